@@ -1,0 +1,30 @@
+# Shared build options: warnings for our own code, sanitizers, ccache.
+option(VES_BUILD_TESTS "Build the GoogleTest suites" ON)
+option(VES_BUILD_BENCH "Build the benchmarks in bench/" ON)
+option(VES_WITH_POSTGRES "Build the PostgreSQL Store (libpqxx)" OFF)
+set(VES_SANITIZE "" CACHE STRING "Sanitizer: address, undefined, thread or empty")
+set_property(CACHE VES_SANITIZE PROPERTY STRINGS "" address undefined thread)
+
+find_program(VES_CCACHE ccache)
+if(VES_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
+  set(CMAKE_CXX_COMPILER_LAUNCHER "${VES_CCACHE}")
+  set(CMAKE_C_COMPILER_LAUNCHER "${VES_CCACHE}")
+endif()
+
+if(VES_SANITIZE)
+  if(NOT VES_SANITIZE MATCHES "^(address|undefined|thread)$")
+    message(FATAL_ERROR "VES_SANITIZE must be address, undefined or thread, not '${VES_SANITIZE}'")
+  endif()
+  add_compile_options(-fsanitize=${VES_SANITIZE} -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=${VES_SANITIZE})
+endif()
+
+# Interface target carrying the warning flags; every ves_* target links it.
+# Generated code (protobuf) does not, so -Werror stays on our code only.
+add_library(ves_warnings INTERFACE)
+target_compile_options(ves_warnings INTERFACE -Wall -Wextra -Werror)
+
+# ves_target_defaults(<target>): warnings + the repository root on the include path.
+function(ves_target_defaults target)
+  target_link_libraries(${target} PRIVATE ves_warnings)
+endfunction()

@@ -1,0 +1,18 @@
+# ves_add_test(NAME name SOURCES a.cc b.cc LIBS ves::x ...)
+# One GoogleTest executable, its cases discovered into CTest.
+include(GoogleTest)
+function(ves_add_test)
+  cmake_parse_arguments(ARG "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${ARG_NAME} ${ARG_SOURCES})
+  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gmock GTest::gtest_main)
+  ves_target_defaults(${ARG_NAME})
+  target_compile_definitions(${ARG_NAME} PRIVATE
+    VES_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    VES_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  gtest_discover_tests(${ARG_NAME}
+    DISCOVERY_TIMEOUT 60
+    PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+endfunction()

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs every build and runtime dependency of VES from Debian's packages.
+# Run as root on Debian 12. Idempotent; quiet when everything is present.
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build ccache pkg-config git
+  # contracts and RPC
+  protobuf-compiler libprotobuf-dev protobuf-compiler-grpc libgrpc++-dev
+  # model, I/O, storage
+  libeigen3-dev libboost-dev libboost-program-options-dev libsqlite3-dev sqlite3
+  libssl-dev openssl zlib1g-dev libspdlog-dev nlohmann-json3-dev
+  # views: OpenCV (highgui with Qt), EGL/GLES offscreen through Mesa
+  libopencv-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri xvfb xauth
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for pkg in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$pkg")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+if [ "$(id -u)" -ne 0 ]; then
+  echo "install-deps: missing packages (${missing[*]}); run this script as root" >&2
+  exit 1
+fi
+echo "install-deps: installing ${#missing[@]} package(s): ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
