@@ -1,0 +1,140 @@
+// ves-station import-case / export-case / status: the station's offline case
+// library (the paper's CD-ROM) and its pending uploads.
+#include <boost/program_options.hpp>
+
+#include <iostream>
+
+#include "patient_db/case_problem.h"
+#include "station/app/commands.h"
+#include "station/sync/case_cache.h"
+#include "station/sync/outbox.h"
+#include "station/sync/station_paths.h"
+
+namespace ves::station {
+namespace po = boost::program_options;
+namespace {
+
+// Parses `args` against `options` (+ --help and --data-dir). Returns false
+// after printing help or a one-line error; `exit_code` then says how to exit.
+bool ParseArgs(const char* usage, const CommandArgs& args, po::options_description& options,
+               const po::positional_options_description& positional, po::variables_map& vm,
+               int& exit_code) {
+  options.add_options()("help,h", "show this help")(
+      "data-dir", po::value<std::string>()->default_value(""),
+      "station data folder (default $VES_STATION_DIR or ~/.ves-station)");
+  try {
+    po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
+    if (vm.count("help")) {
+      std::cout << usage << "\n" << options;
+      exit_code = 0;
+      return false;
+    }
+    po::notify(vm);
+  } catch (const po::error& error) {
+    std::cerr << "ves-station: " << error.what() << " (see --help)\n";
+    exit_code = 2;
+    return false;
+  }
+  return true;
+}
+
+sync::StationPaths Paths(const po::variables_map& vm) {
+  return sync::ResolveStationPaths(vm["data-dir"].as<std::string>());
+}
+
+}  // namespace
+
+int RunImportCaseCommand(const CommandArgs& args) {
+  po::options_description options("options");
+  options.add_options()("file", po::value<std::vector<std::string>>()->required(),
+                        "case bundle(s) (*.vescase)");
+  po::positional_options_description positional;
+  positional.add("file", -1);
+  po::variables_map vm;
+  int exit_code = 0;
+  if (!ParseArgs("usage: ves-station import-case FILE.vescase... [--data-dir DIR]", args, options,
+                 positional, vm, exit_code)) {
+    return exit_code;
+  }
+  try {
+    sync::CaseCache cache(Paths(vm).cases());
+    int failures = 0;
+    for (const auto& file : vm["file"].as<std::vector<std::string>>()) {
+      try {
+        const auto entry = cache.ImportBundleFile(file);
+        std::cout << "imported " << entry.id << " v" << entry.version << " sha256=" << entry.sha256_hex
+                  << "\n";
+      } catch (const std::exception& error) {
+        std::cerr << "ves-station: import refused: " << error.what() << "\n";
+        ++failures;
+      }
+    }
+    return failures == 0 ? 0 : 2;
+  } catch (const std::exception& error) {
+    std::cerr << "ves-station: " << error.what() << "\n";
+    return 1;
+  }
+}
+
+int RunExportCaseCommand(const CommandArgs& args) {
+  po::options_description options("options");
+  options.add_options()("case", po::value<std::string>()->required(), "case id or SHA-256")(
+      "out,o", po::value<std::string>()->required(), "bundle file to write (*.vescase)");
+  po::positional_options_description positional;
+  positional.add("case", 1);
+  po::variables_map vm;
+  int exit_code = 0;
+  if (!ParseArgs("usage: ves-station export-case ID -o FILE.vescase [--data-dir DIR]", args,
+                 options, positional, vm, exit_code)) {
+    return exit_code;
+  }
+  try {
+    sync::CaseCache cache(Paths(vm).cases());
+    const auto entry =
+        cache.ExportBundleFile(vm["case"].as<std::string>(), vm["out"].as<std::string>());
+    std::cout << "exported " << entry.id << " v" << entry.version << " to "
+              << vm["out"].as<std::string>() << "\n";
+    return 0;
+  } catch (const std::exception& error) {
+    std::cerr << "ves-station: " << error.what() << "\n";
+    return 1;
+  }
+}
+
+int RunStatusCommand(const CommandArgs& args) {
+  po::options_description options("options");
+  po::variables_map vm;
+  int exit_code = 0;
+  if (!ParseArgs("usage: ves-station status [--data-dir DIR]", args, options, {}, vm,
+                 exit_code)) {
+    return exit_code;
+  }
+  try {
+    const auto paths = Paths(vm);
+    sync::CaseCache cache(paths.cases());
+    std::vector<std::string> damaged;
+    const auto cases = cache.List(&damaged);
+    std::cout << "data folder: " << paths.root.string() << "\n";
+    std::cout << "cached cases: " << cases.size() << "\n";
+    for (const auto& entry : cases) {
+      std::cout << "  " << entry.id << " v" << entry.version << "  " << entry.title
+                << "  sha256=" << entry.sha256_hex.substr(0, 16) << "…\n";
+    }
+    for (const auto& problem : damaged) std::cout << "  DAMAGED " << problem << "\n";
+    sync::Outbox outbox(paths.outbox_db());
+    const auto pending = outbox.Pending();
+    std::cout << "pending uploads: " << pending.size() << "\n";
+    for (const auto& upload : pending) {
+      std::cout << "  " << upload.uuid << "  trainee=" << upload.record.trainee_id()
+                << "  case=" << upload.record.case_id() << "  attempts=" << upload.attempts
+                << (upload.last_error.empty() ? "" : "  last error: " + upload.last_error)
+                << "\n";
+    }
+    return 0;
+  } catch (const std::exception& error) {
+    std::cerr << "ves-station: " << error.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace ves::station
