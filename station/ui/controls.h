@@ -1,0 +1,61 @@
+#pragma once
+
+#include <optional>
+#include <string>
+
+namespace ves::ui {
+
+enum class ViewMode { kWireframe, kPolygon, kTexture };
+
+// What the trainee asked for through keys, mouse and the control panel
+// (paper §4.4). Without hardware (`--device sim`) the keyboard also moves the
+// simulated hand: targets the simulated hand follows.
+struct ControlState {
+  ViewMode view_mode{ViewMode::kTexture};
+  bool fluoroscopy_visible{false};
+  bool damage_display{false};
+  bool repeat_requested{false};   // consumed by the app when it restarts the session
+  bool quit_requested{false};
+  int case_choice{0};             // index into the panel's case list
+  int scope_choice{0};            // index into the panel's scope list
+  // Fluoroscopy camera (paper §4.3: any angle, continuously, and zoom).
+  double fluoro_yaw_rad{0.0};
+  double fluoro_pitch_rad{0.0};
+  double fluoro_zoom{1.0};
+  // Simulated hand and the angulation knobs.
+  double hand_insertion_m{0.0};
+  double hand_roll_rad{0.0};
+  double knob_up_down_rad{0.0};
+  double knob_left_right_rad{0.0};
+  bool operator==(const ControlState&) const = default;
+};
+
+// Step sizes and limits of the keyboard hand.
+struct KeyboardHand {
+  double insertion_step_m{0.005};
+  double roll_step_rad{0.0872664626};   // 5 degrees
+  double knob_step_rad{0.0872664626};
+  double max_insertion_m{1.8};
+  double max_knob_rad{3.14159265358979};  // 180 degrees; the scope's own limits clamp further
+};
+
+// Applies one key (as cv::waitKeyEx returns it) to the state; returns false
+// when the key means nothing. The mapping is documented in docs/station-ui.md.
+bool ApplyKey(int key, const KeyboardHand& hand, ControlState* state);
+
+// One line per key, for the help overlay and the docs.
+std::string KeyHelpText();
+
+// Mouse drag on the fluoroscopy view rotates it; the wheel zooms.
+struct DragTracker {
+  std::optional<std::pair<int, int>> last;
+};
+constexpr double kFluoroRadiansPerPixel = 0.01;
+constexpr double kFluoroZoomPerWheelStep = 1.1;
+constexpr double kFluoroMinZoom = 0.25;
+constexpr double kFluoroMaxZoom = 8.0;
+
+void ApplyFluoroDrag(int x, int y, bool button_down, DragTracker* drag, ControlState* state);
+void ApplyFluoroWheel(int steps, ControlState* state);  // +: zoom in
+
+}  // namespace ves::ui
