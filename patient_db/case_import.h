@@ -1,0 +1,40 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ves/v1/case.pb.h"
+
+// Import of centerlines exported by segmentation tools (docs/case-format.md):
+//  - CSV: header line, columns x_mm,y_mm,z_mm,radius_mm[,region] in the patient
+//    frame W, first row at the anus;
+//  - 3D Slicer curve markups (*.mrk.json): markups[0].controlPoints[].position in
+//    LPS or RAS millimetres, radius from a sidecar CSV (radius_mm[,region], one
+//    row per control point) or a constant.
+// The importer moves the first point to the origin, puts a radius sample at every
+// point, makes region spans from runs of equal region names (or one region from
+// the options) with DefaultTissue(region), and validates the result.
+namespace ves::patient_db {
+
+struct ImportOptions {
+  std::optional<double> radius_mm;        // constant radius; overrides a sidecar's radii
+  std::optional<ves::v1::Region> region;  // used when the file names no regions
+  std::string id;                         // default: derived from the file name
+  std::string title;                      // default: "Imported centerline <file name>"
+};
+
+// Throws CaseError (parse errors with their line, or validation problems).
+ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::string& file_label,
+                                       const ImportOptions& options = {});
+
+// `radius_csv_text`: the sidecar's content when there is one.
+ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
+                                       const std::optional<std::string>& radius_csv_text,
+                                       const std::string& file_label,
+                                       const ImportOptions& options = {});
+
+// "Case 07.mrk.json" -> "case-07": lowercase, runs of other characters to '-'.
+std::string CaseIdFromFileName(const std::string& file_name);
+
+}  // namespace ves::patient_db

@@ -1,0 +1,95 @@
+// `ves-admin case` as a process: exit status and output (the built binary).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include "patient_db/case_format.h"
+#include "tests/patient_db/case_test_util.h"
+
+namespace ves::patient_db {
+namespace {
+
+using testing::MakeValidCase;
+using testing::ScratchDir;
+using testing::WriteText;
+
+const std::string kCasesDir = VES_SOURCE_DIR "/patient_db/cases/";
+
+struct Run {
+  int status = -1;
+  std::string out;  // stdout and stderr together
+};
+
+Run RunAdmin(const std::string& args) {
+  Run run;
+  const std::string command = std::string(VES_ADMIN_PATH) + " " + args + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) return run;
+  std::array<char, 4096> buffer{};
+  size_t n = 0;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.out.append(buffer.data(), n);
+  const int raw = ::pclose(pipe);
+  run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return run;
+}
+
+TEST(CaseCommand, ValidateShippedCasesExitsZeroWithOkLines) {
+  const auto run = RunAdmin("case validate " + kCasesDir + "standard-adult.textproto " + kCasesDir +
+                            "paper-sigmoid.textproto");
+  EXPECT_EQ(run.status, 0) << run.out;
+  const auto c = LoadCaseFile(kCasesDir + "standard-adult.textproto");
+  EXPECT_NE(run.out.find("OK " + kCasesDir + "standard-adult.textproto standard-adult v1 sha256=" +
+                         CasePayloadSha256Hex(c)),
+            std::string::npos)
+      << run.out;
+}
+
+TEST(CaseCommand, ValidateWithOneInvalidFileExitsTwoAndNamesTheProblem) {
+  ScratchDir dir;
+  auto c = MakeValidCase();
+  c.mutable_radius_profile(0)->set_radius_m(0.07);
+  WriteText(dir / "bad.textproto", FormatCaseTextproto(c));
+  const auto run =
+      RunAdmin("case validate " + kCasesDir + "fixed-tube.textproto " + (dir / "bad.textproto").string());
+  EXPECT_EQ(run.status, 2) << run.out;
+  EXPECT_NE(run.out.find("OK " + kCasesDir + "fixed-tube.textproto"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find((dir / "bad.textproto").string() + ": radius_profile.radius_m[0] = 0.07"),
+            std::string::npos)
+      << run.out;
+}
+
+TEST(CaseCommand, ConvertWritesABundleThatValidates) {
+  ScratchDir dir;
+  const std::string out = (dir / "sa.vescase").string();
+  const auto run = RunAdmin("case convert " + kCasesDir + "standard-adult.textproto " + out);
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_EQ(RunAdmin("case validate " + out).status, 0);
+  EXPECT_EQ(DecodeCaseBundle(ReadFileBytes(out), out).id(), "standard-adult");
+}
+
+TEST(CaseCommand, ConvertCsvNeedsARegionWhenTheTableHasNone) {
+  ScratchDir dir;
+  WriteText(dir / "line.csv", "x_mm,y_mm,z_mm,radius_mm\n0,0,0,20\n0,0,30,20\n0,0,60,20\n0,0,90,20\n");
+  const std::string in = (dir / "line.csv").string();
+  const std::string out = (dir / "line.textproto").string();
+  EXPECT_EQ(RunAdmin("case convert " + in + " " + out).status, 2);
+  EXPECT_EQ(RunAdmin("case convert " + in + " " + out + " --region sigmoid").status, 0);
+  EXPECT_EQ(LoadCaseFile(out).regions(0).region(), ves::v1::REGION_SIGMOID);
+}
+
+TEST(CaseCommand, BadArgumentsExitTwo) {
+  EXPECT_EQ(RunAdmin("case").status, 2);
+  EXPECT_EQ(RunAdmin("case frobnicate").status, 2);
+  EXPECT_EQ(RunAdmin("case validate").status, 2);
+  EXPECT_EQ(RunAdmin("case convert only-one.textproto").status, 2);
+  EXPECT_EQ(RunAdmin("case convert " + kCasesDir + "fixed-tube.textproto out.csv").status, 2);
+  EXPECT_EQ(RunAdmin("case validate x.csv --region nowhere").status, 2);
+  EXPECT_EQ(RunAdmin("case validate --help").status, 0);
+  EXPECT_EQ(RunAdmin("case --help").status, 0);
+}
+
+}  // namespace
+}  // namespace ves::patient_db

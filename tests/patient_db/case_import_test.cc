@@ -1,0 +1,210 @@
+// Import of centerline CSV tables and 3D Slicer curve markups.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "patient_db/case_format.h"
+#include "tests/patient_db/case_test_util.h"
+
+namespace ves::patient_db {
+namespace {
+
+using testing::HasProblem;
+using testing::ScratchDir;
+using testing::WriteText;
+
+constexpr double kPositionTolerance_m = 1e-12;
+
+// Five points, 3 cm apart along z, starting at (10, 20, 30) mm: the importer
+// moves the first to the origin. Regions: rectum for the first three points,
+// sigmoid after, so the joint is at the third point's arc, 0.06 m.
+const char* kCsv =
+    "# exported centerline\n"
+    "x_mm,y_mm,z_mm,radius_mm,region\n"
+    "10,20,30,20,rectum\n"
+    "10,20,60,21,rectum\n"
+    "10,20,90,22,rectum\n"
+    "10,20,120,18,sigmoid\n"
+    "10,20,150,16,sigmoid\n";
+
+std::vector<CaseProblem> ImportProblems(const std::string& text, const ImportOptions& options = {}) {
+  try {
+    ImportCenterlineCsv(text, "in.csv", options);
+  } catch (const CaseError& e) {
+    return e.problems();
+  }
+  ADD_FAILURE() << "import accepted";
+  return {};
+}
+
+TEST(CaseImportCsv, PointsRadiiAndRegionsComeFromTheTable) {
+  const auto c = ImportCenterlineCsv(kCsv, "dir/My Case 07.csv");
+  EXPECT_EQ(c.id(), "my-case-07");
+  EXPECT_EQ(c.version(), 1u);
+  ASSERT_EQ(c.centerline_size(), 5);
+  EXPECT_NEAR(c.centerline(0).x_m(), 0.0, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(4).z_m(), 0.120, kPositionTolerance_m);  // (150 - 30) mm
+  ASSERT_EQ(c.radius_profile_size(), 5);
+  EXPECT_NEAR(c.radius_profile(1).arc_m(), 0.03, kPositionTolerance_m);
+  EXPECT_NEAR(c.radius_profile(1).radius_m(), 0.021, kPositionTolerance_m);
+  ASSERT_EQ(c.regions_size(), 2);
+  EXPECT_EQ(c.regions(0).region(), ves::v1::REGION_RECTUM);
+  EXPECT_NEAR(c.regions(0).end_arc_m(), 0.09, kPositionTolerance_m);  // first sigmoid row
+  EXPECT_EQ(c.regions(1).region(), ves::v1::REGION_SIGMOID);
+  EXPECT_NEAR(c.regions(1).end_arc_m(), 0.12, kPositionTolerance_m);
+  EXPECT_EQ(c.regions(1).tissue().suspension_stiffness_n_per_m2(), 300.0);
+  EXPECT_EQ(c.regions(0).tissue().suspension_stiffness_n_per_m2(), 20000.0);
+}
+
+TEST(CaseImportCsv, WithoutRegionColumnTheOptionGivesOneRegion) {
+  const std::string csv =
+      "x_mm,y_mm,z_mm,radius_mm\n0,0,0,20\n0,0,30,20\n0,0,60,20\n0,0,90,20\n";
+  const auto problems = ImportProblems(csv);
+  EXPECT_TRUE(HasProblem(problems, "region")) << JoinProblems(problems);
+  ImportOptions options;
+  options.region = ves::v1::REGION_SIGMOID;
+  options.id = "chosen-id";
+  const auto c = ImportCenterlineCsv(csv, "in.csv", options);
+  ASSERT_EQ(c.regions_size(), 1);
+  EXPECT_EQ(c.regions(0).region(), ves::v1::REGION_SIGMOID);
+  EXPECT_NEAR(c.regions(0).end_arc_m(), 0.09, kPositionTolerance_m);
+  EXPECT_EQ(c.id(), "chosen-id");
+}
+
+TEST(CaseImportCsv, ByteOrderMarkAndCrLfFromSpreadsheetsAccepted) {
+  std::string csv = "\xEF\xBB\xBFx_mm,y_mm,z_mm,radius_mm,region\r\n";
+  for (int i = 0; i < 4; ++i) csv += "0,0," + std::to_string(30 * i) + ",20,rectum\r\n";
+  EXPECT_EQ(ImportCenterlineCsv(csv, "in.csv").centerline_size(), 4);
+}
+
+TEST(CaseImportCsv, ConstantRadiusOverridesTheColumn) {
+  ImportOptions options;
+  options.radius_mm = 25.0;
+  const auto c = ImportCenterlineCsv(kCsv, "in.csv", options);
+  for (const auto& sample : c.radius_profile()) EXPECT_DOUBLE_EQ(sample.radius_m(), 0.025);
+}
+
+TEST(CaseImportCsv, BadCellsNamedByLine) {
+  const std::string csv =
+      "x_mm,y_mm,z_mm,radius_mm,region\n"
+      "0,0,0,20,rectum\n"
+      "0,zero,30,20,rectum\n"    // line 3
+      "0,0,60,20,colon\n"        // line 4
+      "0,0,90,20\n";             // line 5: too few cells
+  const auto problems = ImportProblems(csv);
+  EXPECT_TRUE(HasProblem(problems, "csv.y_mm", 3)) << JoinProblems(problems);
+  EXPECT_TRUE(HasProblem(problems, "csv.region", 4)) << JoinProblems(problems);
+  EXPECT_TRUE(HasProblem(problems, "csv", 5)) << JoinProblems(problems);
+  EXPECT_EQ(problems.size(), 3u) << JoinProblems(problems);
+}
+
+TEST(CaseImportCsv, HeaderRequiredWithKnownColumns) {
+  EXPECT_TRUE(HasProblem(ImportProblems("0,0,0,20\n0,0,30,20\n"), "csv.header"));
+  EXPECT_TRUE(HasProblem(ImportProblems("x_mm,y_mm,z_mm\n0,0,0\n"), "csv.header"));
+  EXPECT_TRUE(HasProblem(ImportProblems(""), "csv"));
+}
+
+TEST(CaseImportCsv, ImportedGeometryIsValidated) {
+  // Radius 70 mm is beyond anatomy: the import fails like any invalid case.
+  ImportOptions options;
+  options.radius_mm = 70.0;
+  const auto problems = ImportProblems(kCsv, options);
+  EXPECT_TRUE(HasProblem(problems, "radius_profile.radius_m", 0)) << JoinProblems(problems);
+}
+
+std::string Markups(const std::string& system, const std::string& points) {
+  return R"({"@schema": "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/markups-schema-v1.0.3.json#",
+  "markups": [{"type": "Curve", "coordinateSystem": ")" + system +
+         R"(", "coordinateUnits": "mm", "controlPoints": [)" + points + "]}]}";
+}
+
+const char* kPoints =
+    R"({"id": "1", "position": [1.0, 2.0, 3.0]}, {"id": "2", "position": [11.0, 12.0, 43.0]},)"
+    R"({"id": "3", "position": [21.0, 22.0, 83.0]}, {"id": "4", "position": [31.0, 32.0, 123.0]})";
+
+TEST(CaseImportMarkups, LpsPositionsMapToThePatientFrame) {
+  // W = (L, A, S); LPS (x, y, z) -> (x, -y, z), then the first point to the origin.
+  ImportOptions options;
+  options.radius_mm = 20.0;
+  options.region = ves::v1::REGION_RECTUM;
+  const auto c = ImportSlicerMarkups(Markups("LPS", kPoints), std::nullopt, "a.mrk.json", options);
+  ASSERT_EQ(c.centerline_size(), 4);
+  EXPECT_NEAR(c.centerline(1).x_m(), 0.010, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(1).y_m(), -0.010, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(1).z_m(), 0.040, kPositionTolerance_m);
+  EXPECT_EQ(c.id(), "a");
+}
+
+TEST(CaseImportMarkups, RasPositionsMapToThePatientFrame) {
+  // RAS (x, y, z) -> (-x, y, z).
+  ImportOptions options;
+  options.radius_mm = 20.0;
+  options.region = ves::v1::REGION_RECTUM;
+  const auto c = ImportSlicerMarkups(Markups("RAS", kPoints), std::nullopt, "a.mrk.json", options);
+  EXPECT_NEAR(c.centerline(1).x_m(), -0.010, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(1).y_m(), 0.010, kPositionTolerance_m);
+}
+
+TEST(CaseImportMarkups, SidecarGivesRadiusAndRegionPerPoint) {
+  ScratchDir dir;
+  WriteText(dir / "colon.mrk.json", Markups("LPS", kPoints));
+  WriteText(dir / "colon.radius.csv", "radius_mm,region\n20,rectum\n21,rectum\n17,sigmoid\n16,sigmoid\n");
+  const auto c = LoadCaseFile(dir / "colon.mrk.json");
+  ASSERT_EQ(c.radius_profile_size(), 4);
+  EXPECT_NEAR(c.radius_profile(2).radius_m(), 0.017, kPositionTolerance_m);
+  ASSERT_EQ(c.regions_size(), 2);
+  EXPECT_EQ(c.regions(1).region(), ves::v1::REGION_SIGMOID);
+  EXPECT_EQ(c.id(), "colon");
+}
+
+TEST(CaseImportMarkups, NoRadiusIsAnError) {
+  ScratchDir dir;
+  WriteText(dir / "colon.mrk.json", Markups("LPS", kPoints));
+  ImportOptions options;
+  options.region = ves::v1::REGION_RECTUM;
+  try {
+    LoadCaseFile(dir / "colon.mrk.json", options);
+    FAIL() << "markups without radius accepted";
+  } catch (const CaseError& e) {
+    EXPECT_TRUE(HasProblem(e.problems(), "radius_mm")) << e.what();
+  }
+  options.radius_mm = 20.0;
+  EXPECT_EQ(LoadCaseFile(dir / "colon.mrk.json", options).centerline_size(), 4);
+}
+
+TEST(CaseImportMarkups, SidecarRowCountMustMatch) {
+  try {
+    ImportSlicerMarkups(Markups("LPS", kPoints), std::string("radius_mm\n20\n20\n"), "a.mrk.json");
+    FAIL() << "short sidecar accepted";
+  } catch (const CaseError& e) {
+    EXPECT_TRUE(HasProblem(e.problems(), "csv")) << e.what();
+  }
+}
+
+TEST(CaseImportMarkups, MalformedFilesRejected) {
+  auto field_of = [](const std::string& json) {
+    try {
+      ImportOptions options;
+      options.radius_mm = 20.0;
+      options.region = ves::v1::REGION_RECTUM;
+      ImportSlicerMarkups(json, std::nullopt, "a.mrk.json", options);
+    } catch (const CaseError& e) {
+      return e.problems()[0].field;
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(field_of("{not json"), "json");
+  EXPECT_EQ(field_of(R"({"markups": []})"), "markups");
+  EXPECT_EQ(field_of(Markups("IJK", kPoints)), "markups[0].coordinateSystem");
+  EXPECT_EQ(field_of(Markups("LPS", R"({"position": [1, 2]})")),
+            "markups[0].controlPoints.position");
+}
+
+TEST(CaseImport, IdFromFileName) {
+  EXPECT_EQ(CaseIdFromFileName("Case 07.mrk.json"), "case-07");
+  EXPECT_EQ(CaseIdFromFileName("__x__.csv"), "x");
+  EXPECT_EQ(CaseIdFromFileName("???.csv"), "imported-case");
+}
+
+}  // namespace
+}  // namespace ves::patient_db
