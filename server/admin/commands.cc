@@ -5,6 +5,13 @@ namespace ves::admin {
 // Subcommands join this table as their parts are built.
 const std::vector<Command>& AllCommands() {
   static const std::vector<Command> kCommands = {
+      {"case", "colon case files: validate, convert, info", RunCaseCommand},
+      {"init", "create the database, print the first admin token", RunInitCommand},
+      {"token", "create a bearer token (admin)", RunTokenCommand},
+      {"trainee", "add or list trainees", RunTraineeCommand},
+      {"scores", "a trainee's sessions and scores", RunScoresCommand},
+      {"session", "show one session whole", RunSessionCommand},
+      {"audit", "read the audit log (admin)", RunAuditCommand},
   };
   return kCommands;
 }

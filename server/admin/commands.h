@@ -18,4 +18,18 @@ struct Command {
 
 const std::vector<Command>& AllCommands();
 
+// case_command.cc: validate, convert and inspect colon case files.
+int RunCaseCommand(const CommandArgs& args);
+
+// Server work: init_command.cc, remote_commands.cc, case_remote.cc (docs/server.md).
+int RunInitCommand(const CommandArgs& args);
+int RunTokenCommand(const CommandArgs& args);
+int RunTraineeCommand(const CommandArgs& args);
+int RunScoresCommand(const CommandArgs& args);
+int RunSessionCommand(const CommandArgs& args);
+int RunAuditCommand(const CommandArgs& args);
+int RunCaseUpload(const CommandArgs& args);
+int RunCaseList(const CommandArgs& args);
+int RunCaseDownload(const CommandArgs& args);
+
 }  // namespace ves::admin

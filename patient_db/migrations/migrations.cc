@@ -1,0 +1,89 @@
+#include "patient_db/migrations/migrations.h"
+
+namespace ves::patient_db {
+
+const std::vector<Migration>& SqlMigrations() {
+  static const std::vector<Migration> kMigrations = {
+      {1, "institutions, tokens, trainees, cases, sessions, audit log", R"sql(
+CREATE TABLE institutions (
+  name TEXT PRIMARY KEY,
+  created_unix_ms BIGINT NOT NULL
+);
+CREATE TABLE tokens (
+  token_sha256_hex TEXT PRIMARY KEY,
+  role TEXT NOT NULL CHECK (role IN ('admin', 'supervisor', 'station', 'trainee')),
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  trainee_id TEXT NOT NULL,
+  label TEXT NOT NULL,
+  created_unix_ms BIGINT NOT NULL
+);
+CREATE TABLE trainees (
+  trainee_id TEXT PRIMARY KEY,
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  display_name TEXT NOT NULL,
+  created_unix_ms BIGINT NOT NULL
+);
+CREATE INDEX trainees_by_institution ON trainees(institution, trainee_id);
+CREATE TABLE case_blobs (
+  sha256_hex TEXT PRIMARY KEY,
+  size_bytes BIGINT NOT NULL,
+  payload BLOB NOT NULL
+);
+CREATE TABLE cases (
+  case_id TEXT NOT NULL,
+  version INTEGER NOT NULL,
+  title TEXT NOT NULL,
+  difficulty INTEGER NOT NULL,
+  region_mask BIGINT NOT NULL,
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  sha256_hex TEXT NOT NULL REFERENCES case_blobs(sha256_hex),
+  payload_sha256_hex TEXT NOT NULL,
+  size_bytes BIGINT NOT NULL,
+  uploaded_by TEXT NOT NULL,
+  stored_unix_ms BIGINT NOT NULL,
+  PRIMARY KEY (case_id, version)
+);
+CREATE TABLE case_shares (
+  case_id TEXT NOT NULL,
+  version INTEGER NOT NULL,
+  institution TEXT NOT NULL,
+  PRIMARY KEY (case_id, version, institution),
+  FOREIGN KEY (case_id, version) REFERENCES cases(case_id, version)
+);
+CREATE TABLE sessions (
+  uuid TEXT PRIMARY KEY,
+  trainee_id TEXT NOT NULL REFERENCES trainees(trainee_id),
+  institution TEXT NOT NULL,
+  case_id TEXT NOT NULL,
+  case_version INTEGER NOT NULL,
+  station_id TEXT NOT NULL,
+  start_unix_ms BIGINT NOT NULL,
+  end_unix_ms BIGINT NOT NULL,
+  outcome INTEGER NOT NULL,
+  completed INTEGER NOT NULL,
+  time_to_cecum_s DOUBLE PRECISION NOT NULL,
+  pain_s DOUBLE PRECISION NOT NULL,
+  score DOUBLE PRECISION NOT NULL,
+  body_sha256_hex TEXT NOT NULL,
+  stored_unix_ms BIGINT NOT NULL,
+  body BLOB NOT NULL
+);
+CREATE INDEX sessions_by_trainee ON sessions(trainee_id, start_unix_ms);
+CREATE TABLE audit_log (
+  id BIGINT PRIMARY KEY,
+  at_unix_ms BIGINT NOT NULL,
+  actor TEXT NOT NULL,
+  actor_label TEXT NOT NULL,
+  role TEXT NOT NULL,
+  institution TEXT NOT NULL,
+  action TEXT NOT NULL,
+  target TEXT NOT NULL,
+  result TEXT NOT NULL
+);
+CREATE INDEX audit_by_time ON audit_log(at_unix_ms);
+)sql"},
+  };
+  return kMigrations;
+}
+
+}  // namespace ves::patient_db

@@ -1,0 +1,259 @@
+#include "patient_db/sqlite_store.h"
+
+#include <chrono>
+#include <stdexcept>
+
+#include "patient_db/migrations/migrations.h"
+
+namespace ves::patient_db {
+namespace {
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+StoreStatus Internal(SqliteDb& db, const std::string& what) {
+  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
+}
+
+// A constraint failure is the caller's mistake (unknown institution, ...).
+StoreStatus FromStep(SqliteDb& db, int rc, const std::string& what) {
+  if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument, what + ": " + db.LastError());
+  }
+  return Internal(db, what);
+}
+
+}  // namespace
+
+SqliteStore::SqliteStore(const std::string& path) : path_(path) {
+  writer_ = std::make_unique<SqliteDb>(path);
+  Migrate();
+  std::string error;
+  SqliteStatement* s = writer_->Prepare("SELECT COALESCE(MAX(id), 0) FROM audit_log", &error);
+  if (!s) throw std::runtime_error("cannot read audit log of '" + path + "': " + error);
+  int rc = SQLITE_OK;
+  if (s->Step(&rc)) next_audit_id_ = s->Int(0) + 1;
+  s->Reset();
+}
+
+SqliteStore::~SqliteStore() = default;
+
+SqliteStore::Reader SqliteStore::Read() {
+  std::unique_ptr<SqliteDb> db;
+  {
+    std::lock_guard lock(pool_mutex_);
+    if (!readers_.empty()) {
+      db = std::move(readers_.back());
+      readers_.pop_back();
+    }
+  }
+  if (!db) db = std::make_unique<SqliteDb>(path_);
+  return Reader(this, std::move(db));
+}
+
+void SqliteStore::Migrate() {
+  std::string error;
+  auto fail = [&](const std::string& what) {
+    throw std::runtime_error("migration of '" + path_ + "' failed: " + what + ": " + error);
+  };
+  if (!writer_->Exec("CREATE TABLE IF NOT EXISTS schema_migrations (version INTEGER PRIMARY KEY, "
+                     "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
+                     &error)) {
+    fail("schema_migrations");
+  }
+  for (const Migration& m : SqlMigrations()) {
+    if (!writer_->Exec("BEGIN IMMEDIATE", &error)) fail("begin");
+    // Checked inside the transaction so two processes starting together agree.
+    SqliteStatement* s =
+        writer_->Prepare("SELECT COUNT(*) FROM schema_migrations WHERE version = ?", &error);
+    if (!s) fail("version query");
+    s->Bind(1, int64_t{m.version});
+    int rc = SQLITE_OK;
+    const bool applied = s->Step(&rc) && s->Int(0) > 0;
+    s->Reset();
+    if (!applied) {
+      if (!writer_->Exec(m.sql, &error)) {
+        writer_->Exec("ROLLBACK", nullptr);
+        fail("version " + std::to_string(m.version));
+      }
+      SqliteStatement* ins = writer_->Prepare(
+          "INSERT INTO schema_migrations (version, description, applied_unix_ms) VALUES (?, ?, ?)",
+          &error);
+      if (!ins) fail("record");
+      ins->Bind(1, int64_t{m.version}).Bind(2, m.description).Bind(3, NowUnixMs());
+      rc = SQLITE_OK;
+      ins->Step(&rc);
+      ins->Reset();
+      if (rc != SQLITE_OK) {
+        error = writer_->LastError();
+        writer_->Exec("ROLLBACK", nullptr);
+        fail("record");
+      }
+    }
+    if (!writer_->Exec("COMMIT", &error)) fail("commit");
+    schema_version_ = m.version;
+  }
+}
+
+StoreStatus SqliteStore::AddInstitution(const std::string& name, int64_t now_unix_ms) {
+  std::lock_guard lock(write_mutex_);
+  std::string error;
+  SqliteStatement* s = writer_->Prepare(
+      "INSERT INTO institutions (name, created_unix_ms) VALUES (?, ?) "
+      "ON CONFLICT (name) DO NOTHING",
+      &error);
+  if (!s) return Internal(*writer_, "add institution");
+  s->Bind(1, name).Bind(2, now_unix_ms);
+  int rc = SQLITE_OK;
+  s->Step(&rc);
+  s->Reset();
+  return rc == SQLITE_OK ? StoreStatus::Ok() : FromStep(*writer_, rc, "add institution");
+}
+
+StoreResult<bool> SqliteStore::HasInstitution(const std::string& name) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare("SELECT 1 FROM institutions WHERE name = ?", nullptr);
+  if (!s) return Internal(r.db(), "find institution");
+  s->Bind(1, name);
+  int rc = SQLITE_OK;
+  const bool found = s->Step(&rc);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "find institution");
+  return found;
+}
+
+StoreStatus SqliteStore::AddToken(const TokenRow& t) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s = writer_->Prepare(
+      "INSERT INTO tokens (token_sha256_hex, role, institution, trainee_id, label, "
+      "created_unix_ms) VALUES (?, ?, ?, ?, ?, ?)",
+      nullptr);
+  if (!s) return Internal(*writer_, "add token");
+  s->Bind(1, t.token_sha256_hex).Bind(2, RoleName(t.role)).Bind(3, t.institution);
+  s->Bind(4, t.trainee_id).Bind(5, t.label).Bind(6, t.created_unix_ms);
+  int rc = SQLITE_OK;
+  s->Step(&rc);
+  s->Reset();
+  return rc == SQLITE_OK ? StoreStatus::Ok() : FromStep(*writer_, rc, "add token");
+}
+
+StoreResult<TokenRow> SqliteStore::FindToken(const std::string& token_sha256_hex) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT role, institution, trainee_id, label, created_unix_ms FROM tokens "
+      "WHERE token_sha256_hex = ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "find token");
+  s->Bind(1, token_sha256_hex);
+  int rc = SQLITE_OK;
+  TokenRow t;
+  const bool found = s->Step(&rc);
+  if (found) {
+    t.token_sha256_hex = token_sha256_hex;
+    ParseRoleName(s->Text(0), &t.role);
+    t.institution = s->Text(1);
+    t.trainee_id = s->Text(2);
+    t.label = s->Text(3);
+    t.created_unix_ms = s->Int(4);
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "find token");
+  if (!found) return StoreStatus::Error(StoreCode::kNotFound, "no such token");
+  return t;
+}
+
+StoreStatus SqliteStore::AddTrainee(const TraineeRow& t) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s = writer_->Prepare(
+      "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
+      "VALUES (?, ?, ?, ?)",
+      nullptr);
+  if (!s) return Internal(*writer_, "add trainee");
+  s->Bind(1, t.trainee_id).Bind(2, t.institution).Bind(3, t.display_name);
+  s->Bind(4, t.created_unix_ms);
+  int rc = SQLITE_OK;
+  s->Step(&rc);
+  s->Reset();
+  if (rc == SQLITE_OK) return StoreStatus::Ok();
+  if (rc == SQLITE_CONSTRAINT_PRIMARYKEY) {
+    return StoreStatus::Error(StoreCode::kAlreadyExists,
+                              "trainee '" + t.trainee_id + "' already exists");
+  }
+  return FromStep(*writer_, rc, "add trainee '" + t.trainee_id + "'");
+}
+
+StoreResult<TraineeRow> SqliteStore::GetTrainee(const std::string& trainee_id) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT institution, display_name, created_unix_ms FROM trainees WHERE trainee_id = ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "get trainee");
+  s->Bind(1, trainee_id);
+  int rc = SQLITE_OK;
+  TraineeRow t;
+  const bool found = s->Step(&rc);
+  if (found) t = {trainee_id, s->Text(0), s->Text(1), s->Int(2)};
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get trainee");
+  if (!found) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
+  }
+  return t;
+}
+
+StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string& institution) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
+      "WHERE institution = ? ORDER BY trainee_id",
+      nullptr);
+  if (!s) return Internal(r.db(), "list trainees");
+  s->Bind(1, institution);
+  int rc = SQLITE_OK;
+  std::vector<TraineeRow> out;
+  while (s->Step(&rc)) out.push_back({s->Text(0), s->Text(1), s->Text(2), s->Int(3)});
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list trainees");
+  return out;
+}
+
+StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms, int limit) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
+      "FROM audit_log WHERE at_unix_ms >= ? ORDER BY id LIMIT ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "list audit");
+  s->Bind(1, since_unix_ms).Bind(2, int64_t{limit});
+  int rc = SQLITE_OK;
+  std::vector<AuditRow> out;
+  while (s->Step(&rc)) {
+    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
+                   s->Text(6), s->Text(7), s->Text(8)});
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list audit");
+  return out;
+}
+
+StoreStatus SqliteStore::WriteAudit(const AuditRow& a) {
+  SqliteStatement* s = writer_->Prepare(
+      "INSERT INTO audit_log (id, at_unix_ms, actor, actor_label, role, institution, action, "
+      "target, result) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      nullptr);
+  if (!s) return Internal(*writer_, "write audit");
+  s->Bind(1, next_audit_id_).Bind(2, a.at_unix_ms).Bind(3, a.actor).Bind(4, a.actor_label);
+  s->Bind(5, a.role).Bind(6, a.institution).Bind(7, a.action).Bind(8, a.target);
+  s->Bind(9, a.result);
+  int rc = SQLITE_OK;
+  s->Step(&rc);
+  s->Reset();
+  if (rc != SQLITE_OK) return FromStep(*writer_, rc, "write audit");
+  ++next_audit_id_;
+  return StoreStatus::Ok();
+}
+
+}  // namespace ves::patient_db

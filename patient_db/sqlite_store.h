@@ -1,0 +1,80 @@
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "patient_db/sqlite_db.h"
+#include "patient_db/store.h"
+
+// The embedded Store: one SQLite file in WAL mode, synchronous=FULL, foreign
+// keys on. Writes go through one connection under a mutex (SQLite has one
+// writer anyway); reads take a connection from a small pool so they run beside
+// a commit. Migrations are applied when it opens.
+namespace ves::patient_db {
+
+class SqliteStore final : public Store {
+ public:
+  // Throws std::runtime_error when the file cannot be opened or migrated.
+  explicit SqliteStore(const std::string& path);
+  ~SqliteStore() override;
+
+  StoreStatus AddInstitution(const std::string& name, int64_t now_unix_ms) override;
+  StoreResult<bool> HasInstitution(const std::string& name) override;
+  StoreStatus AddToken(const TokenRow& token) override;
+  StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) override;
+  StoreStatus AddTrainee(const TraineeRow& trainee) override;
+  StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) override;
+  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution) override;
+  StoreResult<PutCaseResult> PutCase(const CaseRow& row, const std::string& payload) override;
+  StoreResult<std::vector<CaseRow>> ListCases(const CaseFilter& filter) override;
+  StoreResult<CaseRow> GetCase(const std::string& case_id, uint32_t version) override;
+  StoreResult<std::string> GetBlob(const std::string& sha256_hex) override;
+  StoreResult<std::vector<SessionPutResult>> CommitBatch(const WriteBatch& batch) override;
+  StoreResult<SessionRow> GetSession(const std::string& uuid) override;
+  StoreResult<std::vector<SessionRow>> ListSessions(const std::string& trainee_id,
+                                                    const std::string& case_id) override;
+  StoreResult<int64_t> CountSessions() override;
+  StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) override;
+
+  // The schema version after migration.
+  int schema_version() const { return schema_version_; }
+
+ private:
+  // A pooled read connection, returned on destruction.
+  class Reader;
+  Reader Read();
+  void Migrate();
+  StoreStatus WriteSession(const SessionRow& row, SessionPutResult* result);
+  StoreStatus WriteAudit(const AuditRow& row);
+  StoreResult<std::vector<std::string>> ReadShares(SqliteDb& db, const std::string& case_id,
+                                                   uint32_t version);
+
+  std::string path_;
+  std::mutex write_mutex_;
+  std::unique_ptr<SqliteDb> writer_;  // guarded by write_mutex_
+  int64_t next_audit_id_ = 1;         // guarded by write_mutex_
+  std::mutex pool_mutex_;
+  std::vector<std::unique_ptr<SqliteDb>> readers_;  // idle; guarded by pool_mutex_
+  int schema_version_ = 0;
+};
+
+// A pooled read connection, handed back to the pool when it goes out of scope.
+class SqliteStore::Reader {
+ public:
+  Reader(SqliteStore* store, std::unique_ptr<SqliteDb> db) : store_(store), db_(std::move(db)) {}
+  ~Reader() {
+    std::lock_guard lock(store_->pool_mutex_);
+    store_->readers_.push_back(std::move(db_));
+  }
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+  SqliteDb& db() { return *db_; }
+
+ private:
+  SqliteStore* store_;
+  std::unique_ptr<SqliteDb> db_;
+};
+
+}  // namespace ves::patient_db

@@ -1,0 +1,364 @@
+// SqliteStore: cases (content-addressed blobs, versions, shares) and sessions
+// (group-committed batches).
+#include <map>
+#include <optional>
+
+#include "patient_db/sqlite_store.h"
+
+namespace ves::patient_db {
+namespace {
+
+StoreStatus Internal(SqliteDb& db, const std::string& what) {
+  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
+}
+
+constexpr const char* kCaseColumns =
+    "c.case_id, c.version, c.title, c.difficulty, c.region_mask, c.institution, c.sha256_hex, "
+    "c.payload_sha256_hex, c.size_bytes, c.uploaded_by, c.stored_unix_ms";
+
+CaseRow ReadCaseRow(const SqliteStatement& s) {
+  CaseRow c;
+  c.case_id = s.Text(0);
+  c.version = static_cast<uint32_t>(s.Int(1));
+  c.title = s.Text(2);
+  c.difficulty = static_cast<int>(s.Int(3));
+  c.region_mask = static_cast<uint64_t>(s.Int(4));
+  c.institution = s.Text(5);
+  c.sha256_hex = s.Text(6);
+  c.payload_sha256_hex = s.Text(7);
+  c.size_bytes = static_cast<uint64_t>(s.Int(8));
+  c.uploaded_by = s.Text(9);
+  c.stored_unix_ms = s.Int(10);
+  return c;
+}
+
+constexpr const char* kSessionColumns =
+    "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
+    "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
+    "stored_unix_ms";
+
+SessionRow ReadSessionRow(const SqliteStatement& s) {
+  SessionRow r;
+  r.uuid = s.Text(0);
+  r.trainee_id = s.Text(1);
+  r.institution = s.Text(2);
+  r.case_id = s.Text(3);
+  r.case_version = static_cast<uint32_t>(s.Int(4));
+  r.station_id = s.Text(5);
+  r.start_unix_ms = s.Int(6);
+  r.end_unix_ms = s.Int(7);
+  r.outcome = static_cast<int>(s.Int(8));
+  r.completed = s.Int(9) != 0;
+  r.time_to_cecum_s = s.Real(10);
+  r.pain_s = s.Real(11);
+  r.score = s.Real(12);
+  r.body_sha256_hex = s.Text(13);
+  r.stored_unix_ms = s.Int(14);
+  return r;
+}
+
+// Runs `s` (already bound) to completion; false on error.
+bool Run(SqliteStatement* s, int* rc) {
+  *rc = SQLITE_OK;
+  s->Step(rc);
+  s->Reset();
+  return *rc == SQLITE_OK;
+}
+
+}  // namespace
+
+StoreResult<std::vector<std::string>> SqliteStore::ReadShares(SqliteDb& db,
+                                                              const std::string& case_id,
+                                                              uint32_t version) {
+  SqliteStatement* s = db.Prepare(
+      "SELECT institution FROM case_shares WHERE case_id = ? AND version = ? "
+      "ORDER BY institution",
+      nullptr);
+  if (!s) return Internal(db, "read shares");
+  s->Bind(1, case_id).Bind(2, int64_t{version});
+  int rc = SQLITE_OK;
+  std::vector<std::string> out;
+  while (s->Step(&rc)) out.push_back(s->Text(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "read shares");
+  return out;
+}
+
+StoreResult<PutCaseResult> SqliteStore::PutCase(const CaseRow& row, const std::string& payload) {
+  std::lock_guard lock(write_mutex_);
+  SqliteDb& db = *writer_;
+  std::string error;
+  if (!db.Exec("BEGIN IMMEDIATE", &error)) {
+    return StoreStatus::Error(StoreCode::kInternal, "put case: " + error);
+  }
+  auto fail = [&](StoreStatus status) {
+    db.Exec("ROLLBACK", nullptr);
+    return status;
+  };
+  const std::string name = "case '" + row.case_id + "' version " + std::to_string(row.version);
+  SqliteStatement* s = db.Prepare(std::string("SELECT ") + kCaseColumns +
+                                      " FROM cases c WHERE c.case_id = ? AND c.version = ?",
+                                  nullptr);
+  if (!s) return fail(Internal(db, "put case"));
+  s->Bind(1, row.case_id).Bind(2, int64_t{row.version});
+  int rc = SQLITE_OK;
+  std::optional<CaseRow> existing;
+  if (s->Step(&rc)) existing = ReadCaseRow(*s);
+  s->Reset();
+  if (rc != SQLITE_OK) return fail(Internal(db, "put case"));
+  if (existing) {
+    if (existing->sha256_hex != row.sha256_hex) {
+      return fail(StoreStatus::Error(
+          StoreCode::kAlreadyExists,
+          name + " is already stored with other content (sha256 " + existing->sha256_hex +
+              "); give the new content a higher version"));
+    }
+    auto shares = ReadShares(db, row.case_id, row.version);
+    if (!shares.ok()) return fail(shares.status);
+    existing->shared_with = shares.value;
+    db.Exec("ROLLBACK", nullptr);
+    return PutCaseResult{*existing, true};
+  }
+  s = db.Prepare(
+      "INSERT INTO case_blobs (sha256_hex, size_bytes, payload) VALUES (?, ?, ?) "
+      "ON CONFLICT (sha256_hex) DO NOTHING",
+      nullptr);
+  if (!s) return fail(Internal(db, "put case blob"));
+  s->Bind(1, row.sha256_hex).Bind(2, static_cast<int64_t>(payload.size())).BindBlob(3, payload);
+  if (!Run(s, &rc)) return fail(Internal(db, "put case blob"));
+  s = db.Prepare(
+      "INSERT INTO cases (case_id, version, title, difficulty, region_mask, institution, "
+      "sha256_hex, payload_sha256_hex, size_bytes, uploaded_by, stored_unix_ms) "
+      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+      nullptr);
+  if (!s) return fail(Internal(db, "put case"));
+  s->Bind(1, row.case_id).Bind(2, int64_t{row.version}).Bind(3, row.title);
+  s->Bind(4, int64_t{row.difficulty}).Bind(5, static_cast<int64_t>(row.region_mask));
+  s->Bind(6, row.institution).Bind(7, row.sha256_hex).Bind(8, row.payload_sha256_hex);
+  s->Bind(9, static_cast<int64_t>(payload.size())).Bind(10, row.uploaded_by);
+  s->Bind(11, row.stored_unix_ms);
+  if (!Run(s, &rc)) {
+    if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+      return fail(StoreStatus::Error(StoreCode::kInvalidArgument,
+                                     name + ": unknown institution '" + row.institution + "'"));
+    }
+    return fail(Internal(db, "put " + name));
+  }
+  CaseRow stored = row;
+  stored.size_bytes = payload.size();
+  std::map<std::string, bool> shares;  // sorted, unique
+  for (const std::string& i : row.shared_with) {
+    if (i != row.institution) shares[i] = true;
+  }
+  stored.shared_with.clear();
+  for (const auto& [institution, unused] : shares) {
+    s = db.Prepare("INSERT INTO case_shares (case_id, version, institution) VALUES (?, ?, ?)",
+                   nullptr);
+    if (!s) return fail(Internal(db, "put case share"));
+    s->Bind(1, row.case_id).Bind(2, int64_t{row.version}).Bind(3, institution);
+    if (!Run(s, &rc)) return fail(Internal(db, "put case share"));
+    stored.shared_with.push_back(institution);
+  }
+  if (!db.Exec("COMMIT", &error)) {
+    return fail(StoreStatus::Error(StoreCode::kInternal, "commit " + name + ": " + error));
+  }
+  return PutCaseResult{stored, false};
+}
+
+StoreResult<std::vector<CaseRow>> SqliteStore::ListCases(const CaseFilter& f) {
+  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE 1 = 1";
+  if (f.region != 0) sql += " AND (c.region_mask & ?) <> 0";
+  if (f.difficulty != 0) sql += " AND c.difficulty = ?";
+  if (!f.institution.empty()) sql += " AND c.institution = ?";
+  if (!f.visible_to.empty()) {
+    sql += " AND (c.institution = ? OR EXISTS (SELECT 1 FROM case_shares s WHERE "
+           "s.case_id = c.case_id AND s.version = c.version AND s.institution = ?))";
+  }
+  sql += " ORDER BY c.case_id, c.version";
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(sql, nullptr);
+  if (!s) return Internal(r.db(), "list cases");
+  int i = 1;
+  if (f.region != 0) s->Bind(i++, static_cast<int64_t>(uint64_t{1} << f.region));
+  if (f.difficulty != 0) s->Bind(i++, int64_t{f.difficulty});
+  if (!f.institution.empty()) s->Bind(i++, f.institution);
+  if (!f.visible_to.empty()) {
+    s->Bind(i, f.visible_to).Bind(i + 1, f.visible_to);
+    i += 2;
+  }
+  int rc = SQLITE_OK;
+  std::vector<CaseRow> out;
+  while (s->Step(&rc)) {
+    CaseRow row = ReadCaseRow(*s);
+    // Rows come ordered by (id, version): a later version replaces the last one.
+    if (!f.all_versions && !out.empty() && out.back().case_id == row.case_id) out.pop_back();
+    out.push_back(std::move(row));
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list cases");
+  for (CaseRow& row : out) {
+    auto shares = ReadShares(r.db(), row.case_id, row.version);
+    if (!shares.ok()) return shares.status;
+    row.shared_with = std::move(shares.value);
+  }
+  return out;
+}
+
+StoreResult<CaseRow> SqliteStore::GetCase(const std::string& case_id, uint32_t version) {
+  Reader r = Read();
+  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE c.case_id = ?";
+  sql += version == 0 ? " ORDER BY c.version DESC LIMIT 1" : " AND c.version = ?";
+  SqliteStatement* s = r.db().Prepare(sql, nullptr);
+  if (!s) return Internal(r.db(), "get case");
+  s->Bind(1, case_id);
+  if (version != 0) s->Bind(2, int64_t{version});
+  int rc = SQLITE_OK;
+  std::optional<CaseRow> row;
+  if (s->Step(&rc)) row = ReadCaseRow(*s);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get case");
+  if (!row) {
+    return StoreStatus::Error(
+        StoreCode::kNotFound,
+        "no case '" + case_id + "'" +
+            (version == 0 ? std::string() : " version " + std::to_string(version)));
+  }
+  auto shares = ReadShares(r.db(), row->case_id, row->version);
+  if (!shares.ok()) return shares.status;
+  row->shared_with = std::move(shares.value);
+  return *row;
+}
+
+StoreResult<std::string> SqliteStore::GetBlob(const std::string& sha256_hex) {
+  Reader r = Read();
+  SqliteStatement* s =
+      r.db().Prepare("SELECT payload FROM case_blobs WHERE sha256_hex = ?", nullptr);
+  if (!s) return Internal(r.db(), "get blob");
+  s->Bind(1, sha256_hex);
+  int rc = SQLITE_OK;
+  std::optional<std::string> payload;
+  if (s->Step(&rc)) payload = s->Blob(0);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get blob");
+  if (!payload) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
+  return std::move(*payload);
+}
+
+StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* result) {
+  SqliteDb& db = *writer_;
+  SqliteStatement* s = db.Prepare(
+      std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE uuid = ?", nullptr);
+  if (!s) return Internal(db, "find session");
+  s->Bind(1, row.uuid);
+  int rc = SQLITE_OK;
+  std::optional<SessionRow> first;
+  if (s->Step(&rc)) first = ReadSessionRow(*s);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "find session");
+  if (first) {
+    result->outcome = first->body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
+                                                                     : SessionPut::kConflict;
+    result->first = std::move(*first);
+    return StoreStatus::Ok();
+  }
+  s = db.Prepare(std::string("INSERT INTO sessions (") + kSessionColumns +
+                     ", body) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                 nullptr);
+  if (!s) return Internal(db, "insert session");
+  s->Bind(1, row.uuid).Bind(2, row.trainee_id).Bind(3, row.institution).Bind(4, row.case_id);
+  s->Bind(5, int64_t{row.case_version}).Bind(6, row.station_id).Bind(7, row.start_unix_ms);
+  s->Bind(8, row.end_unix_ms).Bind(9, int64_t{row.outcome}).Bind(10, int64_t{row.completed});
+  s->Bind(11, row.time_to_cecum_s).Bind(12, row.pain_s).Bind(13, row.score);
+  s->Bind(14, row.body_sha256_hex).Bind(15, row.stored_unix_ms).BindBlob(16, row.body);
+  if (!Run(s, &rc)) return Internal(db, "insert session " + row.uuid);
+  result->outcome = SessionPut::kStored;
+  result->first = row;
+  result->first.body.clear();
+  return StoreStatus::Ok();
+}
+
+StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteBatch& batch) {
+  std::lock_guard lock(write_mutex_);
+  SqliteDb& db = *writer_;
+  const int64_t audit_id_before = next_audit_id_;
+  std::string error;
+  if (!db.Exec("BEGIN IMMEDIATE", &error)) {
+    return StoreStatus::Error(StoreCode::kInternal, "begin batch: " + error);
+  }
+  auto fail = [&](StoreStatus status) {
+    db.Exec("ROLLBACK", nullptr);
+    next_audit_id_ = audit_id_before;
+    return status;
+  };
+  std::vector<SessionPutResult> results(batch.sessions.size());
+  for (size_t i = 0; i < batch.sessions.size(); ++i) {
+    StoreStatus st = WriteSession(batch.sessions[i], &results[i]);
+    if (!st.ok()) return fail(st);
+    if (i < batch.session_audit.size()) {
+      AuditRow a = batch.session_audit[i];
+      a.result = SessionPutAuditResult(results[i].outcome);
+      st = WriteAudit(a);
+      if (!st.ok()) return fail(st);
+    }
+  }
+  for (const AuditRow& a : batch.audit) {
+    StoreStatus st = WriteAudit(a);
+    if (!st.ok()) return fail(st);
+  }
+  // With synchronous=FULL the WAL is on disk when COMMIT returns.
+  if (!db.Exec("COMMIT", &error)) {
+    return fail(StoreStatus::Error(StoreCode::kInternal, "commit batch: " + error));
+  }
+  return results;
+}
+
+StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      std::string("SELECT ") + kSessionColumns + ", body FROM sessions WHERE uuid = ?", nullptr);
+  if (!s) return Internal(r.db(), "get session");
+  s->Bind(1, uuid);
+  int rc = SQLITE_OK;
+  std::optional<SessionRow> row;
+  if (s->Step(&rc)) {
+    row = ReadSessionRow(*s);
+    row->body = s->Blob(15);
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get session");
+  if (!row) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
+  return std::move(*row);
+}
+
+StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string& trainee_id,
+                                                               const std::string& case_id) {
+  Reader r = Read();
+  std::string sql =
+      std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE trainee_id = ?";
+  if (!case_id.empty()) sql += " AND case_id = ?";
+  sql += " ORDER BY start_unix_ms, uuid";
+  SqliteStatement* s = r.db().Prepare(sql, nullptr);
+  if (!s) return Internal(r.db(), "list sessions");
+  s->Bind(1, trainee_id);
+  if (!case_id.empty()) s->Bind(2, case_id);
+  int rc = SQLITE_OK;
+  std::vector<SessionRow> out;
+  while (s->Step(&rc)) out.push_back(ReadSessionRow(*s));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list sessions");
+  return out;
+}
+
+StoreResult<int64_t> SqliteStore::CountSessions() {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare("SELECT COUNT(*) FROM sessions", nullptr);
+  if (!s) return Internal(r.db(), "count sessions");
+  int rc = SQLITE_OK;
+  int64_t n = 0;
+  if (s->Step(&rc)) n = s->Int(0);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "count sessions");
+  return n;
+}
+
+}  // namespace ves::patient_db

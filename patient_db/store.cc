@@ -1,0 +1,48 @@
+#include "patient_db/store.h"
+
+#include <stdexcept>
+
+#include "patient_db/sqlite_store.h"
+
+namespace ves::patient_db {
+
+const char* RoleName(StoreRole role) {
+  switch (role) {
+    case StoreRole::kAdmin: return "admin";
+    case StoreRole::kSupervisor: return "supervisor";
+    case StoreRole::kStation: return "station";
+    case StoreRole::kTrainee: return "trainee";
+  }
+  return "unknown";
+}
+
+bool ParseRoleName(const std::string& name, StoreRole* role) {
+  for (StoreRole r : {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation,
+                      StoreRole::kTrainee}) {
+    if (name == RoleName(r)) {
+      *role = r;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* SessionPutAuditResult(SessionPut outcome) {
+  switch (outcome) {
+    case SessionPut::kStored: return "OK";
+    case SessionPut::kDuplicate: return "OK duplicate";
+    case SessionPut::kConflict: return "ALREADY_EXISTS";
+  }
+  return "UNKNOWN";
+}
+
+std::unique_ptr<Store> OpenStore(const std::string& url) {
+  const std::string kSqlite = "sqlite:";
+  if (url.rfind(kSqlite, 0) == 0 && url.size() > kSqlite.size()) {
+    return std::make_unique<SqliteStore>(url.substr(kSqlite.size()));
+  }
+  throw std::invalid_argument("unknown database URL '" + url +
+                              "' (expected sqlite:PATH; postgresql comes later)");
+}
+
+}  // namespace ves::patient_db

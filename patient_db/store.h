@@ -1,0 +1,186 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+// The storage contract of the server (DESIGN.md §6): one interface, an
+// embedded SQLite implementation and (later) PostgreSQL. Every method returns
+// a StoreStatus; the gRPC handlers map it to grpc::Status. Implementations are
+// safe to call from many threads. docs/server.md describes the schema.
+namespace ves::patient_db {
+
+enum class StoreCode { kOk, kNotFound, kAlreadyExists, kInvalidArgument, kInternal };
+
+struct StoreStatus {
+  StoreCode code = StoreCode::kOk;
+  std::string message;
+
+  bool ok() const { return code == StoreCode::kOk; }
+  static StoreStatus Ok() { return {}; }
+  static StoreStatus Error(StoreCode code, std::string message) {
+    return {code, std::move(message)};
+  }
+};
+
+// A value or the status saying why there is none.
+template <typename T>
+struct StoreResult {
+  StoreStatus status;
+  T value{};
+
+  bool ok() const { return status.ok(); }
+  StoreResult() = default;
+  StoreResult(T v) : value(std::move(v)) {}  // NOLINT: implicit on purpose
+  StoreResult(StoreStatus s) : status(std::move(s)) {}  // NOLINT
+};
+
+// Role names are stored as text ("admin", ...), see RoleName().
+enum class StoreRole { kAdmin = 1, kSupervisor = 2, kStation = 3, kTrainee = 4 };
+const char* RoleName(StoreRole role);
+bool ParseRoleName(const std::string& name, StoreRole* role);
+
+struct TokenRow {
+  std::string token_sha256_hex;  // the token itself is never stored
+  StoreRole role = StoreRole::kTrainee;
+  std::string institution;
+  std::string trainee_id;  // ROLE_TRAINEE only
+  std::string label;
+  int64_t created_unix_ms = 0;
+  bool operator==(const TokenRow&) const = default;
+};
+
+struct TraineeRow {
+  std::string trainee_id;
+  std::string institution;
+  std::string display_name;
+  int64_t created_unix_ms = 0;
+  bool operator==(const TraineeRow&) const = default;
+};
+
+// One stored version of a case; the payload lives in a content-addressed blob.
+struct CaseRow {
+  std::string case_id;
+  uint32_t version = 0;
+  std::string title;
+  int difficulty = 0;        // ves.v1.Difficulty
+  uint64_t region_mask = 0;  // bit r set when the case has ves.v1.Region r
+  std::string institution;   // owner
+  std::string sha256_hex;    // of the stored bytes (the bundle): the blob's address
+  std::string payload_sha256_hex;  // CasePayloadSha256Hex, as SessionRecord.case_sha256_hex
+  uint64_t size_bytes = 0;
+  std::string uploaded_by;   // token id
+  int64_t stored_unix_ms = 0;
+  std::vector<std::string> shared_with;  // sorted
+  bool operator==(const CaseRow&) const = default;
+};
+
+struct CaseFilter {
+  int region = 0;             // 0: any
+  int difficulty = 0;         // 0: any
+  std::string institution;    // owner; empty: any
+  std::string visible_to;     // owner or shared with this institution; empty: no restriction
+  bool all_versions = false;  // false: the latest version of each case only
+};
+
+struct PutCaseResult {
+  CaseRow row;
+  bool already_stored = false;
+};
+
+// A session record as stored: the searchable columns plus the serialized body.
+struct SessionRow {
+  std::string uuid;
+  std::string trainee_id;
+  std::string institution;
+  std::string case_id;
+  uint32_t case_version = 0;
+  std::string station_id;
+  int64_t start_unix_ms = 0;
+  int64_t end_unix_ms = 0;
+  int outcome = 0;  // ves.v1.Outcome
+  bool completed = false;
+  double time_to_cecum_s = 0;
+  double pain_s = 0;
+  double score = 0;
+  std::string body_sha256_hex;
+  int64_t stored_unix_ms = 0;
+  std::string body;  // serialized ves.v1.SessionRecord; empty in listings
+  bool operator==(const SessionRow&) const = default;
+};
+
+struct AuditRow {
+  int64_t id = 0;  // assigned by the store
+  int64_t at_unix_ms = 0;
+  std::string actor;  // token id
+  std::string actor_label;
+  std::string role;
+  std::string institution;
+  std::string action;
+  std::string target;
+  std::string result;
+  bool operator==(const AuditRow&) const = default;
+};
+
+// What one group commit writes, in one durable transaction.
+struct WriteBatch {
+  std::vector<SessionRow> sessions;
+  // Empty, or one audit row per session whose result the store sets from the
+  // outcome: "OK", "OK duplicate" or "ALREADY_EXISTS".
+  std::vector<AuditRow> session_audit;
+  std::vector<AuditRow> audit;  // written as given
+};
+
+// The fate of one session of a batch.
+enum class SessionPut { kStored, kDuplicate, kConflict };
+struct SessionPutResult {
+  SessionPut outcome = SessionPut::kStored;
+  SessionRow first;  // the row stored first under this uuid (without body)
+};
+const char* SessionPutAuditResult(SessionPut outcome);
+
+class Store {
+ public:
+  virtual ~Store() = default;
+
+  virtual StoreStatus AddInstitution(const std::string& name, int64_t now_unix_ms) = 0;
+  virtual StoreResult<bool> HasInstitution(const std::string& name) = 0;
+
+  virtual StoreStatus AddToken(const TokenRow& token) = 0;
+  virtual StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) = 0;
+
+  virtual StoreStatus AddTrainee(const TraineeRow& trainee) = 0;
+  virtual StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) = 0;
+  virtual StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution) = 0;
+
+  // Stores the payload under its SHA-256 (once) and the (id, version) row. The
+  // same id, version and hash again: already_stored. Same id and version with
+  // other content: kAlreadyExists.
+  virtual StoreResult<PutCaseResult> PutCase(const CaseRow& row, const std::string& payload) = 0;
+  virtual StoreResult<std::vector<CaseRow>> ListCases(const CaseFilter& filter) = 0;
+  // version 0: the latest.
+  virtual StoreResult<CaseRow> GetCase(const std::string& case_id, uint32_t version) = 0;
+  virtual StoreResult<std::string> GetBlob(const std::string& sha256_hex) = 0;
+
+  // One durable transaction: every session (in order; a uuid already present
+  // gives kDuplicate when the body hash matches, kConflict when not) and every
+  // audit row. The result has one entry per session.
+  virtual StoreResult<std::vector<SessionPutResult>> CommitBatch(const WriteBatch& batch) = 0;
+  virtual StoreResult<SessionRow> GetSession(const std::string& uuid) = 0;  // with body
+  // Oldest first, without bodies; case_id empty: all.
+  virtual StoreResult<std::vector<SessionRow>> ListSessions(const std::string& trainee_id,
+                                                            const std::string& case_id) = 0;
+  virtual StoreResult<int64_t> CountSessions() = 0;
+
+  // Oldest first, at most `limit`.
+  virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) = 0;
+};
+
+// Opens the store named by `url`: "sqlite:PATH" (created and migrated when
+// needed). Throws std::invalid_argument for an unknown scheme and
+// std::runtime_error when the database cannot be opened or migrated.
+std::unique_ptr<Store> OpenStore(const std::string& url);
+
+}  // namespace ves::patient_db

@@ -1,0 +1,30 @@
+#pragma once
+
+#include <boost/program_options.hpp>
+#include <string>
+
+#include "server/admin/commands.h"
+#include "server/client.h"
+
+// Shared by the ves-admin subcommands that talk to a running ves-server:
+// --server, --token (or $VES_TOKEN), TLS files, deadline; parsing with one
+// clear error line and exit status 2.
+namespace ves::admin {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailed = 1;
+inline constexpr int kExitUsage = 2;
+
+void AddRemoteOptions(boost::program_options::options_description* options,
+                      ves::server::ClientOptions* client, int* deadline_s);
+// Parses `args`; returns -1 to go on, else the exit status (help or error).
+// Fills the client's deadline and $VES_TOKEN fallback.
+int ParseRemote(const std::string& name, const std::string& usage, const CommandArgs& args,
+                const boost::program_options::options_description& options,
+                const boost::program_options::positional_options_description* positional,
+                boost::program_options::variables_map* vm, ves::server::ClientOptions* client,
+                int deadline_s);
+// Prints "ves-admin NAME: CODE: message" and returns kExitFailed.
+int ReportRpcError(const std::string& name, int code, const std::string& message);
+
+}  // namespace ves::admin

@@ -1,0 +1,287 @@
+// ves-admin subcommands against a running server: token, trainee, scores,
+// session, audit, and `case upload|list|download` (docs/server.md).
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+
+#include "patient_db/case_format.h"
+#include "server/admin/remote.h"
+#include "server/auth.h"
+#include "ves/v1/services.grpc.pb.h"
+
+namespace ves::admin {
+
+namespace po = boost::program_options;
+using ves::server::ClientOptions;
+
+void AddRemoteOptions(po::options_description* options, ClientOptions* client, int* deadline_s) {
+  options->add_options()("help,h", "show this help")(
+      "server", po::value(&client->address)->required(), "server address host:port")(
+      "token", po::value(&client->token), "bearer token (default: $VES_TOKEN)")(
+      "tls-ca", po::value(&client->tls_ca_file), "CA of the server certificate (PEM); "
+                                                "without it the connection is plaintext")(
+      "tls-cert", po::value(&client->tls_cert_file), "client certificate (PEM)")(
+      "tls-key", po::value(&client->tls_key_file), "client key (PEM)")(
+      "deadline-s", po::value(deadline_s)->default_value(30), "deadline of each call, seconds");
+}
+
+int ParseRemote(const std::string& name, const std::string& usage, const CommandArgs& args,
+                const po::options_description& options,
+                const po::positional_options_description* positional, po::variables_map* vm,
+                ClientOptions* client, int deadline_s) {
+  try {
+    auto parser = po::command_line_parser(args).options(options);
+    if (positional) parser.positional(*positional);
+    po::store(parser.run(), *vm);
+    if (vm->count("help")) {
+      std::cout << "usage: ves-admin " << usage << "\n" << options;
+      return kExitOk;
+    }
+    po::notify(*vm);
+  } catch (const po::error& e) {
+    std::cerr << "ves-admin " << name << ": " << e.what() << "\n";
+    return kExitUsage;
+  }
+  deadline_s = (*vm)["deadline-s"].as<int>();
+  client->deadline = std::chrono::seconds(deadline_s);
+  if (client->token.empty()) {
+    const char* env = std::getenv("VES_TOKEN");
+    if (env) client->token = env;
+  }
+  if (client->token.empty()) {
+    std::cerr << "ves-admin " << name << ": no token (give --token or set VES_TOKEN)\n";
+    return kExitUsage;
+  }
+  return -1;
+}
+
+int ReportRpcError(const std::string& name, int code, const std::string& message) {
+  static const char* const kNames[] = {
+      "OK",        "CANCELLED",         "UNKNOWN",   "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
+      "NOT_FOUND", "ALREADY_EXISTS",    "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
+      "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED", "INTERNAL",
+      "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  std::string first_line = message.substr(0, message.find('\n'));
+  std::cerr << "ves-admin " << name << ": " << (code >= 0 && code <= 16 ? kNames[code] : "ERROR")
+            << ": " << first_line << "\n";
+  return kExitFailed;
+}
+
+namespace {
+
+std::string FormatDate(int64_t unix_ms) {
+  const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M", &tm);
+  return buf;
+}
+
+const char* OutcomeName(ves::v1::Outcome o) {
+  switch (o) {
+    case ves::v1::OUTCOME_CECUM_REACHED: return "cecum";
+    case ves::v1::OUTCOME_ABORTED: return "aborted";
+    case ves::v1::OUTCOME_TIMED_OUT: return "timed-out";
+    default: return "?";
+  }
+}
+
+template <typename Service>
+auto Stub(const ClientOptions& client) {
+  return Service::NewStub(ves::server::MakeClientChannel(client));
+}
+
+}  // namespace
+
+int RunTokenCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  std::string action, role, institution, trainee, label;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("action", po::value(&action)->required(), "create")(
+      "role", po::value(&role)->required(), "admin, supervisor, station or trainee")(
+      "institution", po::value(&institution), "institution (default: the caller's)")(
+      "trainee", po::value(&trainee), "trainee id (role trainee)")(
+      "label", po::value(&label), "who or what holds the token");
+  po::positional_options_description pos;
+  pos.add("action", 1);
+  po::variables_map vm;
+  const int rc = ParseRemote("token", "token create --role R [--institution I] --server A",
+                             args, options, &pos, &vm, &client, deadline_s);
+  if (rc >= 0) return rc;
+  if (action != "create") {
+    std::cerr << "ves-admin token: unknown action '" << action << "' (only: create)\n";
+    return kExitUsage;
+  }
+  ves::server::StoreRole store_role;
+  if (!patient_db::ParseRoleName(role, &store_role)) {
+    std::cerr << "ves-admin token: --role '" << role
+              << "' is not admin, supervisor, station or trainee\n";
+    return kExitUsage;
+  }
+  ves::v1::CreateTokenRequest q;
+  q.set_role(static_cast<ves::v1::Role>(store_role));
+  q.set_institution(institution);
+  q.set_trainee_id(trainee);
+  q.set_label(label);
+  ves::v1::CreateTokenResponse r;
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  auto status = Stub<ves::v1::Admin>(client)->CreateToken(&ctx, q, &r);
+  if (!status.ok()) return ReportRpcError("token", status.error_code(), status.error_message());
+  std::cout << r.token() << "\n";
+  std::cerr << "token " << r.token_id() << " (" << role
+            << "): shown once, the server keeps only its hash\n";
+  return kExitOk;
+}
+
+int RunTraineeCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  std::string action, id, name, institution;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("action", po::value(&action)->required(), "add or list")(
+      "id", po::value(&id), "trainee id (add)")("name", po::value(&name), "display name (add)")(
+      "institution", po::value(&institution), "institution (default: the caller's)");
+  po::positional_options_description pos;
+  pos.add("action", 1);
+  po::variables_map vm;
+  const int rc = ParseRemote("trainee", "trainee add --id ID [--name N] | list", args, options,
+                             &pos, &vm, &client, deadline_s);
+  if (rc >= 0) return rc;
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  auto stub = Stub<ves::v1::Trainees>(client);
+  if (action == "add") {
+    if (id.empty()) {
+      std::cerr << "ves-admin trainee add: --id is required\n";
+      return kExitUsage;
+    }
+    ves::v1::AddTraineeRequest q;
+    q.mutable_trainee()->set_trainee_id(id);
+    q.mutable_trainee()->set_display_name(name);
+    q.mutable_trainee()->set_institution(institution);
+    ves::v1::AddTraineeResponse r;
+    auto status = stub->AddTrainee(&ctx, q, &r);
+    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
+    std::cout << "added " << r.trainee().trainee_id() << " (" << r.trainee().institution()
+              << ")\n";
+    return kExitOk;
+  }
+  if (action == "list") {
+    ves::v1::ListTraineesRequest q;
+    q.set_institution(institution);
+    ves::v1::ListTraineesResponse r;
+    auto status = stub->ListTrainees(&ctx, q, &r);
+    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
+    for (const auto& t : r.trainees()) {
+      std::printf("%-24s %-20s %s\n", t.trainee_id().c_str(), t.institution().c_str(),
+                  t.display_name().c_str());
+    }
+    return kExitOk;
+  }
+  std::cerr << "ves-admin trainee: unknown action '" << action << "' (add or list)\n";
+  return kExitUsage;
+}
+
+int RunScoresCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  std::string trainee, case_id;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("trainee", po::value(&trainee)->required(), "trainee id")(
+      "case", po::value(&case_id), "only this case");
+  po::variables_map vm;
+  const int rc = ParseRemote("scores", "scores --trainee ID [--case C]", args, options, nullptr,
+                             &vm, &client, deadline_s);
+  if (rc >= 0) return rc;
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  ves::v1::ListSessionsRequest q;
+  q.set_trainee_id(trainee);
+  q.set_case_id(case_id);
+  ves::v1::ListSessionsResponse r;
+  auto status = Stub<ves::v1::Trainees>(client)->ListSessions(&ctx, q, &r);
+  if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
+  std::printf("%-16s  %-20s  %-9s  %12s  %11s  %6s\n", "date (UTC)", "case", "outcome",
+              "to cecum (s)", "pain (s)", "score");
+  for (const auto& s : r.sessions()) {
+    const std::string to_cecum =
+        s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
+    std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
+                FormatDate(s.start_unix_ms()).c_str(), s.case_id().c_str(),
+                OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
+  }
+  return kExitOk;
+}
+
+int RunSessionCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  std::string action, uuid;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("action", po::value(&action)->required(), "show")(
+      "uuid", po::value(&uuid)->required(), "session uuid");
+  po::positional_options_description pos;
+  pos.add("action", 1).add("uuid", 1);
+  po::variables_map vm;
+  const int rc =
+      ParseRemote("session", "session show UUID", args, options, &pos, &vm, &client, deadline_s);
+  if (rc >= 0) return rc;
+  if (action != "show") {
+    std::cerr << "ves-admin session: unknown action '" << action << "' (only: show)\n";
+    return kExitUsage;
+  }
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  ves::v1::GetSessionRequest q;
+  q.set_uuid(uuid);
+  ves::v1::GetSessionResponse r;
+  auto status = Stub<ves::v1::Trainees>(client)->GetSession(&ctx, q, &r);
+  if (!status.ok()) return ReportRpcError("session", status.error_code(), status.error_message());
+  // The whole record except the input log's bytes, which only a replay reads.
+  ves::v1::SessionRecord shown = r.record();
+  const size_t log_bytes = shown.input_log().encoded().size();
+  shown.mutable_input_log()->clear_encoded();
+  std::cout << shown.DebugString() << "# input_log.encoded: " << log_bytes << " bytes\n";
+  return kExitOk;
+}
+
+int RunAuditCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  int64_t since_unix_ms = 0;
+  unsigned limit = 1000;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("since", po::value(&since_unix_ms), "Unix time in ms (default: all)")(
+      "limit", po::value(&limit), "most entries shown (default 1000)");
+  po::variables_map vm;
+  const int rc = ParseRemote("audit", "audit [--since UNIX_MS] [--limit N]", args, options,
+                             nullptr, &vm, &client, deadline_s);
+  if (rc >= 0) return rc;
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  ves::v1::ListAuditRequest q;
+  q.set_since_unix_ms(since_unix_ms);
+  q.set_limit(limit);
+  ves::v1::ListAuditResponse r;
+  auto status = Stub<ves::v1::Admin>(client)->ListAudit(&ctx, q, &r);
+  if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
+  for (const auto& e : r.entries()) {
+    std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatDate(e.at_unix_ms()).c_str(),
+                e.actor().c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
+                e.institution().c_str(), e.action().c_str(), e.target().c_str(),
+                e.result().c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace ves::admin

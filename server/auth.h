@@ -1,0 +1,66 @@
+#pragma once
+
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+
+#include "patient_db/store.h"
+
+// Bearer tokens and the access rules of docs/server.md. Tokens are 256 random
+// bits (64 hex digits); the store keeps only their SHA-256. Nothing here knows
+// gRPC: handlers map AuthStatus to grpc::Status.
+namespace ves::server {
+
+using patient_db::StoreRole;
+
+struct Principal {
+  StoreRole role = StoreRole::kTrainee;
+  std::string institution;
+  std::string trainee_id;  // trainee role only
+  std::string token_id;    // first 12 hex digits of the token hash
+  std::string label;
+};
+
+enum class AuthCode { kOk, kUnauthenticated, kPermissionDenied, kInternal };
+
+struct AuthStatus {
+  AuthCode code = AuthCode::kOk;
+  std::string message;
+  bool ok() const { return code == AuthCode::kOk; }
+};
+
+// A new random token (OpenSSL RAND_bytes); throws std::runtime_error if the
+// generator fails.
+std::string NewToken();
+std::string Sha256HexOf(std::string_view bytes);
+std::string TokenIdOf(const std::string& token_sha256_hex);
+
+// Resolves `authorization` metadata ("Bearer <token>") to a principal. Hashes
+// are cached: tokens are never changed once stored.
+class Authenticator {
+ public:
+  explicit Authenticator(patient_db::Store* store) : store_(store) {}
+  AuthStatus Authenticate(std::string_view authorization, Principal* principal);
+
+ private:
+  patient_db::Store* store_;
+  std::mutex mutex_;
+  std::unordered_map<std::string, Principal> cache_;  // by token hash
+};
+
+// kPermissionDenied unless the principal has one of `roles` (`what` names the call).
+AuthStatus RequireRole(const Principal& p, std::initializer_list<StoreRole> roles,
+                       const std::string& what);
+// Admins reach every institution; everyone else only their own.
+AuthStatus RequireInstitution(const Principal& p, const std::string& institution,
+                              const std::string& what);
+// Reading a trainee's records: admin; supervisor of the trainee's institution;
+// the trainee themself.
+AuthStatus RequireTraineeReader(const Principal& p, const patient_db::TraineeRow& trainee,
+                                const std::string& what);
+
+// True for 127.0.0.0/8, [::1] and localhost listen addresses ("host:port").
+bool IsLoopbackListenAddress(const std::string& address);
+
+}  // namespace ves::server

@@ -1,0 +1,305 @@
+// The Cases service: list, streamed download with resume, streamed upload.
+#include <algorithm>
+
+#include "patient_db/case_bundle.h"
+#include "patient_db/case_problem.h"
+#include "server/services.h"
+
+namespace ves::server {
+
+using grpc::Status;
+using grpc::StatusCode;
+using patient_db::StoreRole;
+
+std::shared_ptr<const std::string> BlobCache::Get(const std::string& sha256_hex) {
+  std::lock_guard lock(mutex_);
+  auto it = blobs_.find(sha256_hex);
+  return it == blobs_.end() ? nullptr : it->second;
+}
+
+void BlobCache::Put(const std::string& sha256_hex, std::shared_ptr<const std::string> bytes) {
+  std::lock_guard lock(mutex_);
+  if (bytes->size() > budget_bytes_ || blobs_.count(sha256_hex)) return;
+  // Crude but bounded: forget everything when the budget would be exceeded.
+  if (bytes_ + bytes->size() > budget_bytes_) {
+    blobs_.clear();
+    bytes_ = 0;
+  }
+  bytes_ += bytes->size();
+  blobs_[sha256_hex] = std::move(bytes);
+}
+
+namespace {
+
+void ToSummary(const patient_db::CaseRow& row, ves::v1::CaseSummary* s) {
+  s->set_case_id(row.case_id);
+  s->set_version(row.version);
+  s->set_title(row.title);
+  s->set_difficulty(static_cast<ves::v1::Difficulty>(row.difficulty));
+  s->set_institution(row.institution);
+  for (int r = 1; r < 64; ++r) {
+    if (row.region_mask & (uint64_t{1} << r)) s->add_regions(static_cast<ves::v1::Region>(r));
+  }
+  s->set_sha256_hex(row.sha256_hex);
+  s->set_payload_sha256_hex(row.payload_sha256_hex);
+  s->set_size_bytes(row.size_bytes);
+  s->set_stored_unix_ms(row.stored_unix_ms);
+  for (const auto& i : row.shared_with) s->add_shared_with(i);
+}
+
+bool VisibleTo(const patient_db::CaseRow& row, const Principal& who) {
+  if (who.role == StoreRole::kAdmin || row.institution == who.institution) return true;
+  return std::find(row.shared_with.begin(), row.shared_with.end(), who.institution) !=
+         row.shared_with.end();
+}
+
+std::string CaseTarget(const std::string& id, uint32_t version) {
+  return id + "@" + (version == 0 ? std::string("latest") : std::to_string(version));
+}
+
+// Streams bytes [offset, end) in chunks of at most kCaseChunkBytes; the first
+// chunk carries the summary, total size and hash even when no data is left.
+class DownloadReactor final : public grpc::ServerWriteReactor<ves::v1::CaseChunk> {
+ public:
+  DownloadReactor(std::shared_ptr<const std::string> bytes, ves::v1::CaseSummary summary,
+                  uint64_t offset)
+      : bytes_(std::move(bytes)), summary_(std::move(summary)), offset_(offset) {
+    WriteNext();
+  }
+  void OnWriteDone(bool ok) override {
+    if (!ok) {
+      Finish(Status(StatusCode::CANCELLED, "client went away"));
+      return;
+    }
+    WriteNext();
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  void WriteNext() {
+    if (!first_ && offset_ >= bytes_->size()) {
+      Finish(Status::OK);
+      return;
+    }
+    chunk_.Clear();
+    if (first_) {
+      *chunk_.mutable_summary() = summary_;
+      chunk_.set_total_bytes(bytes_->size());
+      chunk_.set_sha256_hex(summary_.sha256_hex());
+      first_ = false;
+    }
+    const size_t n = std::min<uint64_t>(kCaseChunkBytes, bytes_->size() - offset_);
+    chunk_.set_offset(offset_);
+    chunk_.set_data(bytes_->data() + offset_, n);
+    offset_ += n;
+    StartWrite(&chunk_);
+  }
+
+  std::shared_ptr<const std::string> bytes_;
+  ves::v1::CaseSummary summary_;
+  uint64_t offset_;
+  bool first_ = true;
+  ves::v1::CaseChunk chunk_;
+};
+
+template <typename Base>
+class ErrorReactor final : public Base {
+ public:
+  explicit ErrorReactor(const Status& status) { this->Finish(status); }
+  void OnDone() override { delete this; }
+};
+
+// Collects the header and the chunks, then checks size, hash and the case
+// itself (the case validator names the field) before storing.
+class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRequest> {
+ public:
+  UploadReactor(ServiceDeps deps, Principal who, ves::v1::UploadCaseResponse* response)
+      : deps_(deps), who_(std::move(who)), response_(response) {
+    StartRead(&request_);
+  }
+  void OnReadDone(bool ok) override {
+    if (!ok) {
+      Done(Complete());
+      return;
+    }
+    Status s = Take();
+    if (!s.ok()) {
+      Done(s);
+      return;
+    }
+    StartRead(&request_);
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  Status Take() {
+    if (request_.has_header()) {
+      if (has_header_) return Status(StatusCode::INVALID_ARGUMENT, "a second header");
+      header_ = request_.header();
+      has_header_ = true;
+      if (header_.total_bytes() > kMaxCaseUploadBytes) {
+        return Status(StatusCode::RESOURCE_EXHAUSTED,
+                      "header.total_bytes = " + std::to_string(header_.total_bytes()) +
+                          ": larger than the limit " + std::to_string(kMaxCaseUploadBytes));
+      }
+      bytes_.reserve(header_.total_bytes());
+      return Status::OK;
+    }
+    if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "chunk before the header");
+    if (bytes_.size() + request_.chunk().size() > header_.total_bytes()) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "more bytes than header.total_bytes = " +
+                        std::to_string(header_.total_bytes()));
+    }
+    bytes_ += request_.chunk();
+    return Status::OK;
+  }
+
+  Status Complete() {
+    if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "no header was sent");
+    const std::string label = header_.file_label().empty() ? "upload" : header_.file_label();
+    if (bytes_.size() != header_.total_bytes()) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    label + ": received " + std::to_string(bytes_.size()) +
+                        " bytes, header.total_bytes = " + std::to_string(header_.total_bytes()));
+    }
+    const std::string sha = Sha256HexOf(bytes_);
+    if (sha != header_.sha256_hex()) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    label + ": header.sha256_hex = " + header_.sha256_hex() +
+                        " does not match the bytes received (sha256 " + sha + ")");
+    }
+    ves::v1::ColonCase colon_case;
+    try {
+      colon_case = patient_db::DecodeCaseBundle(bytes_, label);
+    } catch (const patient_db::CaseError& e) {
+      return Status(StatusCode::INVALID_ARGUMENT, patient_db::JoinProblems(e.problems()));
+    }
+    target_ = CaseTarget(colon_case.id(), colon_case.version());
+    // Stored canonical: the same case always has the same bytes and address.
+    const std::string canonical = patient_db::EncodeCaseBundle(colon_case);
+    patient_db::CaseRow row;
+    row.case_id = colon_case.id();
+    row.version = colon_case.version();
+    row.title = colon_case.title();
+    row.difficulty = colon_case.difficulty();
+    for (const auto& span : colon_case.regions()) {
+      if (span.region() > 0 && span.region() < 64) row.region_mask |= uint64_t{1} << span.region();
+    }
+    row.institution = header_.institution().empty() ? who_.institution : header_.institution();
+    row.sha256_hex = Sha256HexOf(canonical);
+    row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
+    row.uploaded_by = who_.token_id;
+    row.stored_unix_ms = NowUnixMs();
+    row.shared_with.assign(header_.share_with().begin(), header_.share_with().end());
+    auto st = deps_.store->AddInstitution(row.institution, row.stored_unix_ms);
+    if (!st.ok()) return ToGrpcStatus(st);
+    auto put = deps_.store->PutCase(row, canonical);
+    if (!put.ok()) return ToGrpcStatus(put.status);
+    ToSummary(put.value.row, response_->mutable_summary());
+    response_->set_already_stored(put.value.already_stored);
+    return Status::OK;
+  }
+
+  void Done(const Status& status) {
+    deps_.writer->SubmitAudit(MakeAudit(who_, "case.upload", target_, status));
+    Finish(status);
+  }
+
+  ServiceDeps deps_;
+  Principal who_;
+  ves::v1::UploadCaseResponse* response_;
+  ves::v1::UploadCaseRequest request_;
+  ves::v1::UploadCaseHeader header_;
+  bool has_header_ = false;
+  std::string bytes_;
+  std::string target_ = "?";
+};
+
+}  // namespace
+
+grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* ctx,
+                                                  const ves::v1::ListCasesRequest* request,
+                                                  ves::v1::ListCasesResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
+  if (!a.ok()) {
+    reactor->Finish(ToGrpcStatus(a));
+    return reactor;
+  }
+  const Status status = [&]() -> Status {
+    AuthStatus r = RequireRole(
+        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list cases");
+    if (!r.ok()) return ToGrpcStatus(r);
+    patient_db::CaseFilter filter;
+    filter.region = request->region();
+    filter.difficulty = request->difficulty();
+    filter.institution = request->institution();
+    filter.all_versions = request->all_versions();
+    if (who.role != StoreRole::kAdmin) filter.visible_to = who.institution;
+    auto rows = deps_.store->ListCases(filter);
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    for (const auto& row : rows.value) ToSummary(row, response->add_cases());
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "case.list", request->institution(), status);
+  return reactor;
+}
+
+grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
+    grpc::CallbackServerContext* ctx, const ves::v1::DownloadCaseRequest* request) {
+  using Error = ErrorReactor<grpc::ServerWriteReactor<ves::v1::CaseChunk>>;
+  Principal who;
+  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
+  if (!a.ok()) return new Error(ToGrpcStatus(a));
+  std::string target = CaseTarget(request->case_id(), request->version());
+  std::shared_ptr<const std::string> bytes;
+  ves::v1::CaseSummary summary;
+  const Status status = [&]() -> Status {
+    AuthStatus r = RequireRole(
+        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "download cases");
+    if (!r.ok()) return ToGrpcStatus(r);
+    auto row = deps_.store->GetCase(request->case_id(), request->version());
+    if (!row.ok()) return ToGrpcStatus(row.status);
+    target = CaseTarget(row.value.case_id, row.value.version);
+    if (!VisibleTo(row.value, who)) {
+      return Status(StatusCode::PERMISSION_DENIED, "case " + target +
+                                                       " is not shared with institution '" +
+                                                       who.institution + "'");
+    }
+    if (request->offset() > row.value.size_bytes) {
+      return Status(StatusCode::OUT_OF_RANGE,
+                    "offset = " + std::to_string(request->offset()) + ": the case has only " +
+                        std::to_string(row.value.size_bytes) + " bytes");
+    }
+    bytes = blobs_.Get(row.value.sha256_hex);
+    if (!bytes) {
+      auto blob = deps_.store->GetBlob(row.value.sha256_hex);
+      if (!blob.ok()) return ToGrpcStatus(blob.status);
+      bytes = std::make_shared<const std::string>(std::move(blob.value));
+      blobs_.Put(row.value.sha256_hex, bytes);
+    }
+    ToSummary(row.value, &summary);
+    return Status::OK;
+  }();
+  deps_.writer->SubmitAudit(MakeAudit(who, "case.download", target, status));
+  if (!status.ok()) return new Error(status);
+  return new DownloadReactor(std::move(bytes), std::move(summary), request->offset());
+}
+
+grpc::ServerReadReactor<ves::v1::UploadCaseRequest>* CasesService::UploadCase(
+    grpc::CallbackServerContext* ctx, ves::v1::UploadCaseResponse* response) {
+  using Error = ErrorReactor<grpc::ServerReadReactor<ves::v1::UploadCaseRequest>>;
+  Principal who;
+  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
+  if (!a.ok()) return new Error(ToGrpcStatus(a));
+  a = RequireRole(who, {StoreRole::kAdmin}, "upload cases");
+  if (!a.ok()) {
+    deps_.writer->SubmitAudit(MakeAudit(who, "case.upload", "?", ToGrpcStatus(a)));
+    return new Error(ToGrpcStatus(a));
+  }
+  return new UploadReactor(deps_, std::move(who), response);
+}
+
+}  // namespace ves::server

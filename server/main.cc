@@ -1,0 +1,79 @@
+// ves-server: the central gRPC server (docs/server.md).
+//   ves-server --listen 127.0.0.1:50051 --db sqlite:PATH
+//              [--tls-cert F --tls-key F [--tls-client-ca F] | --insecure-loopback]
+// SIGTERM or SIGINT drains in-flight calls, commits pending writes and exits 0.
+#include <spdlog/spdlog.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/program_options.hpp>
+#include <fstream>
+#include <iostream>
+
+#include "patient_db/store_factory.h"
+#include "server/server.h"
+
+namespace po = boost::program_options;
+
+int main(int argc, char** argv) {
+  ves::server::ServerOptions options;
+  std::string db_url;
+  std::string port_file;
+  int drain_s = 20;
+  po::options_description desc("ves-server options");
+  desc.add_options()("help,h", "show this help")(
+      "listen", po::value(&options.listen)->default_value(options.listen), "host:port to serve")(
+      "db", po::value(&db_url)->required(),
+      "database URL: sqlite:/var/lib/ves/ves.db or postgresql://USER@HOST/DB")(
+      "tls-cert", po::value(&options.tls_cert_file), "server certificate chain (PEM)")(
+      "tls-key", po::value(&options.tls_key_file), "server private key (PEM)")(
+      "tls-client-ca", po::value(&options.tls_client_ca_file),
+      "require client certificates signed by this CA (PEM)")(
+      "insecure-loopback", po::bool_switch(&options.insecure_loopback),
+      "serve plaintext (only on a loopback --listen address)")(
+      "max-message-mb", po::value<int>()->default_value(16), "largest message accepted, MiB")(
+      "drain-s", po::value(&drain_s)->default_value(drain_s),
+      "on SIGTERM, seconds in-flight calls get to finish")(
+      "port-file", po::value(&port_file), "write the bound port here (for --listen ...:0)")(
+      "quiet", "do not log every call");
+  po::variables_map vm;
+  try {
+    po::store(po::parse_command_line(argc, argv, desc), vm);
+    if (vm.count("help")) {
+      std::cout << "usage: ves-server --db sqlite:PATH [--listen ADDR] [TLS flags]\n" << desc;
+      return 0;
+    }
+    po::notify(vm);
+  } catch (const po::error& e) {
+    std::cerr << "ves-server: " << e.what() << " (see ves-server --help)\n";
+    return 2;
+  }
+  options.max_receive_message_bytes = vm["max-message-mb"].as<int>() << 20;
+  options.log_calls = vm.count("quiet") == 0;
+  try {
+    ves::server::MakeServerCredentials(options);  // refuse bad TLS choices before opening the DB
+    ves::server::VesServer server(options, ves::patient_db::OpenStoreFromUrl(db_url));
+    server.Start();
+    spdlog::info("ves-server listening on port {} ({}), database {}", server.port(),
+                 options.tls_cert_file.empty() ? "plaintext loopback" : "TLS", db_url);
+    if (!port_file.empty()) {
+      std::ofstream(port_file + ".tmp") << server.port() << "\n";
+      std::rename((port_file + ".tmp").c_str(), port_file.c_str());
+    }
+    boost::asio::io_context io;
+    boost::asio::signal_set signals(io, SIGTERM, SIGINT);
+    signals.async_wait([&](const boost::system::error_code&, int signal_number) {
+      spdlog::info("signal {}: draining in-flight calls (up to {} s)", signal_number, drain_s);
+    });
+    io.run();
+    server.Shutdown(std::chrono::seconds(drain_s));
+    spdlog::info("ves-server stopped after {} commit batches", server.commit_batches());
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "ves-server: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "ves-server: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,471 @@
+// Sessions, Trainees and Admin services, and the helpers every handler shares.
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <chrono>
+#include <map>
+
+#include "server/services.h"
+#include "server/session_check.h"
+
+namespace ves::server {
+
+using grpc::Status;
+using grpc::StatusCode;
+using patient_db::StoreCode;
+using patient_db::StoreRole;
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Status ToGrpcStatus(const patient_db::StoreStatus& s) {
+  switch (s.code) {
+    case StoreCode::kOk: return Status::OK;
+    case StoreCode::kNotFound: return Status(StatusCode::NOT_FOUND, s.message);
+    case StoreCode::kAlreadyExists: return Status(StatusCode::ALREADY_EXISTS, s.message);
+    case StoreCode::kInvalidArgument: return Status(StatusCode::INVALID_ARGUMENT, s.message);
+    case StoreCode::kInternal: break;
+  }
+  return Status(StatusCode::INTERNAL, "storage error: " + s.message);
+}
+
+Status ToGrpcStatus(const AuthStatus& s) {
+  switch (s.code) {
+    case AuthCode::kOk: return Status::OK;
+    case AuthCode::kUnauthenticated: return Status(StatusCode::UNAUTHENTICATED, s.message);
+    case AuthCode::kPermissionDenied: return Status(StatusCode::PERMISSION_DENIED, s.message);
+    case AuthCode::kInternal: break;
+  }
+  return Status(StatusCode::INTERNAL, "authentication failed: " + s.message);
+}
+
+AuthStatus AuthenticateCall(grpc::CallbackServerContext* ctx, Authenticator& auth,
+                            Principal* principal) {
+  const auto& md = ctx->client_metadata();
+  auto it = md.find("authorization");
+  if (it == md.end()) return auth.Authenticate({}, principal);
+  return auth.Authenticate(std::string_view(it->second.data(), it->second.size()), principal);
+}
+
+const char* StatusCodeName(grpc::StatusCode code) {
+  static const char* const kNames[] = {
+      "OK",           "CANCELLED",         "UNKNOWN",           "INVALID_ARGUMENT",
+      "DEADLINE_EXCEEDED", "NOT_FOUND",    "ALREADY_EXISTS",    "PERMISSION_DENIED",
+      "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED",   "OUT_OF_RANGE",
+      "UNIMPLEMENTED", "INTERNAL",         "UNAVAILABLE",       "DATA_LOSS",
+      "UNAUTHENTICATED"};
+  const int i = static_cast<int>(code);
+  return i >= 0 && i <= 16 ? kNames[i] : "UNKNOWN";
+}
+
+ves::v1::Role ToProtoRole(StoreRole role) { return static_cast<ves::v1::Role>(role); }
+
+patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
+                               const std::string& target, const Status& result) {
+  patient_db::AuditRow a;
+  a.at_unix_ms = NowUnixMs();
+  a.actor = who.token_id;
+  a.actor_label = who.label;
+  a.role = patient_db::RoleName(who.role);
+  a.institution = who.institution;
+  a.action = action;
+  a.target = target;
+  a.result = result.ok() ? std::string("OK")
+                          : std::string(StatusCodeName(result.error_code())) + ": " +
+                                result.error_message().substr(0, 200);
+  return a;
+}
+
+void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
+                   const Principal& who, const std::string& action, const std::string& target,
+                   const Status& status) {
+  deps.writer->SubmitAudit(MakeAudit(who, action, target, status));
+  reactor->Finish(status);
+}
+
+namespace {
+
+// Authenticates; on failure finishes the call and returns false.
+bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
+           const ServiceDeps& deps, Principal* who) {
+  AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
+  if (a.ok()) return true;
+  reactor->Finish(ToGrpcStatus(a));
+  return false;
+}
+
+std::string DeterministicBytes(const google::protobuf::Message& m) {
+  std::string out;
+  {
+    google::protobuf::io::StringOutputStream stream(&out);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    m.SerializeToCodedStream(&coded);
+  }
+  return out;
+}
+
+ves::v1::SessionSummary ToSummary(const patient_db::SessionRow& r) {
+  ves::v1::SessionSummary s;
+  s.set_uuid(r.uuid);
+  s.set_trainee_id(r.trainee_id);
+  s.set_case_id(r.case_id);
+  s.set_case_version(r.case_version);
+  s.set_station_id(r.station_id);
+  s.set_start_unix_ms(r.start_unix_ms);
+  s.set_end_unix_ms(r.end_unix_ms);
+  s.set_outcome(static_cast<ves::v1::Outcome>(r.outcome));
+  s.set_completed(r.completed);
+  s.set_time_to_cecum_s(r.time_to_cecum_s);
+  s.set_pain_s(r.pain_s);
+  s.set_score(r.score);
+  return s;
+}
+
+void ToTrainee(const patient_db::TraineeRow& r, ves::v1::Trainee* t) {
+  t->set_trainee_id(r.trainee_id);
+  t->set_institution(r.institution);
+  t->set_display_name(r.display_name);
+  t->set_created_unix_ms(r.created_unix_ms);
+}
+
+bool IsName(const std::string& s) {
+  if (s.empty() || s.size() > 128) return false;
+  for (char c : s) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
+  }
+  return true;
+}
+
+// Looks the trainee up and checks that `who` may read their records.
+Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std::string& id,
+                       const std::string& what, patient_db::TraineeRow* trainee) {
+  AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
+                                   StoreRole::kTrainee}, what);
+  if (!a.ok()) return ToGrpcStatus(a);
+  auto found = deps.store->GetTrainee(id);
+  if (!found.ok()) return ToGrpcStatus(found.status);
+  a = RequireTraineeReader(who, found.value, what);
+  if (!a.ok()) return ToGrpcStatus(a);
+  *trainee = found.value;
+  return Status::OK;
+}
+
+}  // namespace
+
+// ---- Sessions --------------------------------------------------------------
+
+patient_db::StoreResult<std::string> SessionsService::TraineeInstitution(
+    const std::string& trainee_id) {
+  {
+    std::lock_guard lock(mutex_);
+    auto it = trainee_institution_.find(trainee_id);
+    if (it != trainee_institution_.end()) return it->second;
+  }
+  auto trainee = deps_.store->GetTrainee(trainee_id);
+  if (!trainee.ok()) return trainee.status;
+  std::lock_guard lock(mutex_);
+  trainee_institution_[trainee_id] = trainee.value.institution;
+  return trainee.value.institution;
+}
+
+grpc::ServerUnaryReactor* SessionsService::UploadSession(
+    grpc::CallbackServerContext* ctx, const ves::v1::UploadSessionRequest* request,
+    ves::v1::UploadSessionResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const ves::v1::SessionRecord& rec = request->record();
+  auto reject = [&](const Status& s) {
+    FinishAudited(reactor, deps_, who, "session.upload", rec.uuid(), s);
+    return reactor;
+  };
+  AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kStation}, "upload sessions");
+  if (!a.ok()) return reject(ToGrpcStatus(a));
+  if (!request->has_record()) return reject(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
+  const std::string problem = CheckSessionRecord(rec);
+  if (!problem.empty()) return reject(Status(StatusCode::INVALID_ARGUMENT, problem));
+  auto institution = TraineeInstitution(rec.trainee_id());
+  if (institution.status.code == StoreCode::kNotFound) {
+    return reject(Status(StatusCode::FAILED_PRECONDITION,
+                         "record.trainee_id = '" + rec.trainee_id() + "': no such trainee"));
+  }
+  if (!institution.ok()) return reject(ToGrpcStatus(institution.status));
+  a = RequireInstitution(who, institution.value, "upload sessions for trainees");
+  if (!a.ok()) return reject(ToGrpcStatus(a));
+
+  patient_db::SessionRow row;
+  row.uuid = rec.uuid();
+  row.trainee_id = rec.trainee_id();
+  row.institution = institution.value;
+  row.case_id = rec.case_id();
+  row.case_version = rec.case_version();
+  row.station_id = rec.station_id();
+  row.start_unix_ms = rec.start_unix_ms();
+  row.end_unix_ms = rec.end_unix_ms();
+  row.outcome = rec.outcome();
+  row.completed = rec.metrics().completed();
+  row.time_to_cecum_s = rec.metrics().time_to_cecum_s();
+  row.pain_s = rec.metrics().pain_s();
+  row.score = rec.score();
+  row.body = DeterministicBytes(rec);
+  row.body_sha256_hex = Sha256HexOf(row.body);
+  row.stored_unix_ms = NowUnixMs();
+  const std::string body_sha = row.body_sha256_hex;
+  // Acknowledged from the writer thread once the batch holding it is durable.
+  deps_.writer->Submit(
+      std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
+      [reactor, response, body_sha](const patient_db::StoreStatus& status,
+                                    const patient_db::SessionPutResult& result) {
+        if (!status.ok()) {
+          reactor->Finish(ToGrpcStatus(status));
+          return;
+        }
+        if (result.outcome == patient_db::SessionPut::kConflict) {
+          reactor->Finish(Status(StatusCode::ALREADY_EXISTS,
+                                 "session " + result.first.uuid +
+                                     " was already uploaded with other content (stored body "
+                                     "sha256 " + result.first.body_sha256_hex + ", this one " +
+                                     body_sha + "); a changed record needs a new uuid"));
+          return;
+        }
+        response->set_uuid(result.first.uuid);
+        response->set_body_sha256_hex(result.first.body_sha256_hex);
+        response->set_stored_unix_ms(result.first.stored_unix_ms);
+        reactor->Finish(Status::OK);
+      });
+  return reactor;
+}
+
+// ---- Trainees --------------------------------------------------------------
+
+grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContext* ctx,
+                                                      const ves::v1::AddTraineeRequest* request,
+                                                      ves::v1::AddTraineeResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const ves::v1::Trainee& t = request->trainee();
+  const Status status = [&]() -> Status {
+    AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "add trainees");
+    if (!a.ok()) return ToGrpcStatus(a);
+    if (!IsName(t.trainee_id())) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "trainee.trainee_id = '" + t.trainee_id() + "': must be 1..128 printable "
+                    "characters");
+    }
+    patient_db::TraineeRow row{t.trainee_id(),
+                               t.institution().empty() ? who.institution : t.institution(),
+                               t.display_name(), NowUnixMs()};
+    if (!IsName(row.institution)) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "trainee.institution = '" + row.institution + "': not a valid name");
+    }
+    auto st = deps_.store->AddInstitution(row.institution, row.created_unix_ms);
+    if (st.ok()) st = deps_.store->AddTrainee(row);
+    if (!st.ok()) return ToGrpcStatus(st);
+    ToTrainee(row, response->mutable_trainee());
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "trainee.add", t.trainee_id(), status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* TraineesService::ListTrainees(
+    grpc::CallbackServerContext* ctx, const ves::v1::ListTraineesRequest* request,
+    ves::v1::ListTraineesResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const std::string institution =
+      request->institution().empty() ? who.institution : request->institution();
+  const Status status = [&]() -> Status {
+    AuthStatus a = RequireRole(
+        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list trainees");
+    if (a.ok()) a = RequireInstitution(who, institution, "list the trainees");
+    if (!a.ok()) return ToGrpcStatus(a);
+    auto rows = deps_.store->ListTrainees(institution);
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    for (const auto& r : rows.value) ToTrainee(r, response->add_trainees());
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "trainee.list", institution, status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* TraineesService::ListSessions(
+    grpc::CallbackServerContext* ctx, const ves::v1::ListSessionsRequest* request,
+    ves::v1::ListSessionsResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const Status status = [&]() -> Status {
+    patient_db::TraineeRow trainee;
+    Status s = ReadableTrainee(deps_, who, request->trainee_id(), "list the sessions", &trainee);
+    if (!s.ok()) return s;
+    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id());
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    for (const auto& r : rows.value) *response->add_sessions() = ToSummary(r);
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "trainee.sessions", request->trainee_id(), status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
+    grpc::CallbackServerContext* ctx, const ves::v1::LearningCurveRequest* request,
+    ves::v1::LearningCurveResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const Status status = [&]() -> Status {
+    patient_db::TraineeRow trainee;
+    Status s =
+        ReadableTrainee(deps_, who, request->trainee_id(), "read the learning curve", &trainee);
+    if (!s.ok()) return s;
+    auto rows = deps_.store->ListSessions(trainee.trainee_id, "");
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    // Sessions come oldest first: attempts are numbered per case in that order.
+    std::map<std::string, ves::v1::CaseCurve> curves;
+    for (const auto& r : rows.value) {
+      ves::v1::CaseCurve& curve = curves[r.case_id];
+      curve.set_case_id(r.case_id);
+      auto* p = curve.add_points();
+      p->set_attempt(static_cast<uint32_t>(curve.points_size()));
+      p->set_start_unix_ms(r.start_unix_ms);
+      p->set_score(r.score);
+      p->set_completed(r.completed);
+      p->set_time_to_cecum_s(r.time_to_cecum_s);
+      p->set_uuid(r.uuid);
+    }
+    response->set_trainee_id(trainee.trainee_id);
+    for (auto& [id, curve] : curves) *response->add_curves() = std::move(curve);
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "trainee.curve", request->trainee_id(), status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContext* ctx,
+                                                      const ves::v1::GetSessionRequest* request,
+                                                      ves::v1::GetSessionResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const Status status = [&]() -> Status {
+    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
+                                     StoreRole::kTrainee}, "read sessions");
+    if (!a.ok()) return ToGrpcStatus(a);
+    auto row = deps_.store->GetSession(request->uuid());
+    if (!row.ok()) return ToGrpcStatus(row.status);
+    patient_db::TraineeRow trainee;
+    Status s = ReadableTrainee(deps_, who, row.value.trainee_id, "read the sessions", &trainee);
+    if (!s.ok()) return s;
+    if (!response->mutable_record()->ParseFromString(row.value.body)) {
+      return Status(StatusCode::DATA_LOSS, "stored session " + request->uuid() + " is corrupt");
+    }
+    response->set_stored_unix_ms(row.value.stored_unix_ms);
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "session.read", request->uuid(), status);
+  return reactor;
+}
+
+// ---- Admin -----------------------------------------------------------------
+
+grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext* ctx,
+                                                    const ves::v1::CreateTokenRequest* request,
+                                                    ves::v1::CreateTokenResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  const std::string institution =
+      request->institution().empty() ? who.institution : request->institution();
+  const Status status = [&]() -> Status {
+    AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "create tokens");
+    if (!a.ok()) return ToGrpcStatus(a);
+    const int role = request->role();
+    if (role < 1 || role > 4) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "role = " + std::to_string(role) + ": must be admin, supervisor, station "
+                    "or trainee");
+    }
+    if (!IsName(institution)) {
+      return Status(StatusCode::INVALID_ARGUMENT,
+                    "institution = '" + institution + "': not a valid name");
+    }
+    patient_db::TokenRow row;
+    row.role = static_cast<StoreRole>(role);
+    row.institution = institution;
+    row.label = request->label();
+    row.created_unix_ms = NowUnixMs();
+    if (row.role == StoreRole::kTrainee) {
+      auto trainee = deps_.store->GetTrainee(request->trainee_id());
+      if (!trainee.ok()) {
+        return Status(StatusCode::FAILED_PRECONDITION,
+                      "trainee_id = '" + request->trainee_id() + "': " + trainee.status.message);
+      }
+      if (trainee.value.institution != institution) {
+        return Status(StatusCode::INVALID_ARGUMENT,
+                      "trainee '" + request->trainee_id() + "' belongs to institution '" +
+                          trainee.value.institution + "', not '" + institution + "'");
+      }
+      row.trainee_id = request->trainee_id();
+    }
+    auto st = deps_.store->AddInstitution(institution, row.created_unix_ms);
+    const std::string token = NewToken();
+    row.token_sha256_hex = Sha256HexOf(token);
+    if (st.ok()) st = deps_.store->AddToken(row);
+    if (!st.ok()) return ToGrpcStatus(st);
+    response->set_token(token);
+    response->set_token_id(TokenIdOf(row.token_sha256_hex));
+    return Status::OK;
+  }();
+  FinishAudited(reactor, deps_, who, "token.create",
+                std::string(patient_db::RoleName(static_cast<StoreRole>(
+                    request->role() >= 1 && request->role() <= 4 ? request->role() : 4))) +
+                    "@" + institution,
+                status);
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* ctx,
+                                                  const ves::v1::ListAuditRequest* request,
+                                                  ves::v1::ListAuditResponse* response) {
+  auto* reactor = ctx->DefaultReactor();
+  Principal who;
+  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "read the audit log");
+  if (!a.ok()) {
+    FinishAudited(reactor, deps_, who, "audit.list", "", ToGrpcStatus(a));
+    return reactor;
+  }
+  const int limit =
+      request->limit() == 0 ? 1000 : static_cast<int>(std::min(request->limit(), 100000u));
+  auto rows = deps_.store->ListAudit(request->since_unix_ms(), limit);
+  if (!rows.ok()) {
+    reactor->Finish(ToGrpcStatus(rows.status));
+    return reactor;
+  }
+  for (const auto& r : rows.value) {
+    auto* e = response->add_entries();
+    e->set_id(r.id);
+    e->set_at_unix_ms(r.at_unix_ms);
+    e->set_actor(r.actor);
+    e->set_actor_label(r.actor_label);
+    StoreRole role = StoreRole::kTrainee;
+    e->set_role(patient_db::ParseRoleName(r.role, &role) ? ToProtoRole(role)
+                                                          : ves::v1::ROLE_UNSPECIFIED);
+    e->set_institution(r.institution);
+    e->set_action(r.action);
+    e->set_target(r.target);
+    e->set_result(r.result);
+  }
+  reactor->Finish(Status::OK);
+  return reactor;
+}
+
+}  // namespace ves::server

@@ -1,0 +1,149 @@
+#include "server/server.h"
+
+#include <grpcpp/support/server_interceptor.h>
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace ves::server {
+namespace {
+
+std::string ReadPem(const std::string& path, const std::string& flag) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in || text.str().empty()) {
+    throw std::invalid_argument(flag + " " + path + ": cannot read the file");
+  }
+  return text.str();
+}
+
+// One log line per call: method, status, duration, peer.
+class CallLogInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit CallLogInterceptor(grpc::experimental::ServerRpcInfo* info)
+      : info_(info), start_(std::chrono::steady_clock::now()) {}
+
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    using grpc::experimental::InterceptionHookPoints;
+    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS)) {
+      const grpc::Status status = methods->GetSendStatus();
+      const double ms = std::chrono::duration<double, std::milli>(
+                            std::chrono::steady_clock::now() - start_)
+                            .count();
+      const std::string peer = info_->server_context()->peer();
+      if (status.ok()) {
+        spdlog::info("{} OK {:.2f} ms peer={}", info_->method(), ms, peer);
+      } else {
+        spdlog::warn("{} {} {:.2f} ms peer={}: {}", info_->method(),
+                     StatusCodeName(status.error_code()), ms, peer, status.error_message());
+      }
+    }
+    methods->Proceed();
+  }
+
+ private:
+  grpc::experimental::ServerRpcInfo* info_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+class CallLogFactory final : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo* info) override {
+    return new CallLogInterceptor(info);
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptions& o) {
+  const bool tls = !o.tls_cert_file.empty() || !o.tls_key_file.empty();
+  if (!tls) {
+    if (!o.tls_client_ca_file.empty()) {
+      throw std::invalid_argument("--tls-client-ca needs --tls-cert and --tls-key");
+    }
+    if (!o.insecure_loopback) {
+      throw std::invalid_argument(
+          "refusing to serve without TLS: give --tls-cert and --tls-key, or "
+          "--insecure-loopback with a loopback --listen address");
+    }
+    if (!IsLoopbackListenAddress(o.listen)) {
+      throw std::invalid_argument("refusing plaintext on '" + o.listen +
+                                  "': --insecure-loopback needs a loopback address such as "
+                                  "127.0.0.1:50051");
+    }
+    return grpc::InsecureServerCredentials();
+  }
+  if (o.tls_cert_file.empty() || o.tls_key_file.empty()) {
+    throw std::invalid_argument("TLS needs both --tls-cert and --tls-key");
+  }
+  if (o.insecure_loopback) {
+    throw std::invalid_argument("--insecure-loopback cannot be combined with TLS flags");
+  }
+  grpc::SslServerCredentialsOptions ssl;
+  ssl.pem_key_cert_pairs.push_back(
+      {ReadPem(o.tls_key_file, "--tls-key"), ReadPem(o.tls_cert_file, "--tls-cert")});
+  if (!o.tls_client_ca_file.empty()) {
+    ssl.pem_root_certs = ReadPem(o.tls_client_ca_file, "--tls-client-ca");
+    ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+  }
+  return grpc::SslServerCredentials(ssl);
+}
+
+VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> store)
+    : options_(std::move(options)), store_(std::move(store)) {
+  writer_ = std::make_unique<SessionWriter>(store_.get());
+  auth_ = std::make_unique<Authenticator>(store_.get());
+  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get()};
+  cases_ = std::make_unique<CasesService>(deps);
+  sessions_ = std::make_unique<SessionsService>(deps);
+  trainees_ = std::make_unique<TraineesService>(deps);
+  admin_ = std::make_unique<AdminService>(deps);
+}
+
+VesServer::~VesServer() { Shutdown(std::chrono::milliseconds(0)); }
+
+void VesServer::Start() {
+  auto credentials = MakeServerCredentials(options_);
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options_.listen, credentials, &port_);
+  builder.RegisterService(cases_.get());
+  builder.RegisterService(sessions_.get());
+  builder.RegisterService(trainees_.get());
+  builder.RegisterService(admin_.get());
+  builder.SetMaxReceiveMessageSize(options_.max_receive_message_bytes);
+  builder.SetMaxSendMessageSize(options_.max_send_message_bytes);
+  // Keepalive: ping idle clients every 30 s, drop them after 10 s of silence;
+  // accept client pings no more often than every 10 s.
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, 30000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, 10000);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
+  if (options_.log_calls) {
+    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> logs;
+    logs.push_back(std::make_unique<CallLogFactory>());
+    builder.experimental().SetInterceptorCreators(std::move(logs));
+  }
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) {
+    server_.reset();
+    throw std::runtime_error("cannot listen on '" + options_.listen +
+                             "' (address in use or invalid)");
+  }
+}
+
+void VesServer::Shutdown(std::chrono::milliseconds grace) {
+  if (shut_down_) return;
+  shut_down_ = true;
+  if (server_) {
+    server_->Shutdown(std::chrono::system_clock::now() + grace);
+    server_->Wait();
+  }
+  writer_->Stop();
+}
+
+}  // namespace ves::server

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include "patient_db/store.h"
+#include "server/auth.h"
+#include "server/services.h"
+#include "server/session_writer.h"
+
+// The ves-server process in a class: services, group-commit writer, TLS,
+// limits, keepalive, per-call log and draining shutdown (docs/server.md).
+namespace ves::server {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
+  std::string tls_cert_file;               // PEM; with tls_key_file enables TLS
+  std::string tls_key_file;
+  std::string tls_client_ca_file;          // PEM; when set, clients must present a cert it signed
+  bool insecure_loopback = false;          // plaintext, allowed only on a loopback address
+  int max_receive_message_bytes = 16 << 20;
+  int max_send_message_bytes = 16 << 20;
+  bool log_calls = true;                   // one spdlog line per call
+};
+
+// Checks the TLS/plaintext choice and reads the PEM files. Throws
+// std::invalid_argument with one clear line when the options are refused
+// (plaintext off loopback, plaintext without --insecure-loopback, a cert
+// without a key, an unreadable file).
+std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptions& options);
+
+class VesServer {
+ public:
+  VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> store);
+  ~VesServer();
+
+  // Binds and starts serving; throws std::runtime_error when the address
+  // cannot be bound, std::invalid_argument for refused options.
+  void Start();
+  int port() const { return port_; }
+  patient_db::Store& store() { return *store_; }
+  // Stops accepting calls, lets in-flight calls finish for up to `grace`
+  // (then cancels them), commits what the writer holds. Idempotent.
+  void Shutdown(std::chrono::milliseconds grace);
+  uint64_t commit_batches() const { return writer_->batches(); }
+
+ private:
+  ServerOptions options_;
+  std::unique_ptr<patient_db::Store> store_;
+  std::unique_ptr<SessionWriter> writer_;
+  std::unique_ptr<Authenticator> auth_;
+  std::unique_ptr<CasesService> cases_;
+  std::unique_ptr<SessionsService> sessions_;
+  std::unique_ptr<TraineesService> trainees_;
+  std::unique_ptr<AdminService> admin_;
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+  bool shut_down_ = false;
+};
+
+}  // namespace ves::server

@@ -1,0 +1,130 @@
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "patient_db/store.h"
+#include "server/auth.h"
+#include "server/session_writer.h"
+#include "ves/v1/services.grpc.pb.h"
+
+// The gRPC services (callback API). Handlers are thin: authenticate, check
+// the role and institution, translate proto <-> store rows, call the Store,
+// map its status to grpc::Status, write the audit row. docs/server.md lists
+// who may call what.
+namespace ves::server {
+
+inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
+inline constexpr uint64_t kMaxCaseUploadBytes = 256ull << 20;  // a bundle's limit
+
+// What every handler needs; owned by VesServer.
+struct ServiceDeps {
+  patient_db::Store* store = nullptr;
+  SessionWriter* writer = nullptr;
+  Authenticator* auth = nullptr;
+};
+
+// Recently served case bundles by hash (content-addressed, so never stale).
+class BlobCache {
+ public:
+  explicit BlobCache(size_t budget_bytes) : budget_bytes_(budget_bytes) {}
+  std::shared_ptr<const std::string> Get(const std::string& sha256_hex);
+  void Put(const std::string& sha256_hex, std::shared_ptr<const std::string> bytes);
+
+ private:
+  std::mutex mutex_;
+  size_t budget_bytes_;
+  size_t bytes_ = 0;
+  std::map<std::string, std::shared_ptr<const std::string>> blobs_;
+};
+
+class CasesService final : public ves::v1::Cases::CallbackService {
+ public:
+  explicit CasesService(ServiceDeps deps) : deps_(deps), blobs_(512u << 20) {}
+  grpc::ServerUnaryReactor* ListCases(grpc::CallbackServerContext* ctx,
+                                      const ves::v1::ListCasesRequest* request,
+                                      ves::v1::ListCasesResponse* response) override;
+  grpc::ServerWriteReactor<ves::v1::CaseChunk>* DownloadCase(
+      grpc::CallbackServerContext* ctx, const ves::v1::DownloadCaseRequest* request) override;
+  grpc::ServerReadReactor<ves::v1::UploadCaseRequest>* UploadCase(
+      grpc::CallbackServerContext* ctx, ves::v1::UploadCaseResponse* response) override;
+
+ private:
+  ServiceDeps deps_;
+  BlobCache blobs_;
+};
+
+class SessionsService final : public ves::v1::Sessions::CallbackService {
+ public:
+  explicit SessionsService(ServiceDeps deps) : deps_(deps) {}
+  grpc::ServerUnaryReactor* UploadSession(grpc::CallbackServerContext* ctx,
+                                          const ves::v1::UploadSessionRequest* request,
+                                          ves::v1::UploadSessionResponse* response) override;
+
+ private:
+  // The trainee's institution; cached, as a trainee never changes institution.
+  patient_db::StoreResult<std::string> TraineeInstitution(const std::string& trainee_id);
+
+  ServiceDeps deps_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> trainee_institution_;  // guarded by mutex_
+};
+
+class TraineesService final : public ves::v1::Trainees::CallbackService {
+ public:
+  explicit TraineesService(ServiceDeps deps) : deps_(deps) {}
+  grpc::ServerUnaryReactor* AddTrainee(grpc::CallbackServerContext* ctx,
+                                       const ves::v1::AddTraineeRequest* request,
+                                       ves::v1::AddTraineeResponse* response) override;
+  grpc::ServerUnaryReactor* ListTrainees(grpc::CallbackServerContext* ctx,
+                                         const ves::v1::ListTraineesRequest* request,
+                                         ves::v1::ListTraineesResponse* response) override;
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* ctx,
+                                         const ves::v1::ListSessionsRequest* request,
+                                         ves::v1::ListSessionsResponse* response) override;
+  grpc::ServerUnaryReactor* GetLearningCurve(grpc::CallbackServerContext* ctx,
+                                             const ves::v1::LearningCurveRequest* request,
+                                             ves::v1::LearningCurveResponse* response) override;
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext* ctx,
+                                       const ves::v1::GetSessionRequest* request,
+                                       ves::v1::GetSessionResponse* response) override;
+
+ private:
+  ServiceDeps deps_;
+};
+
+class AdminService final : public ves::v1::Admin::CallbackService {
+ public:
+  explicit AdminService(ServiceDeps deps) : deps_(deps) {}
+  grpc::ServerUnaryReactor* CreateToken(grpc::CallbackServerContext* ctx,
+                                        const ves::v1::CreateTokenRequest* request,
+                                        ves::v1::CreateTokenResponse* response) override;
+  grpc::ServerUnaryReactor* ListAudit(grpc::CallbackServerContext* ctx,
+                                      const ves::v1::ListAuditRequest* request,
+                                      ves::v1::ListAuditResponse* response) override;
+
+ private:
+  ServiceDeps deps_;
+};
+
+// Helpers shared by the handlers.
+grpc::Status ToGrpcStatus(const patient_db::StoreStatus& status);
+grpc::Status ToGrpcStatus(const AuthStatus& status);
+AuthStatus AuthenticateCall(grpc::CallbackServerContext* ctx, Authenticator& auth,
+                            Principal* principal);
+patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
+                               const std::string& target, const grpc::Status& result);
+int64_t NowUnixMs();
+const char* StatusCodeName(grpc::StatusCode code);
+ves::v1::Role ToProtoRole(StoreRole role);
+// Writes the audit row (through the group commit) and finishes the call.
+void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
+                   const Principal& who, const std::string& action, const std::string& target,
+                   const grpc::Status& status);
+
+}  // namespace ves::server

@@ -1,0 +1,127 @@
+// ves-admin run as a process against an in-process server: init, the remote
+// subcommands, and errors as one line with a non-zero exit status.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "patient_db/case_format.h"
+#include "tests/integration/test_server.h"
+
+namespace ves::server::testing {
+namespace {
+
+using patient_db::StoreRole;
+
+struct AdminRun {
+  int exit_status = -1;
+  std::string out;
+  std::string err;
+};
+
+AdminRun Admin(const std::filesystem::path& dir, const std::string& args) {
+  const auto err_path = dir / "stderr.txt";
+  const std::string command =
+      std::string(VES_ADMIN_PATH) + " " + args + " 2>'" + err_path.string() + "'";
+  AdminRun run;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) run.out.append(buf, n);
+  const int status = ::pclose(pipe);
+  run.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream err(err_path);
+  std::stringstream text;
+  text << err.rdbuf();
+  run.err = text.str();
+  return run;
+}
+
+int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(AdminCli, InitPrintsTheFirstAdminTokenOnce) {
+  const auto dir = MakeTempDir("admin_init");
+  const std::string db = "sqlite:" + (dir / "ves.db").string();
+  AdminRun first = Admin(dir, "init --db " + db + " --institution north");
+  ASSERT_EQ(first.exit_status, 0) << first.err;
+  ASSERT_EQ(first.out.size(), 65u);  // 64 hex digits and a newline
+  auto store = patient_db::OpenStore(db);
+  auto token = store->FindToken(Sha256HexOf(first.out.substr(0, 64)));
+  ASSERT_TRUE(token.ok());
+  EXPECT_EQ(token.value.role, StoreRole::kAdmin);
+  AdminRun second = Admin(dir, "init --db " + db + " --institution north");
+  EXPECT_EQ(second.exit_status, 1);
+  EXPECT_EQ(second.out, "");
+  EXPECT_EQ(Lines(second.err), 1) << second.err;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
+  TestServer server;
+  const auto& dir = server.dir();
+  const std::string remote =
+      " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kAdmin, "north");
+  ASSERT_EQ(Admin(dir, "trainee add --id alice --name Alice" + remote).exit_status, 0);
+  AdminRun list = Admin(dir, "trainee list" + remote);
+  EXPECT_NE(list.out.find("alice"), std::string::npos);
+
+  const std::string case_file = std::string(VES_SOURCE_DIR) +
+                                "/patient_db/cases/standard-adult.textproto";
+  AdminRun up = Admin(dir, "case upload " + case_file + remote);
+  ASSERT_EQ(up.exit_status, 0) << up.err;
+  EXPECT_NE(Admin(dir, "case list" + remote).out.find("standard-adult"), std::string::npos);
+  const auto out = dir / "copy.vescase";
+  AdminRun down = Admin(dir, "case download standard-adult -o " + out.string() + remote);
+  ASSERT_EQ(down.exit_status, 0) << down.err;
+  EXPECT_EQ(patient_db::ReadFileBytes(out),
+            patient_db::EncodeCaseBundle(patient_db::LoadCaseFile(case_file)));
+
+  std::mt19937_64 rng(3);
+  const std::string uuid = NewUuid(rng);
+  ves::v1::UploadSessionResponse r;
+  ASSERT_TRUE(UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")),
+                            MakeRecord(uuid, "alice", 7), &r)
+                  .ok());
+  AdminRun scores = Admin(dir, "scores --trainee alice" + remote);
+  ASSERT_EQ(scores.exit_status, 0) << scores.err;
+  EXPECT_EQ(Lines(scores.out), 2);  // header and one session
+  EXPECT_NE(scores.out.find("standard-adult"), std::string::npos);
+  EXPECT_NE(scores.out.find("57.0"), std::string::npos);  // score 50 + 7
+  AdminRun show = Admin(dir, "session show " + uuid + remote);
+  EXPECT_NE(show.out.find(uuid), std::string::npos);
+  AdminRun token = Admin(dir, "token create --role station" + remote);
+  EXPECT_EQ(token.out.size(), 65u);
+  // Reads are audited through the group commit, a moment after the answer.
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  AdminRun audit = Admin(dir, "audit" + remote);
+  EXPECT_NE(audit.out.find("case.upload"), std::string::npos);
+  EXPECT_NE(audit.out.find("session.read"), std::string::npos);
+}
+
+TEST(AdminCli, ErrorsAreOneLineWithNonZeroStatus) {
+  TestServer server;
+  const auto& dir = server.dir();
+  AdminRun bad_token = Admin(dir, "trainee list --server " + server.address() + " --token nope");
+  EXPECT_EQ(bad_token.exit_status, 1);
+  EXPECT_EQ(Lines(bad_token.err), 1);
+  EXPECT_NE(bad_token.err.find("UNAUTHENTICATED"), std::string::npos);
+  const std::string remote =
+      " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kTrainee,
+                                                                       "north", "");
+  AdminRun denied = Admin(dir, "audit" + remote);
+  EXPECT_EQ(denied.exit_status, 1);
+  EXPECT_NE(denied.err.find("PERMISSION_DENIED"), std::string::npos);
+  AdminRun bad_role = Admin(dir, "token create --role boss" + remote);
+  EXPECT_EQ(bad_role.exit_status, 2);
+  EXPECT_EQ(Lines(bad_role.err), 1);
+  AdminRun no_server = Admin(dir, "scores --trainee x --token t");
+  EXPECT_EQ(no_server.exit_status, 2);
+  EXPECT_NE(no_server.err.find("server"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ves::server::testing

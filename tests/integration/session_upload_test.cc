@@ -1,0 +1,179 @@
+// Sessions.UploadSession: idempotency both ways, concurrency with repeats,
+// bad input, and the supervisor's read side.
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "tests/integration/test_server.h"
+
+namespace ves::server::testing {
+namespace {
+
+using patient_db::StoreRole;
+
+class SessionUpload : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server_.AddTrainee("t1", "north");
+    station_ = server_.Client(server_.MakeToken(StoreRole::kStation, "north"));
+    supervisor_ = server_.Client(server_.MakeToken(StoreRole::kSupervisor, "north"));
+  }
+  grpc::Status Get(const std::string& uuid, ves::v1::GetSessionResponse* r) {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, supervisor_);
+    ves::v1::GetSessionRequest q;
+    q.set_uuid(uuid);
+    return ves::v1::Trainees::NewStub(MakeClientChannel(supervisor_))->GetSession(&ctx, q, r);
+  }
+  TestServer server_;
+  ClientOptions station_;
+  ClientOptions supervisor_;
+  std::mt19937_64 rng_{7};
+};
+
+TEST_F(SessionUpload, SameUuidAndBodyAgainGivesTheFirstResult) {
+  const auto record = MakeRecord(NewUuid(rng_), "t1", 3);
+  ves::v1::UploadSessionResponse first, second;
+  ASSERT_TRUE(UploadSession(station_, record, &first).ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));  // a later stored time if re-stored
+  ASSERT_TRUE(UploadSession(station_, record, &second).ok());
+  EXPECT_EQ(first.SerializeAsString(), second.SerializeAsString());
+  EXPECT_EQ(first.uuid(), record.uuid());
+  EXPECT_EQ(server_.store().CountSessions().value, 1);
+}
+
+TEST_F(SessionUpload, SameUuidWithOtherBodyIsRefusedAndFirstKept) {
+  const auto record = MakeRecord(NewUuid(rng_), "t1", 3);
+  auto changed = record;
+  changed.set_score(record.score() + 1);
+  ves::v1::UploadSessionResponse r;
+  ASSERT_TRUE(UploadSession(station_, record, &r).ok());
+  auto status = UploadSession(station_, changed, &r);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::ALREADY_EXISTS);
+  EXPECT_NE(status.error_message().find(record.uuid()), std::string::npos);
+  ves::v1::GetSessionResponse got;
+  ASSERT_TRUE(Get(record.uuid(), &got).ok());
+  EXPECT_EQ(got.record().SerializeAsString(), record.SerializeAsString());  // whole, unchanged
+}
+
+TEST_F(SessionUpload, ConcurrentUploadsWithRepeatsStoreExactlyTheDistinctRecords) {
+  constexpr int kClients = 32;
+  constexpr int kUploads = 1000;
+  constexpr int kDistinct = 600;  // uploads k and k+600 carry the same record
+  std::vector<ves::v1::SessionRecord> records;
+  for (int i = 0; i < kDistinct; ++i) records.push_back(MakeRecord(NewUuid(rng_), "t1", i));
+  std::atomic<int> next{0};
+  std::atomic<int> failures{0};
+  std::vector<std::thread> clients;
+  for (int c = 0; c < kClients; ++c) {
+    clients.emplace_back([&] {
+      auto stub = ves::v1::Sessions::NewStub(MakeClientChannel(station_));
+      for (int k = next++; k < kUploads; k = next++) {
+        grpc::ClientContext ctx;
+        PrepareContext(&ctx, station_);
+        ves::v1::UploadSessionRequest q;
+        *q.mutable_record() = records[k % kDistinct];
+        ves::v1::UploadSessionResponse r;
+        if (!stub->UploadSession(&ctx, q, &r).ok() || r.uuid() != q.record().uuid()) ++failures;
+      }
+    });
+  }
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(failures.load(), 0);
+  EXPECT_EQ(server_.store().CountSessions().value, kDistinct);
+  auto listed = server_.store().ListSessions("t1", "").value;
+  std::set<std::string> uuids;
+  for (const auto& row : listed) uuids.insert(row.uuid);
+  EXPECT_EQ(uuids.size(), static_cast<size_t>(kDistinct));
+  EXPECT_GT(server_.server().commit_batches(), 0u);
+}
+
+TEST_F(SessionUpload, NonFiniteMetricIsRefusedNamingTheField) {
+  auto record = MakeRecord(NewUuid(rng_), "t1", 1);
+  record.mutable_metrics()->set_pain_s(std::numeric_limits<double>::quiet_NaN());
+  ves::v1::UploadSessionResponse r;
+  auto status = UploadSession(station_, record, &r);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("record.metrics.pain_s"), std::string::npos)
+      << status.error_message();
+  record = MakeRecord(NewUuid(rng_), "t1", 1);
+  record.mutable_events(2)->set_value(std::numeric_limits<double>::infinity());
+  status = UploadSession(station_, record, &r);
+  EXPECT_NE(status.error_message().find("record.events[2].value"), std::string::npos)
+      << status.error_message();
+  EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
+}
+
+TEST_F(SessionUpload, BadUuidAndUnknownTraineeAreRefused) {
+  ves::v1::UploadSessionResponse r;
+  auto status = UploadSession(station_, MakeRecord("NOT-A-UUID", "t1", 1), &r);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("record.uuid"), std::string::npos);
+  status = UploadSession(station_, MakeRecord(NewUuid(rng_), "ghost", 1), &r);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("ghost"), std::string::npos);
+}
+
+TEST_F(SessionUpload, OversizedMessageIsRefusedAndServerKeepsServing) {
+  auto record = MakeRecord(NewUuid(rng_), "t1", 1);
+  record.mutable_input_log()->set_encoded(std::string(17 << 20, 'x'));  // limit is 16 MiB
+  ves::v1::UploadSessionResponse r;
+  auto status = UploadSession(station_, record, &r);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+  EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
+}
+
+TEST_F(SessionUpload, GarbageBytesOnThePortDoNotStopTheServer) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<uint16_t>(server_.server().port()));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  std::string garbage(4096, '\0');
+  for (auto& ch : garbage) ch = static_cast<char>(rng_());
+  ASSERT_GT(::send(fd, garbage.data(), garbage.size(), MSG_NOSIGNAL), 0);
+  char buf[1024];
+  // The server answers with an HTTP/2 GOAWAY (or nothing) and closes.
+  timeval tv{5, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  while (::recv(fd, buf, sizeof buf, 0) > 0) {
+  }
+  ::close(fd);
+  ves::v1::UploadSessionResponse r;
+  EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
+}
+
+TEST_F(SessionUpload, SupervisorSeesScoresAndLearningCurvePerCase) {
+  ves::v1::UploadSessionResponse r;
+  for (int i = 0; i < 3; ++i) {
+    auto record = MakeRecord(NewUuid(rng_), "t1", i);
+    if (i == 1) record.set_case_id("paper-sigmoid");
+    ASSERT_TRUE(UploadSession(station_, record, &r).ok());
+  }
+  grpc::ClientContext ctx;
+  PrepareContext(&ctx, supervisor_);
+  ves::v1::LearningCurveRequest q;
+  q.set_trainee_id("t1");
+  ves::v1::LearningCurveResponse curve;
+  ASSERT_TRUE(ves::v1::Trainees::NewStub(MakeClientChannel(supervisor_))
+                  ->GetLearningCurve(&ctx, q, &curve)
+                  .ok());
+  ASSERT_EQ(curve.curves_size(), 2);
+  EXPECT_EQ(curve.curves(0).case_id(), "paper-sigmoid");
+  EXPECT_EQ(curve.curves(0).points_size(), 1);
+  ASSERT_EQ(curve.curves(1).points_size(), 2);  // standard-adult: seeds 0 and 2
+  EXPECT_EQ(curve.curves(1).points(1).attempt(), 2u);
+  EXPECT_DOUBLE_EQ(curve.curves(1).points(1).score(), 52.0);  // 50 + 2 % 50
+}
+
+}  // namespace
+}  // namespace ves::server::testing

@@ -1,0 +1,296 @@
+// The storage contract every Store implementation must keep (DESIGN.md §7:
+// one suite, run against each backend). A new backend adds one line to
+// INSTANTIATE_TEST_SUITE_P below with a factory for an empty store.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "patient_db/migrations/migrations.h"
+#include "patient_db/sqlite_store.h"
+#include "patient_db/store.h"
+
+namespace ves::patient_db {
+namespace {
+
+struct Backend {
+  std::string name;
+  // Opens the store kept at `dir` (empty dir: a new store).
+  std::function<std::unique_ptr<Store>(const std::filesystem::path& dir)> open;
+};
+
+void PrintTo(const Backend& backend, std::ostream* os) { *os << backend.name; }
+
+class StoreContract : public ::testing::TestWithParam<Backend> {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("ves_store_" + GetParam().name + "_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    store_ = GetParam().open(dir_);
+    ASSERT_TRUE(store_->AddInstitution("north", 1).ok());
+    ASSERT_TRUE(store_->AddInstitution("south", 1).ok());
+    ASSERT_TRUE(store_->AddTrainee({"t1", "north", "Trainee One", 10}).ok());
+  }
+  void TearDown() override {
+    store_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  void Reopen() {
+    store_.reset();
+    store_ = GetParam().open(dir_);
+  }
+
+  static SessionRow Session(const std::string& uuid, const std::string& body, int64_t start) {
+    SessionRow r;
+    r.uuid = uuid;
+    r.trainee_id = "t1";
+    r.institution = "north";
+    r.case_id = "standard-adult";
+    r.case_version = 1;
+    r.station_id = "st-1";
+    r.start_unix_ms = start;
+    r.end_unix_ms = start + 1000;
+    r.outcome = 1;
+    r.completed = true;
+    r.time_to_cecum_s = 120.5;
+    r.pain_s = 3.25;
+    r.score = 77.5;
+    r.body = body;
+    r.body_sha256_hex = "hash-of-" + body;
+    r.stored_unix_ms = 5000 + start;
+    return r;
+  }
+
+  static CaseRow Case(const std::string& id, uint32_t version, const std::string& sha) {
+    CaseRow c;
+    c.case_id = id;
+    c.version = version;
+    c.title = id + " v" + std::to_string(version);
+    c.difficulty = 2;
+    c.region_mask = (1u << 1) | (1u << 2);  // rectum, sigmoid
+    c.institution = "north";
+    c.sha256_hex = sha;
+    c.payload_sha256_hex = "p" + sha;
+    c.uploaded_by = "abc";
+    c.stored_unix_ms = 42;
+    return c;
+  }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<Store> store_;
+};
+
+TEST_P(StoreContract, TokensAreFoundByHashOnly) {
+  TokenRow t{"aa11", StoreRole::kSupervisor, "north", "", "dr x", 7};
+  ASSERT_TRUE(store_->AddToken(t).ok());
+  auto found = store_->FindToken("aa11");
+  ASSERT_TRUE(found.ok()) << found.status.message;
+  EXPECT_EQ(found.value, t);
+  EXPECT_EQ(store_->FindToken("aa12").status.code, StoreCode::kNotFound);
+}
+
+TEST_P(StoreContract, TokenForUnknownInstitutionIsRefused) {
+  TokenRow t{"bb", StoreRole::kStation, "nowhere", "", "", 7};
+  EXPECT_EQ(store_->AddToken(t).code, StoreCode::kInvalidArgument);
+}
+
+TEST_P(StoreContract, TraineesAreListedPerInstitution) {
+  ASSERT_TRUE(store_->AddTrainee({"t2", "south", "Two", 11}).ok());
+  ASSERT_TRUE(store_->AddTrainee({"t0", "north", "Zero", 12}).ok());
+  auto north = store_->ListTrainees("north");
+  ASSERT_TRUE(north.ok());
+  ASSERT_EQ(north.value.size(), 2u);
+  EXPECT_EQ(north.value[0].trainee_id, "t0");  // ordered by id
+  EXPECT_EQ(north.value[1].trainee_id, "t1");
+  EXPECT_EQ(store_->AddTrainee({"t1", "north", "again", 13}).code, StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->GetTrainee("nobody").status.code, StoreCode::kNotFound);
+}
+
+TEST_P(StoreContract, CaseVersionsAreKeptAndBlobsContentAddressed) {
+  ASSERT_TRUE(store_->PutCase(Case("c", 1, "h1"), "bytes-1").ok());
+  auto v2 = store_->PutCase(Case("c", 2, "h2"), "bytes-22");
+  ASSERT_TRUE(v2.ok()) << v2.status.message;
+  EXPECT_FALSE(v2.value.already_stored);
+  EXPECT_EQ(v2.value.row.size_bytes, 8u);
+  auto latest = store_->GetCase("c", 0);
+  ASSERT_TRUE(latest.ok());
+  EXPECT_EQ(latest.value.version, 2u);
+  EXPECT_EQ(store_->GetCase("c", 1).value.sha256_hex, "h1");
+  EXPECT_EQ(store_->GetBlob("h1").value, "bytes-1");
+  EXPECT_EQ(store_->GetBlob("h2").value, "bytes-22");
+  EXPECT_EQ(store_->GetCase("c", 3).status.code, StoreCode::kNotFound);
+}
+
+TEST_P(StoreContract, SameCaseVersionTwiceIsIdempotentOtherContentRefused) {
+  ASSERT_TRUE(store_->PutCase(Case("c", 1, "h1"), "bytes-1").ok());
+  auto again = store_->PutCase(Case("c", 1, "h1"), "bytes-1");
+  ASSERT_TRUE(again.ok());
+  EXPECT_TRUE(again.value.already_stored);
+  auto other = store_->PutCase(Case("c", 1, "h9"), "other");
+  EXPECT_EQ(other.status.code, StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->GetBlob("h9").status.code, StoreCode::kNotFound);  // rolled back
+}
+
+TEST_P(StoreContract, CaseListFiltersAndVisibility) {
+  CaseRow shared = Case("shared", 1, "hs");
+  shared.shared_with = {"south"};
+  ASSERT_TRUE(store_->PutCase(shared, "s").ok());
+  CaseRow hard = Case("hard", 1, "hh");
+  hard.difficulty = 3;
+  hard.region_mask = 1u << 5;  // transverse only
+  ASSERT_TRUE(store_->PutCase(hard, "h").ok());
+  ASSERT_TRUE(store_->PutCase(Case("hard", 2, "hh2"), "h2").ok());
+
+  CaseFilter latest;
+  auto all = store_->ListCases(latest);
+  ASSERT_TRUE(all.ok());
+  ASSERT_EQ(all.value.size(), 2u);  // hard@2, shared@1
+  EXPECT_EQ(all.value[0].case_id, "hard");
+  EXPECT_EQ(all.value[0].version, 2u);
+
+  CaseFilter versions;
+  versions.all_versions = true;
+  EXPECT_EQ(store_->ListCases(versions).value.size(), 3u);
+
+  CaseFilter south;
+  south.visible_to = "south";
+  auto seen = store_->ListCases(south).value;
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0].case_id, "shared");
+  EXPECT_EQ(seen[0].shared_with, std::vector<std::string>{"south"});
+
+  CaseFilter transverse;
+  transverse.region = 5;
+  transverse.all_versions = true;
+  auto t = store_->ListCases(transverse).value;
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_EQ(t[0].version, 1u);
+
+  CaseFilter medium;
+  medium.difficulty = 2;
+  EXPECT_EQ(store_->ListCases(medium).value.size(), 2u);  // shared@1 and hard@2
+}
+
+TEST_P(StoreContract, BatchStoresNewDetectsDuplicateAndConflict) {
+  WriteBatch first;
+  first.sessions = {Session("u1", "body-a", 100), Session("u2", "body-b", 50)};
+  auto r1 = store_->CommitBatch(first);
+  ASSERT_TRUE(r1.ok()) << r1.status.message;
+  ASSERT_EQ(r1.value.size(), 2u);
+  EXPECT_EQ(r1.value[0].outcome, SessionPut::kStored);
+
+  WriteBatch second;
+  SessionRow dup = Session("u1", "body-a", 100);
+  dup.stored_unix_ms = 999999;  // a later upload: the first one's time must come back
+  second.sessions = {dup, Session("u2", "body-changed", 50), Session("u3", "c", 10),
+                     Session("u3", "c", 10)};
+  auto r2 = store_->CommitBatch(second);
+  ASSERT_TRUE(r2.ok());
+  EXPECT_EQ(r2.value[0].outcome, SessionPut::kDuplicate);
+  EXPECT_EQ(r2.value[0].first.stored_unix_ms, 5100);
+  EXPECT_EQ(r2.value[1].outcome, SessionPut::kConflict);
+  EXPECT_EQ(r2.value[1].first.body_sha256_hex, "hash-of-body-b");
+  EXPECT_EQ(r2.value[2].outcome, SessionPut::kStored);
+  EXPECT_EQ(r2.value[3].outcome, SessionPut::kDuplicate);  // repeat inside one batch
+  EXPECT_EQ(store_->CountSessions().value, 3);
+}
+
+TEST_P(StoreContract, SessionsSurviveReopenWithBodyAndOrder) {
+  WriteBatch b;
+  b.sessions = {Session("u1", "body-a", 300), Session("u2", "body-b", 100)};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto one = store_->GetSession("u1");
+  ASSERT_TRUE(one.ok());
+  SessionRow expected = Session("u1", "body-a", 300);
+  EXPECT_EQ(one.value, expected);
+  auto list = store_->ListSessions("t1", "");
+  ASSERT_TRUE(list.ok());
+  ASSERT_EQ(list.value.size(), 2u);
+  EXPECT_EQ(list.value[0].uuid, "u2");  // oldest first
+  EXPECT_TRUE(list.value[0].body.empty());
+  EXPECT_EQ(store_->ListSessions("t1", "other-case").value.size(), 0u);
+  EXPECT_EQ(store_->GetSession("nope").status.code, StoreCode::kNotFound);
+}
+
+TEST_P(StoreContract, SessionForUnknownTraineeFailsWholeBatch) {
+  WriteBatch b;
+  SessionRow orphan = Session("u9", "x", 1);
+  orphan.trainee_id = "ghost";
+  b.sessions = {Session("u8", "y", 1), orphan};
+  EXPECT_FALSE(store_->CommitBatch(b).ok());
+  EXPECT_EQ(store_->CountSessions().value, 0);  // nothing half-written
+}
+
+TEST_P(StoreContract, AuditRowsGetIdsAndSessionResults) {
+  WriteBatch b;
+  b.sessions = {Session("u1", "a", 1), Session("u1", "b", 1)};
+  AuditRow a{0, 20, "tok", "label", "station", "north", "session.upload", "u1", ""};
+  b.session_audit = {a, a};
+  AuditRow read{0, 30, "tok", "label", "station", "north", "case.download", "c@1", "OK"};
+  b.audit = {read};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto rows = store_->ListAudit(0, 100);
+  ASSERT_TRUE(rows.ok());
+  ASSERT_EQ(rows.value.size(), 3u);
+  EXPECT_EQ(rows.value[0].id, 1);
+  EXPECT_EQ(rows.value[0].result, "OK");
+  EXPECT_EQ(rows.value[1].result, "ALREADY_EXISTS");
+  EXPECT_EQ(rows.value[2].action, "case.download");
+  EXPECT_EQ(store_->ListAudit(25, 100).value.size(), 1u);
+  EXPECT_EQ(store_->ListAudit(0, 2).value.size(), 2u);
+  // Ids continue after a reopen.
+  WriteBatch more;
+  more.audit = {read};
+  ASSERT_TRUE(store_->CommitBatch(more).ok());
+  EXPECT_EQ(store_->ListAudit(0, 100).value.back().id, 4);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Backends, StoreContract,
+    ::testing::Values(Backend{"sqlite",
+                              [](const std::filesystem::path& dir) -> std::unique_ptr<Store> {
+                                return OpenStore("sqlite:" + (dir / "ves.db").string());
+                              }}),
+    [](const ::testing::TestParamInfo<Backend>& info) { return info.param.name; });
+
+// SQLite specifics: the migration runs once and the settings are the durable ones.
+TEST(SqliteStore, MigratesOnceAndRecordsVersion) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("ves_migrate_" + std::to_string(::getpid()) + ".db");
+  std::filesystem::remove(path);
+  {
+    SqliteStore first(path.string());
+    EXPECT_EQ(first.schema_version(), SqlMigrations().back().version);
+  }
+  SqliteStore second(path.string());  // a second open must not re-run CREATE TABLE
+  EXPECT_EQ(second.schema_version(), SqlMigrations().back().version);
+  SqliteDb db(path.string());
+  std::string error;
+  auto* s = db.Prepare("PRAGMA journal_mode", &error);
+  ASSERT_NE(s, nullptr) << error;
+  int rc = 0;
+  ASSERT_TRUE(s->Step(&rc));
+  EXPECT_EQ(s->Text(0), "wal");
+  s = db.Prepare("PRAGMA synchronous", &error);
+  ASSERT_TRUE(s->Step(&rc));
+  EXPECT_EQ(s->Int(0), 2);  // FULL
+  s = db.Prepare("PRAGMA foreign_keys", &error);
+  ASSERT_TRUE(s->Step(&rc));
+  EXPECT_EQ(s->Int(0), 1);
+  std::filesystem::remove(path);
+}
+
+TEST(OpenStore, UnknownSchemeIsRefused) {
+  EXPECT_THROW(OpenStore("mysql://x"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ves::patient_db
