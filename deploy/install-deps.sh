@@ -11,8 +11,12 @@ PACKAGES=(
   # model, I/O, storage
   libeigen3-dev libboost-dev libboost-program-options-dev libsqlite3-dev sqlite3
   libssl-dev openssl zlib1g-dev libspdlog-dev nlohmann-json3-dev
+  # PostgreSQL store and its test cluster (deploy/with-postgres.sh)
+  libpqxx-dev postgresql postgresql-client
   # views: OpenCV (highgui with Qt), EGL/GLES offscreen through Mesa
   libopencv-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri xvfb xauth
+  # the station's UI test drives the windows under Xvfb: keys/mouse and screenshots
+  xdotool x11-apps
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -7,4 +7,10 @@ build="${VES_BUILD_DIR:-$root/build}"
 "$root/deploy/install-deps.sh"
 VES_BUILD_DIR="$build" "$root/deploy/build.sh" "$@"
 cd "$build"
-ctest --output-on-failure -j "${VES_JOBS:-2}" --timeout 600
+# With PostgreSQL's server installed, the tests also run against a throwaway
+# cluster (deploy/with-postgres.sh sets VES_TEST_POSTGRES_URL).
+with_pg=()
+if compgen -G "/usr/lib/postgresql/*/bin/initdb" >/dev/null; then
+  with_pg=("$root/deploy/with-postgres.sh")
+fi
+"${with_pg[@]}" ctest --output-on-failure -j "${VES_JOBS:-2}" --timeout 600

@@ -1,5 +1,5 @@
 // ves-server: the central gRPC server (docs/server.md).
-//   ves-server --listen 127.0.0.1:50051 --db sqlite:PATH
+//   ves-server --listen 127.0.0.1:50051 --db sqlite:PATH|postgresql://URL
 //              [--tls-cert F --tls-key F [--tls-client-ca F] | --insecure-loopback]
 // SIGTERM or SIGINT drains in-flight calls, commits pending writes and exits 0.
 #include <spdlog/spdlog.h>
@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
   try {
     po::store(po::parse_command_line(argc, argv, desc), vm);
     if (vm.count("help")) {
-      std::cout << "usage: ves-server --db sqlite:PATH [--listen ADDR] [TLS flags]\n" << desc;
+      std::cout << "usage: ves-server --db sqlite:PATH|postgresql://URL [--listen ADDR] [TLS flags]\n"
+                << desc;
       return 0;
     }
     po::notify(vm);

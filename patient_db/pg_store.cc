@@ -1,0 +1,290 @@
+#include "patient_db/pg_store.h"
+
+#include <chrono>
+#include <stdexcept>
+#include <thread>
+
+#include <pqxx/pqxx>
+
+#include "patient_db/migrations/postgres/pg_migrations.h"
+
+namespace ves::patient_db {
+namespace {
+
+// Any constant works: it only has to be the same in every replica.
+constexpr int64_t kMigrationLockKey = 0x7665735f6d6967;  // "ves_mig"
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+StoreStatus Internal(const std::string& what, const std::string& error) {
+  return StoreStatus::Error(StoreCode::kInternal, what + ": " + error);
+}
+
+}  // namespace
+
+PgStore::PgStore(PgStoreOptions options)
+    : options_(std::move(options)), pool_(options_.url, options_.pool_size) {
+  if (options_.max_attempts < 1) {
+    throw std::invalid_argument("PostgreSQL max_attempts must be >= 1, not " +
+                                std::to_string(options_.max_attempts));
+  }
+  try {
+    Migrate();
+  } catch (const std::exception& e) {
+    throw std::runtime_error("cannot open PostgreSQL store: " + std::string(e.what()));
+  }
+}
+
+PgStore::~PgStore() = default;
+
+PgStore::Stats PgStore::stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return stats_;
+}
+
+void PgStore::Migrate() {
+  auto conn = pool_.Connect();
+  pqxx::work tx(*conn);
+  // Replicas starting together queue here; DDL is transactional in PostgreSQL,
+  // so a failed migration leaves nothing behind.
+  tx.exec_params("SELECT pg_advisory_xact_lock($1)", kMigrationLockKey);
+  tx.exec(
+      "CREATE TABLE IF NOT EXISTS schema_migrations (version INTEGER PRIMARY KEY, "
+      "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)");
+  for (const Migration& m : PgMigrations()) {
+    const bool applied =
+        !tx.exec_params("SELECT 1 FROM schema_migrations WHERE version = $1", m.version).empty();
+    if (!applied) {
+      try {
+        tx.exec(m.sql);
+      } catch (const std::exception& e) {
+        throw std::runtime_error("migration " + std::to_string(m.version) + " failed: " +
+                                 e.what());
+      }
+      tx.exec_params(
+          "INSERT INTO schema_migrations (version, description, applied_unix_ms) "
+          "VALUES ($1, $2, $3)",
+          m.version, m.description, NowUnixMs());
+    }
+    schema_version_ = m.version;
+  }
+  tx.commit();
+}
+
+bool PgStore::IsRetryableBeforeCommit(const std::exception& e) {
+  // serialization_failure and deadlock_detected derive from transaction_rollback.
+  return dynamic_cast<const pqxx::transaction_rollback*>(&e) != nullptr ||
+         dynamic_cast<const pqxx::broken_connection*>(&e) != nullptr;
+}
+
+PgStore::InDoubt PgStore::ResolveInDoubt(int64_t txid) {
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(options_.in_doubt_wait_ms);
+  {
+    std::lock_guard lock(stats_mutex_);
+    ++stats_.in_doubt_resolved;
+  }
+  while (std::chrono::steady_clock::now() < deadline) {
+    try {
+      auto conn = pool_.Connect();
+      pqxx::nontransaction q(*conn);
+      pqxx::result r = q.exec_params("SELECT txid_status($1)", txid);
+      if (!r.empty() && !r[0][0].is_null()) {
+        const std::string status = r[0][0].as<std::string>();
+        if (status == "committed") return InDoubt::kCommitted;
+        if (status == "aborted") return InDoubt::kAborted;
+      }
+      // "in progress": the server has not finished the commit yet; NULL: too
+      // old to know (cannot happen within seconds).
+    } catch (const pqxx::broken_connection&) {
+      // The server may be restarting; try again until the deadline.
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return InDoubt::kUnknown;
+}
+
+StoreStatus PgStore::Transact(const std::string& what, TxMode mode, const Body& body) {
+  std::string last_error;
+  for (int attempt = 1; attempt <= options_.max_attempts; ++attempt) {
+    if (attempt > 1) {
+      {
+        std::lock_guard lock(stats_mutex_);
+        ++stats_.retries;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10 << std::min(attempt, 6)));
+    }
+    int64_t txid = 0;
+    bool commit_sent = false;
+    try {
+      PgPool::Lease lease = pool_.Acquire();
+      try {
+        // Reads run each statement on its own (READ COMMITTED gives every
+        // statement its own snapshot either way): no BEGIN/COMMIT round trips.
+        std::unique_ptr<pqxx::transaction_base> tx;
+        if (mode == TxMode::kWrite) {
+          tx = std::make_unique<pqxx::work>(lease.conn());
+          // Known before COMMIT so an in-doubt commit can be looked up after.
+          txid = tx->exec("SELECT txid_current()")[0][0].as<int64_t>();
+        } else {
+          tx = std::make_unique<pqxx::nontransaction>(lease.conn());
+        }
+        StoreStatus status = body(*tx);
+        if (!status.ok()) {
+          tx->abort();
+          return status;
+        }
+        commit_sent = mode == TxMode::kWrite;
+        tx->commit();
+        return StoreStatus::Ok();
+      } catch (const pqxx::broken_connection&) {
+        lease.Discard();
+        if (!commit_sent) throw;
+        // Lost while committing: fall through to the in-doubt lookup below.
+      } catch (const pqxx::in_doubt_error&) {
+        lease.Discard();
+      }
+      switch (ResolveInDoubt(txid)) {
+        case InDoubt::kCommitted: return StoreStatus::Ok();
+        case InDoubt::kAborted: last_error = "commit lost with the connection"; continue;
+        case InDoubt::kUnknown:
+          return Internal(what, "outcome of commit (txid " + std::to_string(txid) +
+                                    ") unknown: connection lost during COMMIT");
+      }
+    } catch (const pqxx::integrity_constraint_violation& e) {
+      return StoreStatus::Error(StoreCode::kInvalidArgument, what + ": " + e.what());
+    } catch (const std::exception& e) {
+      if (!IsRetryableBeforeCommit(e)) return Internal(what, e.what());
+      last_error = e.what();
+    }
+  }
+  return Internal(what, "gave up after " + std::to_string(options_.max_attempts) +
+                            " attempts: " + last_error);
+}
+
+StoreStatus PgStore::AddInstitution(const std::string& name, int64_t now_unix_ms) {
+  return Transact("add institution", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    tx.exec_params(
+        "INSERT INTO institutions (name, created_unix_ms) VALUES ($1, $2) "
+        "ON CONFLICT (name) DO NOTHING",
+        name, now_unix_ms);
+    return StoreStatus::Ok();
+  });
+}
+
+StoreResult<bool> PgStore::HasInstitution(const std::string& name) {
+  bool found = false;
+  StoreStatus st = Transact("find institution", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    found = !tx.exec_params("SELECT 1 FROM institutions WHERE name = $1", name).empty();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return found;
+}
+
+StoreStatus PgStore::AddToken(const TokenRow& t) {
+  return Transact("add token", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    tx.exec_params(
+        "INSERT INTO tokens (token_sha256_hex, role, institution, trainee_id, label, "
+        "created_unix_ms) VALUES ($1, $2, $3, $4, $5, $6)",
+        t.token_sha256_hex, std::string(RoleName(t.role)), t.institution, t.trainee_id, t.label,
+        t.created_unix_ms);
+    return StoreStatus::Ok();
+  });
+}
+
+StoreResult<TokenRow> PgStore::FindToken(const std::string& token_sha256_hex) {
+  TokenRow t;
+  StoreStatus st = Transact("find token", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "SELECT role, institution, trainee_id, label, created_unix_ms FROM tokens "
+        "WHERE token_sha256_hex = $1",
+        token_sha256_hex);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such token");
+    t.token_sha256_hex = token_sha256_hex;
+    ParseRoleName(r[0][0].as<std::string>(), &t.role);
+    t.institution = r[0][1].as<std::string>();
+    t.trainee_id = r[0][2].as<std::string>();
+    t.label = r[0][3].as<std::string>();
+    t.created_unix_ms = r[0][4].as<int64_t>();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return t;
+}
+
+StoreStatus PgStore::AddTrainee(const TraineeRow& t) {
+  return Transact("add trainee '" + t.trainee_id + "'", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
+        "VALUES ($1, $2, $3, $4) ON CONFLICT (trainee_id) DO NOTHING RETURNING 1",
+        t.trainee_id, t.institution, t.display_name, t.created_unix_ms);
+    if (r.empty()) {
+      return StoreStatus::Error(StoreCode::kAlreadyExists,
+                                "trainee '" + t.trainee_id + "' already exists");
+    }
+    return StoreStatus::Ok();
+  });
+}
+
+StoreResult<TraineeRow> PgStore::GetTrainee(const std::string& trainee_id) {
+  TraineeRow t;
+  StoreStatus st = Transact("get trainee", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "SELECT institution, display_name, created_unix_ms FROM trainees WHERE trainee_id = $1",
+        trainee_id);
+    if (r.empty()) {
+      return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
+    }
+    t = {trainee_id, r[0][0].as<std::string>(), r[0][1].as<std::string>(),
+         r[0][2].as<int64_t>()};
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return t;
+}
+
+StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& institution) {
+  std::vector<TraineeRow> out;
+  StoreStatus st = Transact("list trainees", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    // COLLATE "C": byte order, as SQLite sorts, whatever the cluster's locale.
+    pqxx::result r = tx.exec_params(
+        "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
+        "WHERE institution = $1 ORDER BY trainee_id COLLATE \"C\"",
+        institution);
+    for (const auto& row : r) {
+      out.push_back({row[0].as<std::string>(), row[1].as<std::string>(),
+                     row[2].as<std::string>(), row[3].as<int64_t>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int limit) {
+  std::vector<AuditRow> out;
+  StoreStatus st = Transact("list audit", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    pqxx::result r = tx.exec_params(
+        "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
+        "FROM audit_log WHERE at_unix_ms >= $1 ORDER BY id LIMIT $2",
+        since_unix_ms, limit);
+    for (const auto& row : r) {
+      out.push_back({row[0].as<int64_t>(), row[1].as<int64_t>(), row[2].as<std::string>(),
+                     row[3].as<std::string>(), row[4].as<std::string>(),
+                     row[5].as<std::string>(), row[6].as<std::string>(),
+                     row[7].as<std::string>(), row[8].as<std::string>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+}  // namespace ves::patient_db

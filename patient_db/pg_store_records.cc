@@ -1,0 +1,368 @@
+// PgStore: cases (content-addressed blobs, versions, shares) and sessions
+// (group-committed batches). Races between replicas are settled by the
+// primary keys with INSERT ... ON CONFLICT DO NOTHING: the loser waits for the
+// winner's transaction and then reads its row, so no error reaches the caller.
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <optional>
+#include <set>
+
+#include <pqxx/pqxx>
+
+#include "patient_db/pg_store.h"
+
+namespace ves::patient_db {
+namespace {
+
+constexpr const char* kCaseColumns =
+    "c.case_id, c.version, c.title, c.difficulty, c.region_mask, c.institution, c.sha256_hex, "
+    "c.payload_sha256_hex, c.size_bytes, c.uploaded_by, c.stored_unix_ms";
+
+CaseRow ReadCaseRow(const pqxx::row& r) {
+  CaseRow c;
+  c.case_id = r[0].as<std::string>();
+  c.version = static_cast<uint32_t>(r[1].as<int64_t>());
+  c.title = r[2].as<std::string>();
+  c.difficulty = r[3].as<int>();
+  c.region_mask = static_cast<uint64_t>(r[4].as<int64_t>());
+  c.institution = r[5].as<std::string>();
+  c.sha256_hex = r[6].as<std::string>();
+  c.payload_sha256_hex = r[7].as<std::string>();
+  c.size_bytes = static_cast<uint64_t>(r[8].as<int64_t>());
+  c.uploaded_by = r[9].as<std::string>();
+  c.stored_unix_ms = r[10].as<int64_t>();
+  return c;
+}
+
+constexpr const char* kSessionColumns =
+    "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
+    "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
+    "stored_unix_ms";
+
+SessionRow ReadSessionRow(const pqxx::row& r) {
+  SessionRow s;
+  s.uuid = r[0].as<std::string>();
+  s.trainee_id = r[1].as<std::string>();
+  s.institution = r[2].as<std::string>();
+  s.case_id = r[3].as<std::string>();
+  s.case_version = static_cast<uint32_t>(r[4].as<int64_t>());
+  s.station_id = r[5].as<std::string>();
+  s.start_unix_ms = r[6].as<int64_t>();
+  s.end_unix_ms = r[7].as<int64_t>();
+  s.outcome = r[8].as<int>();
+  s.completed = r[9].as<int>() != 0;
+  s.time_to_cecum_s = r[10].as<double>();
+  s.pain_s = r[11].as<double>();
+  s.score = r[12].as<double>();
+  s.body_sha256_hex = r[13].as<std::string>();
+  s.stored_unix_ms = r[14].as<int64_t>();
+  return s;
+}
+
+// Appends `rows` in order in one statement; ids come from audit_log_id_seq
+// (PgMigrations), shared by all replicas.
+void WriteAudit(pqxx::transaction_base& tx, const std::vector<AuditRow>& rows) {
+  if (rows.empty()) return;
+  std::string sql =
+      "INSERT INTO audit_log (at_unix_ms, actor, actor_label, role, institution, action, "
+      "target, result) SELECT at, actor, label, role, inst, action, target, result FROM "
+      "(VALUES ";
+  std::vector<std::string> params;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const AuditRow& a = rows[k];
+    const size_t p = params.size();
+    sql += (k ? ", (" : "(") + std::to_string(k) + ", $" + std::to_string(p + 1) + "::BIGINT";
+    for (size_t c = 2; c <= 8; ++c) sql += ", $" + std::to_string(p + c);
+    sql += ")";
+    for (const std::string& v : {std::to_string(a.at_unix_ms), a.actor, a.actor_label, a.role,
+                                 a.institution, a.action, a.target, a.result}) {
+      params.push_back(v);
+    }
+  }
+  // ORDER BY the position so the ids follow the batch order.
+  sql += ") AS v(pos, at, actor, label, role, inst, action, target, result) ORDER BY pos";
+  tx.exec_params(sql, pqxx::prepare::make_dynamic_params(params));
+}
+
+// bytea in PostgreSQL's hex input format, so binary bodies travel as text parameters.
+std::string ByteaHex(const std::string& bytes) {
+  static const char kHex[] = "0123456789abcdef";
+  std::string out = "\\x";
+  out.reserve(2 + 2 * bytes.size());
+  for (unsigned char c : bytes) {
+    out += kHex[c >> 4];
+    out += kHex[c & 0xf];
+  }
+  return out;
+}
+
+}  // namespace
+
+StoreStatus PgStore::ReadShares(pqxx::transaction_base& tx, CaseRow* row) {
+  pqxx::result r = tx.exec_params(
+      "SELECT institution FROM case_shares WHERE case_id = $1 AND version = $2 "
+      "ORDER BY institution COLLATE \"C\"",
+      row->case_id, int64_t{row->version});
+  row->shared_with.clear();
+  for (const auto& s : r) row->shared_with.push_back(s[0].as<std::string>());
+  return StoreStatus::Ok();
+}
+
+StoreResult<PutCaseResult> PgStore::PutCase(const CaseRow& row, const std::string& payload) {
+  const std::string name = "case '" + row.case_id + "' version " + std::to_string(row.version);
+  PutCaseResult result;
+  StoreStatus st = Transact("put " + name, TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    tx.exec_params(
+        "INSERT INTO case_blobs (sha256_hex, size_bytes, payload) VALUES ($1, $2, $3) "
+        "ON CONFLICT (sha256_hex) DO NOTHING",
+        row.sha256_hex, static_cast<int64_t>(payload.size()), pqxx::binarystring(payload));
+    pqxx::result inserted = tx.exec_params(
+        "INSERT INTO cases (case_id, version, title, difficulty, region_mask, institution, "
+        "sha256_hex, payload_sha256_hex, size_bytes, uploaded_by, stored_unix_ms) "
+        "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) "
+        "ON CONFLICT (case_id, version) DO NOTHING RETURNING 1",
+        row.case_id, int64_t{row.version}, row.title, int64_t{row.difficulty},
+        static_cast<int64_t>(row.region_mask), row.institution, row.sha256_hex,
+        row.payload_sha256_hex, static_cast<int64_t>(payload.size()), row.uploaded_by,
+        row.stored_unix_ms);
+    if (inserted.empty()) {
+      // Stored before (maybe a moment ago by another replica): same content is
+      // an idempotent repeat, other content a refusal. Either way nothing of
+      // this transaction is kept.
+      pqxx::result r = tx.exec_params(std::string("SELECT ") + kCaseColumns +
+                                          " FROM cases c WHERE c.case_id = $1 AND c.version = $2",
+                                      row.case_id, int64_t{row.version});
+      CaseRow existing = ReadCaseRow(r.at(0));
+      if (existing.sha256_hex != row.sha256_hex) {
+        return StoreStatus::Error(
+            StoreCode::kAlreadyExists,
+            name + " is already stored with other content (sha256 " + existing.sha256_hex +
+                "); give the new content a higher version");
+      }
+      ReadShares(tx, &existing);
+      result = {existing, true};  // the blob was there too: the commit writes nothing
+      return StoreStatus::Ok();
+    }
+    CaseRow stored = row;
+    stored.size_bytes = payload.size();
+    std::map<std::string, bool> shares;  // sorted, unique
+    for (const std::string& i : row.shared_with) {
+      if (i != row.institution) shares[i] = true;
+    }
+    stored.shared_with.clear();
+    for (const auto& [institution, unused] : shares) {
+      tx.exec_params("INSERT INTO case_shares (case_id, version, institution) VALUES ($1, $2, $3)",
+                     row.case_id, int64_t{row.version}, institution);
+      stored.shared_with.push_back(institution);
+    }
+    result = {stored, false};
+    return StoreStatus::Ok();
+  });
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument,
+                              name + ": unknown institution '" + row.institution + "'");
+  }
+  if (!st.ok()) return st;
+  return result;
+}
+
+StoreResult<std::vector<CaseRow>> PgStore::ListCases(const CaseFilter& f) {
+  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE TRUE";
+  // Unused filters compare with themselves so the parameter list stays fixed.
+  sql += " AND ($1::BIGINT = 0 OR (c.region_mask & $1::BIGINT) <> 0)";
+  sql += " AND ($2::INTEGER = 0 OR c.difficulty = $2::INTEGER)";
+  sql += " AND ($3 = '' OR c.institution = $3)";
+  sql += " AND ($4 = '' OR c.institution = $4 OR EXISTS (SELECT 1 FROM case_shares s WHERE "
+         "s.case_id = c.case_id AND s.version = c.version AND s.institution = $4))";
+  sql += " ORDER BY c.case_id COLLATE \"C\", c.version";
+  const int64_t region_bit = f.region != 0 ? static_cast<int64_t>(uint64_t{1} << f.region) : 0;
+  std::vector<CaseRow> out;
+  StoreStatus st = Transact("list cases", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    pqxx::result r =
+        tx.exec_params(sql, region_bit, int64_t{f.difficulty}, f.institution, f.visible_to);
+    for (const auto& row : r) {
+      CaseRow c = ReadCaseRow(row);
+      // Rows come ordered by (id, version): a later version replaces the last one.
+      if (!f.all_versions && !out.empty() && out.back().case_id == c.case_id) out.pop_back();
+      out.push_back(std::move(c));
+    }
+    for (CaseRow& c : out) ReadShares(tx, &c);
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<CaseRow> PgStore::GetCase(const std::string& case_id, uint32_t version) {
+  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE c.case_id = $1";
+  sql += version == 0 ? " AND $2::BIGINT = 0 ORDER BY c.version DESC LIMIT 1" : " AND c.version = $2";
+  CaseRow out;
+  StoreStatus st = Transact("get case", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(sql, case_id, int64_t{version});
+    if (r.empty()) {
+      return StoreStatus::Error(
+          StoreCode::kNotFound,
+          "no case '" + case_id + "'" +
+              (version == 0 ? std::string() : " version " + std::to_string(version)));
+    }
+    out = ReadCaseRow(r[0]);
+    return ReadShares(tx, &out);
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::string> PgStore::GetBlob(const std::string& sha256_hex) {
+  std::string out;
+  StoreStatus st = Transact("get blob", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r =
+        tx.exec_params("SELECT payload FROM case_blobs WHERE sha256_hex = $1", sha256_hex);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
+    out = pqxx::binarystring(r[0][0]).str();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch& batch) {
+  // Rows are inserted in uuid order (stable, so repeats keep batch order) so
+  // two replicas committing overlapping batches lock the same keys in the same
+  // order and cannot deadlock; audit rows are then written in batch order.
+  // Each step is one multi-row statement, whatever the batch size.
+  std::vector<size_t> order(batch.sessions.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return batch.sessions[a].uuid < batch.sessions[b].uuid;
+  });
+  std::vector<std::string> params;
+  std::string insert;
+  if (!order.empty()) {
+    insert = std::string("INSERT INTO sessions (") + kSessionColumns + ", body) VALUES ";
+    for (size_t k = 0; k < order.size(); ++k) {
+      const SessionRow& row = batch.sessions[order[k]];
+      insert += k == 0 ? "(" : ", (";
+      for (int c = 1; c <= 16; ++c) {
+        insert += (c == 1 ? "$" : ", $") + std::to_string(params.size() + c);
+      }
+      insert += ")";
+      for (const std::string& v :
+           {row.uuid, row.trainee_id, row.institution, row.case_id,
+            std::to_string(row.case_version), row.station_id, std::to_string(row.start_unix_ms),
+            std::to_string(row.end_unix_ms), std::to_string(row.outcome),
+            std::string(row.completed ? "1" : "0"), pqxx::to_string(row.time_to_cecum_s),
+            pqxx::to_string(row.pain_s), pqxx::to_string(row.score), row.body_sha256_hex,
+            std::to_string(row.stored_unix_ms), ByteaHex(row.body)}) {
+        params.push_back(v);
+      }
+    }
+    // A uuid already stored (or repeated in this batch) is skipped here and
+    // looked up below: the first stored row decides duplicate or conflict.
+    insert += " ON CONFLICT (uuid) DO NOTHING RETURNING uuid";
+  }
+  std::vector<SessionPutResult> results;
+  StoreStatus st = Transact("commit batch", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    results.assign(batch.sessions.size(), SessionPutResult{});
+    std::set<std::string> inserted;
+    if (!order.empty()) {
+      for (const auto& r : tx.exec_params(insert, pqxx::prepare::make_dynamic_params(params))) {
+        inserted.insert(r[0].as<std::string>());
+      }
+    }
+    // Stored by this batch: the first occurrence of each inserted uuid.
+    std::map<std::string, SessionRow> first;
+    std::vector<std::string> lookup;
+    for (size_t i = 0; i < batch.sessions.size(); ++i) {
+      const SessionRow& row = batch.sessions[i];
+      if (first.count(row.uuid)) continue;
+      if (inserted.count(row.uuid)) {
+        first[row.uuid] = row;
+        first[row.uuid].body.clear();
+        results[i].outcome = SessionPut::kStored;
+      } else {
+        lookup.push_back(row.uuid);
+        first[row.uuid] = SessionRow{};  // filled in below
+      }
+    }
+    // Present before (or committed a moment ago by another replica: ON
+    // CONFLICT waited for it, and this statement sees it).
+    if (!lookup.empty()) {
+      std::string find = std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE uuid IN (";
+      for (size_t k = 0; k < lookup.size(); ++k) find += (k ? ", $" : "$") + std::to_string(k + 1);
+      find += ")";
+      for (const auto& r : tx.exec_params(find, pqxx::prepare::make_dynamic_params(lookup))) {
+        SessionRow found = ReadSessionRow(r);
+        first[found.uuid] = std::move(found);
+      }
+    }
+    std::set<std::string> seen;
+    for (size_t i = 0; i < batch.sessions.size(); ++i) {
+      const SessionRow& row = batch.sessions[i];
+      const SessionRow& stored = first[row.uuid];
+      if (stored.uuid.empty()) return StoreStatus::Error(StoreCode::kInternal, "lost " + row.uuid);
+      results[i].first = stored;
+      const bool stored_here = inserted.count(row.uuid) && seen.insert(row.uuid).second;
+      if (stored_here) continue;  // kStored, set above
+      results[i].outcome = stored.body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
+                                                                          : SessionPut::kConflict;
+    }
+    std::vector<AuditRow> audit;
+    for (size_t i = 0; i < batch.sessions.size() && i < batch.session_audit.size(); ++i) {
+      audit.push_back(batch.session_audit[i]);
+      audit.back().result = SessionPutAuditResult(results[i].outcome);
+    }
+    audit.insert(audit.end(), batch.audit.begin(), batch.audit.end());
+    WriteAudit(tx, audit);
+    return StoreStatus::Ok();
+  });
+  // A constraint failure (a session of an unknown trainee) fails the whole
+  // batch, as in SQLite, where it is an internal error.
+  if (st.code == StoreCode::kInvalidArgument) st.code = StoreCode::kInternal;
+  if (!st.ok()) return st;
+  return results;
+}
+
+StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
+  SessionRow out;
+  StoreStatus st = Transact("get session", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        std::string("SELECT ") + kSessionColumns + ", body FROM sessions WHERE uuid = $1", uuid);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
+    out = ReadSessionRow(r[0]);
+    out.body = pqxx::binarystring(r[0][15]).str();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& trainee_id,
+                                                           const std::string& case_id) {
+  const std::string sql = std::string("SELECT ") + kSessionColumns +
+                          " FROM sessions WHERE trainee_id = $1 AND ($2 = '' OR case_id = $2)"
+                          " ORDER BY start_unix_ms, uuid COLLATE \"C\"";
+  std::vector<SessionRow> out;
+  StoreStatus st = Transact("list sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const auto& row : tx.exec_params(sql, trainee_id, case_id)) {
+      out.push_back(ReadSessionRow(row));
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<int64_t> PgStore::CountSessions() {
+  int64_t n = 0;
+  StoreStatus st = Transact("count sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    n = tx.exec("SELECT COUNT(*) FROM sessions")[0][0].as<int64_t>();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return n;
+}
+
+}  // namespace ves::patient_db
