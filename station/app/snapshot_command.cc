@@ -1,0 +1,218 @@
+// ves-station snapshot: inserts the scope into a case with the model
+// (position-driven) and writes the views of paper §4 as PNG files: the
+// endoscope image in its three modes and AP / lateral fluoroscopy.
+#include <algorithm>
+#include <boost/program_options.hpp>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "patient_db/case_format.h"
+#include "station/app/commands.h"
+#include "station/model/model.h"
+#include "station/render/endoscope_view.h"
+#include "station/render/fluoroscopy_view.h"
+#include "station/render/model_scene.h"
+#include "station/render/mucosa_texture.h"
+#include "station/training/case_model.h"
+
+namespace ves::station {
+namespace {
+
+namespace po = boost::program_options;
+
+constexpr char kName[] = "ves-station snapshot";
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+constexpr double kSettle_s = 0.5;  // knobs turned and the model settled after inserting
+
+constexpr char kUsage[] =
+    "usage: ves-station snapshot --case FILE --insert-mm L [--knob-ud DEG --knob-lr DEG]\n"
+    "                            [--width W --height H] [--segments N] --out DIR\n\n"
+    "Inserts the scope L mm with the model (position-driven), turns the knobs, and writes\n"
+    "endoscope_wireframe.png, endoscope_polygon.png, endoscope_texture.png,\n"
+    "fluoroscopy_ap.png and fluoroscopy_lateral.png into DIR.";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct SnapshotOptions {
+  std::string case_path;
+  double insert_m{0.0};
+  double insert_speed_m_per_s{0.1};
+  double knob_up_rad{0.0};
+  double knob_right_rad{0.0};
+  int width{640};
+  int height{480};
+  int segments{150};
+  std::filesystem::path out_dir;
+};
+
+double Checked(const po::variables_map& vm, const char* name, double low, double high) {
+  const double value = vm[name].as<double>();
+  if (!std::isfinite(value) || value < low || value > high) {
+    throw UsageError(std::string("--") + name + " " + std::to_string(value) + " must be in [" +
+                     std::to_string(low) + ", " + std::to_string(high) + "]");
+  }
+  return value;
+}
+
+SnapshotOptions ParseOptions(const po::variables_map& vm) {
+  SnapshotOptions o;
+  if (!vm.count("case")) throw UsageError("--case FILE is required");
+  if (!vm.count("insert-mm")) throw UsageError("--insert-mm L is required");
+  if (!vm.count("out")) throw UsageError("--out DIR is required");
+  o.case_path = vm["case"].as<std::string>();
+  o.insert_m = Checked(vm, "insert-mm", 0.0, 2000.0) * 1e-3;
+  o.insert_speed_m_per_s = Checked(vm, "insert-speed-mm-s", 1.0, 1000.0) * 1e-3;
+  o.knob_up_rad = Checked(vm, "knob-ud", -180.0, 180.0) * kDegToRad;
+  o.knob_right_rad = Checked(vm, "knob-lr", -180.0, 180.0) * kDegToRad;
+  o.width = vm["width"].as<int>();
+  o.height = vm["height"].as<int>();
+  if (o.width < 16 || o.width > 4096 || o.height < 16 || o.height > 4096) {
+    throw UsageError("--width/--height " + std::to_string(o.width) + "x" +
+                     std::to_string(o.height) + " must each be in [16, 4096]");
+  }
+  o.segments = vm["segments"].as<int>();
+  if (o.segments < 3 || o.segments > 2000) {
+    throw UsageError("--segments " + std::to_string(o.segments) + " must be in [3, 2000]");
+  }
+  o.out_dir = vm["out"].as<std::string>();
+  return o;
+}
+
+// Inserts at constant speed to the target, then holds while the knobs turn
+// and the model settles. Returns false if the model diverged.
+bool Insert(const SnapshotOptions& o, const model::ModelParams& params, model::ModelState* state,
+            model::StepOutput* output) {
+  model::Scratch scratch = model::MakeScratch(params);
+  const double insert_s = o.insert_m / o.insert_speed_m_per_s;
+  const auto steps = static_cast<long>(std::ceil((insert_s + kSettle_s) / params.dt_s));
+  model::StepInput input;
+  input.thrust_mode = model::ThrustMode::kPosition;
+  for (long i = 1; i <= steps; ++i) {
+    const double t_s = i * params.dt_s;
+    input.insertion_m = std::min(o.insert_m, o.insert_speed_m_per_s * t_s);
+    const double knob_share = std::clamp((t_s - insert_s) / (0.5 * kSettle_s), 0.0, 1.0);
+    input.knob_up_rad = knob_share * o.knob_up_rad;
+    input.knob_right_rad = knob_share * o.knob_right_rad;
+    model::Step(params, input, state, &scratch, output);
+    if (!output->finite) return false;
+  }
+  return true;
+}
+
+// Both C-arm views frame the whole colon at rest, centred on its bounding box.
+render::FluoroscopyCamera FrameColon(const model::ModelParams& params, double aspect) {
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(1e9);
+  Eigen::Vector3d high = Eigen::Vector3d::Constant(-1e9);
+  double radius_m = 0.0;
+  for (const auto& point : params.colon.points) {
+    low = low.cwiseMin(point.rest_position_m);
+    high = high.cwiseMax(point.rest_position_m);
+    radius_m = std::max(radius_m, point.radius_m);
+  }
+  const Eigen::Vector3d extent = high - low;
+  render::FluoroscopyCamera camera;
+  camera.center_m = 0.5 * (low + high);
+  camera.field_height_m =
+      1.15 * std::max(extent.z(), std::max(extent.x(), extent.y()) / aspect) + 4.0 * radius_m;
+  return camera;
+}
+
+void Write(const std::filesystem::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) {
+    throw std::runtime_error("cannot write '" + path.string() + "'");
+  }
+}
+
+int RunSnapshot(const SnapshotOptions& o) {
+  ves::v1::ColonCase colon_case;
+  model::ModelParams params;
+  cv::Mat case_texture;
+  try {
+    colon_case = patient_db::LoadCaseFile(o.case_path);
+    training::CaseModelOptions case_options;
+    case_options.segments = o.segments;
+    params = training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(), case_options);
+    if (!colon_case.mucosa_texture().image().empty()) {
+      case_texture = render::DecodeMucosaTexture(colon_case.mucosa_texture().image());
+    }
+    std::filesystem::create_directories(o.out_dir);
+  } catch (const std::exception& e) {  // CaseError, invalid_argument, filesystem_error
+    std::cerr << kName << ": " << e.what() << "\n";
+    return 2;
+  }
+  model::ModelState state = model::MakeInitialState(params);
+  model::StepOutput output = model::MakeStepOutput(params);
+  if (!Insert(o, params, &state, &output)) {
+    std::cerr << kName << ": the model diverged at t = " << state.time_s << " s\n";
+    return 1;
+  }
+  try {
+    const render::SceneGeometry scene = render::SceneFromModel(params, state, &output);
+    render::GlContext context;
+    render::EndoscopeViewOptions endoscope_options;
+    endoscope_options.width = o.width;
+    endoscope_options.height = o.height;
+    render::EndoscopeView endoscope(&context, endoscope_options);
+    if (!case_texture.empty()) endoscope.SetMucosaTexture(case_texture);
+    for (auto mode : {render::EndoscopeMode::kWireframe, render::EndoscopeMode::kPolygon,
+                      render::EndoscopeMode::kTexture}) {
+      endoscope.set_mode(mode);
+      Write(o.out_dir / (std::string("endoscope_") + render::EndoscopeModeName(mode) + ".png"),
+            endoscope.Render(scene).image);
+    }
+    render::FluoroscopyOptions fluoroscopy_options;
+    fluoroscopy_options.width = o.width;
+    fluoroscopy_options.height = o.height;
+    fluoroscopy_options.damage_display = true;
+    render::FluoroscopyView fluoroscopy(&context, fluoroscopy_options);
+    render::FluoroscopyCamera camera = FrameColon(params, static_cast<double>(o.width) / o.height);
+    Write(o.out_dir / "fluoroscopy_ap.png", fluoroscopy.Render(scene, camera));
+    camera.yaw_rad = 90.0 * kDegToRad;
+    Write(o.out_dir / "fluoroscopy_lateral.png", fluoroscopy.Render(scene, camera));
+    std::cout << "inserted_m=" << state.inserted_m << " tip_arc_m=" << state.tip_arc_m
+              << " renderer=\"" << context.renderer() << "\" out=" << o.out_dir.string() << "\n";
+  } catch (const std::exception& e) {  // RenderError (no EGL/GLES), write failures
+    std::cerr << kName << ": " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int RunSnapshotCommand(const CommandArgs& args) {
+  po::options_description desc("options");
+  desc.add_options()("help,h", "show this help")("case", po::value<std::string>(),
+                                                 "colon case file (.textproto, .vescase, ...)")(
+      "insert-mm", po::value<double>(), "inserted length past the anus, mm")(
+      "insert-speed-mm-s", po::value<double>()->default_value(100.0), "insertion speed, mm/s")(
+      "knob-ud", po::value<double>()->default_value(0.0), "up/down knob, degrees (+ up)")(
+      "knob-lr", po::value<double>()->default_value(0.0), "left/right knob, degrees (+ right)")(
+      "width", po::value<int>()->default_value(640), "image width, px")(
+      "height", po::value<int>()->default_value(480), "image height, px")(
+      "segments", po::value<int>()->default_value(150), "colon segment points N")(
+      "out", po::value<std::string>(), "output directory (created)");
+  SnapshotOptions options;
+  try {
+    po::variables_map vm;
+    po::store(po::command_line_parser(args).options(desc).run(), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::cout << kUsage << "\n\n" << desc;
+      return 0;
+    }
+    options = ParseOptions(vm);
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": " << e.what() << "\n";
+    return 2;
+  }
+  return RunSnapshot(options);
+}
+
+}  // namespace ves::station
