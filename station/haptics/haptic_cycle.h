@@ -1,0 +1,73 @@
+#pragma once
+
+// One period of the haptic loop, independent of any clock: read the device,
+// ask the model source, check the safety rules, run the mode's controller,
+// clamp, write. The wall-clock loop (HapticLoop) and the simulated-time runner
+// both call Run() once per period, so tests exercise exactly the loop's code.
+// Run() never throws or allocates; the one log line on a fault transition is
+// the exception that proves the rule (it happens once per fault).
+#include <cstdint>
+
+#include "station/haptics/base_response.h"
+#include "station/haptics/controllers.h"
+#include "station/haptics/device.h"
+#include "station/haptics/safety_monitor.h"
+
+namespace ves::haptics {
+
+struct OutputLimits {
+  double max_force_N{10.0};
+  double max_torque_Nm{0.3};
+  bool operator==(const OutputLimits&) const = default;
+};
+
+struct CycleOptions {
+  double period_s{0.001};
+  ControlParams control{};
+  SafetyLimits safety{};
+  OutputLimits limits{};
+};
+
+struct CycleOutput {
+  MotorCommand command{};  // what was written this period
+  SafetyFault fault{SafetyFault::kNotArmed};
+  BaseResponse base{};  // coupled mode: the model response used
+  bool operator==(const CycleOutput&) const = default;
+};
+
+// Clamps to the limits; NaN/Inf in a value -> 0 and `*non_finite` set.
+MotorCommand ClampCommand(const MotorCommand& command, const OutputLimits& limits,
+                          bool* non_finite);
+
+class HapticCycle {
+ public:
+  // `source` is needed for the coupled mode only (may be null otherwise).
+  HapticCycle(HapticDevice* device, BaseResponseSource* source, CycleOptions options);
+
+  const CycleOutput& Run(double now_s);
+  // Leaves the safe state: clears the latched fault and sticky bus flags,
+  // puts the controller's targets on the measured state, and has the next
+  // Run() send NMT start so a device that cut its motors drives again.
+  void Rearm();
+  // Starts from what a bring-up already read (times of the last frames and
+  // heartbeat), so the first period does not see them as missing.
+  void SetInitialDeviceState(const DeviceState& state) { device_state_ = state; }
+
+  const DeviceState& device_state() const { return device_state_; }
+  const CycleOutput& output() const { return output_; }
+  const SafetyMonitor& safety() const { return safety_; }
+  const CycleOptions& options() const { return options_; }
+
+ private:
+  HapticDevice* device_;
+  BaseResponseSource* source_;
+  CycleOptions options_;
+  SafetyMonitor safety_;
+  DeviceState device_state_{};
+  ControllerState controller_{};
+  CycleOutput output_{};
+  std::uint64_t reported_trips_{0};
+  bool enable_pending_{false};
+};
+
+}  // namespace ves::haptics

@@ -1,0 +1,87 @@
+#pragma once
+
+// HapticLoop: runs a HapticCycle at 1 kHz on its own thread, on absolute
+// deadlines (clock_nanosleep, TIMER_ABSTIME, CLOCK_MONOTONIC), SCHED_FIFO and
+// mlockall when permitted. It records the period error (wake-up minus
+// deadline) in a histogram and counts overruns (a period that ends after the
+// next deadline; the missed deadlines are skipped, not bunched). Each period's
+// state goes to readers through a SeqLock (latest value, e.g. the render
+// thread) and an optional SPSC ring (every period, e.g. a CSV writer).
+#include <atomic>
+#include <cstdint>
+#include <thread>
+
+#include "station/haptics/haptic_cycle.h"
+#include "station/haptics/period_histogram.h"
+#include "station/haptics/seqlock.h"
+#include "station/haptics/spsc_ring.h"
+
+namespace ves::haptics {
+
+// What a render or UI thread needs from the loop, published every period.
+struct HapticSnapshot {
+  std::uint64_t cycle{0};
+  double t_s{0.0};
+  double insertion_m{0.0};
+  double roll_rad{0.0};
+  double force_N{0.0};
+  double torque_Nm{0.0};
+  double thrust_command_N{0.0};
+  double roll_command_Nm{0.0};
+  double base_thrust_force_N{0.0};
+  double base_roll_torque_Nm{0.0};
+  SafetyFault fault{SafetyFault::kNotArmed};
+};
+
+HapticSnapshot MakeSnapshot(std::uint64_t cycle, double t_s, const DeviceState& device,
+                            const CycleOutput& output);
+
+struct LoopOptions {
+  double period_s{0.001};
+  bool realtime{true};  // try SCHED_FIFO + mlockall
+  int realtime_priority{80};
+};
+
+struct LoopStats {
+  PeriodHistogram period_error{};
+  std::uint64_t cycles{0};
+  std::uint64_t overruns{0};
+};
+
+class HapticLoop {
+ public:
+  // `trace` may be null; the cycle must outlive the loop.
+  HapticLoop(HapticCycle* cycle, LoopOptions options, SpscRing<HapticSnapshot>* trace = nullptr);
+  ~HapticLoop();
+  HapticLoop(const HapticLoop&) = delete;
+  HapticLoop& operator=(const HapticLoop&) = delete;
+
+  void Start();
+  void Stop();
+  // Asks the loop thread to re-arm at its next period.
+  void RequestRearm() { rearm_requested_.store(true, std::memory_order_release); }
+  // Start-up: waits (up to timeout_s) until the loop has run `periods`
+  // periods, so SYNCs have fetched fresh samples, then requests the re-arm.
+  // False if the loop did not get that far.
+  bool ArmAfter(std::uint64_t periods, double timeout_s);
+
+  const SeqLock<HapticSnapshot>& latest() const { return latest_; }
+  // Valid after Stop().
+  const LoopStats& stats() const { return stats_; }
+  std::uint64_t cycles() const { return cycles_.load(std::memory_order_relaxed); }
+
+ private:
+  void Main();
+
+  HapticCycle* cycle_;
+  LoopOptions options_;
+  SpscRing<HapticSnapshot>* trace_;
+  SeqLock<HapticSnapshot> latest_;
+  LoopStats stats_;
+  std::atomic<std::uint64_t> cycles_{0};
+  std::atomic<bool> running_{false};
+  std::atomic<bool> rearm_requested_{false};
+  std::thread thread_;
+};
+
+}  // namespace ves::haptics

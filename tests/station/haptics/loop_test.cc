@@ -1,0 +1,142 @@
+// The wall-clock loop and its pieces. No timing assertions here: the loop's
+// speed is measured by bench/haptics/haptic_loop_bench.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "station/haptics/haptic_loop.h"
+#include "station/haptics/line_fit.h"
+#include "station/haptics/period_histogram.h"
+#include "station/haptics/seqlock.h"
+#include "station/haptics/sim_rig.h"
+
+namespace ves::haptics {
+namespace {
+
+struct Triple {
+  double a{0.0};
+  double b{0.0};
+  double c{0.0};
+  std::uint64_t n{0};
+};
+
+TEST(SeqLock, ReaderNeverSeesATornValue) {
+  SeqLock<Triple> lock;
+  std::atomic<bool> done{false};
+  std::atomic<bool> stop{false};
+  constexpr std::uint64_t kMaxStores = 50000000;
+  std::atomic<std::uint64_t> stores{0};
+  std::thread writer([&] {
+    std::uint64_t i = 1;
+    for (; i <= kMaxStores && !stop.load(std::memory_order_relaxed); ++i) {
+      const double v = static_cast<double>(i);
+      lock.Store({v, 2.0 * v, 3.0 * v, i});
+    }
+    stores.store(i - 1);
+    done.store(true);
+  });
+  std::uint64_t reads = 0;
+  std::uint64_t last_n = 0;
+  while (!done.load()) {
+    if (reads >= 20000) stop.store(true);
+    Triple t;
+    if (!lock.Load(&t)) continue;
+    ++reads;
+    ASSERT_EQ(t.b, 2.0 * t.a);
+    ASSERT_EQ(t.c, 3.0 * t.a);
+    ASSERT_EQ(static_cast<double>(t.n), t.a);
+    ASSERT_GE(t.n, last_n);  // never goes back in time
+    last_n = t.n;
+  }
+  writer.join();
+  Triple final_value;
+  ASSERT_TRUE(lock.Load(&final_value));
+  EXPECT_EQ(final_value.n, stores.load());
+  EXPECT_GT(reads, 0u);
+}
+
+TEST(PeriodHistogram, PercentilesAtMicrosecondResolution) {
+  PeriodHistogram histogram;
+  // 990 samples of 5 µs, 9 of 150 µs, one of 2.5 ms.
+  for (int i = 0; i < 990; ++i) histogram.Add(5000);
+  for (int i = 0; i < 9; ++i) histogram.Add(150000);
+  histogram.Add(2500000);
+  EXPECT_EQ(histogram.count(), 1000u);
+  EXPECT_EQ(histogram.PercentileNs(0.5), 6000);   // upper edge of the 5 µs bin
+  EXPECT_EQ(histogram.PercentileNs(0.99), 6000);  // the 990th sample
+  EXPECT_EQ(histogram.PercentileNs(0.999), 151000);
+  EXPECT_EQ(histogram.PercentileNs(1.0), 2500000);
+  EXPECT_EQ(histogram.max_ns(), 2500000);
+  histogram.Add(-3000);  // early wake-ups count as 0
+  EXPECT_EQ(histogram.count(), 1001u);
+}
+
+TEST(LineFit, RecoversAnExactLineAndScoresNoise) {
+  // y = 100·x − 0.5: slope 100, R² = 1.
+  std::vector<double> x;
+  std::vector<double> y;
+  for (int i = 0; i < 50; ++i) {
+    x.push_back(i * 0.001);
+    y.push_back(100.0 * i * 0.001 - 0.5);
+  }
+  const LineFit fit = FitLine(x, y);
+  EXPECT_NEAR(fit.slope, 100.0, 1e-9);
+  EXPECT_NEAR(fit.intercept, -0.5, 1e-12);
+  EXPECT_NEAR(fit.r2, 1.0, 1e-12);
+  // y = ±1 alternating has no linear relation to x: R² near 0.
+  for (int i = 0; i < 50; ++i) y[i] = (i % 2 == 0) ? 1.0 : -1.0;
+  EXPECT_LT(FitLine(x, y).r2, 0.05);
+  const AxisSummary summary = SummarizeAxis(x, y);
+  EXPECT_DOUBLE_EQ(summary.rms_load, 1.0);
+  EXPECT_DOUBLE_EQ(summary.max_abs_load, 1.0);
+  EXPECT_THROW(FitLine({1.0}, {1.0}), std::invalid_argument);
+}
+
+TEST(HapticLoop, RunsOnTheWallClockWithTheDeviceOnItsOwnThread) {
+  auto [host, bus_device] = CanBus::CreateSocketPair();
+  SimulatedBallDriveOptions device_options;
+  device_options.hand.thrust.amplitude = 0.01;
+  device_options.hand.thrust.frequency_Hz = 1.0;
+  Ves4Device driver(std::move(host), device_options.params);
+  SimulatedBallDrive device(std::move(bus_device), device_options);
+  SimulatedDeviceThread device_thread(&device, /*realtime=*/false);
+  DeviceState state;
+  ASSERT_TRUE(BringUpDevice(&driver, &state, 2.0));
+
+  CycleOptions cycle_options;
+  HapticCycle cycle(&driver, nullptr, cycle_options);
+  cycle.SetInitialDeviceState(state);
+  SpscRing<HapticSnapshot> trace(4096);
+  HapticLoop loop(&cycle, LoopOptions{.realtime = false}, &trace);
+  loop.Start();
+  ASSERT_TRUE(loop.ArmAfter(20, 5.0));
+  // A reader thread's view: the latest snapshot, taken without locks.
+  HapticSnapshot latest;
+  for (int i = 0; i < 30 && loop.cycles() < 100; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(loop.latest().Load(&latest));
+  loop.Stop();
+  device_thread.Stop();
+
+  EXPECT_GE(loop.stats().cycles, 100u);
+  EXPECT_EQ(loop.stats().period_error.count(), loop.stats().cycles);
+  EXPECT_GT(latest.cycle, 0u);
+  HapticSnapshot popped;
+  std::uint64_t popped_count = 0;
+  std::uint64_t previous_cycle = 0;
+  while (trace.Pop(&popped)) {
+    if (popped_count > 0) {
+      EXPECT_EQ(popped.cycle, previous_cycle + 1);
+    }
+    previous_cycle = popped.cycle;
+    ++popped_count;
+  }
+  EXPECT_EQ(popped_count + trace.dropped(), loop.stats().cycles);
+  EXPECT_GT(driver.counters().frames_received, 100u);
+}
+
+}  // namespace
+}  // namespace ves::haptics

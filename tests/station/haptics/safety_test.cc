@@ -1,0 +1,268 @@
+// Each safety rule: inject the fault, check zero output (0 V on both pairs)
+// within one period of the rule's deadline and EMCY on the bus, and that only
+// an explicit re-arm leaves the safe state.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "station/haptics/sim_rig.h"
+#include "tests/station/haptics/scripted_source.h"
+
+namespace ves::haptics {
+namespace {
+
+constexpr double kPeriod_s = 0.001;
+constexpr int kPeriodsAfterFaultCleared = 200;
+
+SimulatedRigOptions HoldingHand(ControlMode mode) {
+  SimulatedRigOptions options;
+  options.device.hand.thrust.amplitude = 0.005;
+  options.device.hand.thrust.frequency_Hz = 1.0;
+  options.cycle.control.mode = mode;
+  return options;
+}
+
+bool IsZeroOutput(SimulatedRig& rig, const CycleOutput& output) {
+  return !output.command.powered && rig.driver().last_voltages() == MotorVoltages{};
+}
+
+// Steps until the cycle reports a fault; returns the number of steps (or -1).
+int StepsUntilFault(SimulatedRig& rig, int max_steps, CycleOutput* at_fault) {
+  for (int step = 1; step <= max_steps; ++step) {
+    const CycleOutput& output = rig.Step();
+    if (output.fault != SafetyFault::kNone) {
+      *at_fault = output;
+      return step;
+    }
+    EXPECT_TRUE(output.command.powered) << "unpowered before the fault, step " << step;
+  }
+  return -1;
+}
+
+// After the cause is gone: stays safe for many periods, re-arm leaves it.
+void ExpectOnlyRearmLeavesSafeState(SimulatedRig& rig, SafetyFault fault) {
+  for (int i = 0; i < kPeriodsAfterFaultCleared; ++i) {
+    const CycleOutput& output = rig.Step();
+    ASSERT_EQ(output.fault, fault) << "left the safe state by itself after " << i << " periods";
+    ASSERT_TRUE(IsZeroOutput(rig, output));
+  }
+  rig.Rearm();
+  const CycleOutput& output = rig.Step();
+  EXPECT_EQ(output.fault, SafetyFault::kNone);
+  EXPECT_TRUE(output.command.powered);
+}
+
+void ExpectEmcyAtDevice(SimulatedRig& rig, EmcyCode code) {
+  rig.Step();  // the device reads the EMCY sent in the fault period
+  ASSERT_FALSE(rig.device().received_emcy().empty());
+  EXPECT_EQ(rig.device().received_emcy().back().code, code);
+  EXPECT_EQ(rig.device().received_emcy().back().node_id, kHostNodeId);
+}
+
+TEST(Safety, StartsSafeUntilArmed) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  const CycleOutput& output = rig.Step();
+  EXPECT_EQ(output.fault, SafetyFault::kNotArmed);
+  EXPECT_TRUE(IsZeroOutput(rig, output));
+  ASSERT_TRUE(rig.BringUp());
+  EXPECT_TRUE(rig.Step().command.powered);
+}
+
+TEST(Safety, SilentSensorGivesZeroOutputWithinOnePeriodOf5Ms) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) rig.Step();
+  rig.device().set_faults({.mute_sensor_pdo = true});
+  CycleOutput at_fault;
+  const int steps = StepsUntilFault(rig, 100, &at_fault);
+  // The last sensor frame was read in the first step after muting; the rule
+  // fires when its age passes 5 ms: 5 or 6 periods later (rounding of time).
+  EXPECT_GE(steps, 6);
+  EXPECT_LE(steps, 7);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kSensorTimeout);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectEmcyAtDevice(rig, EmcyCode::kSensorTimeout);
+  rig.device().set_faults({});
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kSensorTimeout);
+}
+
+TEST(Safety, SilentEncoderAlsoCountsAsSilentSensor) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  rig.device().set_faults({.mute_encoder_pdo = true});
+  CycleOutput at_fault;
+  EXPECT_LE(StepsUntilFault(rig, 100, &at_fault), 7);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kSensorTimeout);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+}
+
+TEST(Safety, MissedDeviceHeartbeatGivesZeroOutputWithinOnePeriodOfTimeout) {
+  auto options = HoldingHand(ControlMode::kFree);
+  SimulatedRig rig(options);
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) rig.Step();
+  rig.device().set_faults({.mute_heartbeat = true});
+  const double last_heartbeat_s = rig.cycle().device_state().last_heartbeat_time_s;
+  CycleOutput at_fault;
+  ASSERT_GT(StepsUntilFault(rig, 200, &at_fault), 0);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kHeartbeatLost);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  // The fault period's time is now_s − one period (Step advanced the clock).
+  const double detected_after_s = rig.now_s() - kPeriod_s - last_heartbeat_s;
+  EXPECT_GT(detected_after_s, options.cycle.safety.heartbeat_timeout_s);
+  EXPECT_LE(detected_after_s, options.cycle.safety.heartbeat_timeout_s + kPeriod_s + 1e-9);
+  ExpectEmcyAtDevice(rig, EmcyCode::kHeartbeatLost);
+  rig.device().set_faults({});
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kHeartbeatLost);
+}
+
+TEST(Safety, BusOffErrorFrameGivesZeroOutputInTheSamePeriod) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 10; ++i) rig.Step();
+  rig.device().SendBusError({.bus_off = true});
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kBusOff);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectEmcyAtDevice(rig, EmcyCode::kCanBusOff);
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kBusOff);
+}
+
+TEST(Safety, ErrorPassiveErrorFrameGivesZeroOutputInTheSamePeriod) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  rig.device().SendBusError({.error_passive = true});
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kErrorPassive);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kErrorPassive);
+}
+
+TEST(Safety, ErrorWarningAloneIsCountedButNotAFault) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  rig.device().SendBusError({.error_warning = true});
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(rig.Step().fault, SafetyFault::kNone);
+  EXPECT_EQ(rig.driver().counters().bus_errors, 1u);
+}
+
+TEST(Safety, DeviceEmcyGivesZeroOutputInTheSamePeriod) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  Emcy overcurrent;
+  overcurrent.node_id = kDeviceNodeId;
+  overcurrent.code = EmcyCode::kCurrentExceeded;
+  rig.device().SendRawFrame(EncodeEmcy(overcurrent));
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kDeviceEmergency);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kDeviceEmergency);
+}
+
+TEST(Safety, RearmRestartsADeviceThatCutItsOwnMotors) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) rig.Step();
+  // The station stalls for 40 ms: the device misses its heartbeat, cuts the
+  // motors and sends EMCY (device-side rule, 25 ms).
+  for (int i = 0; i < 40; ++i) rig.device().Service(rig.now_s() + i * kPeriod_s);
+  ASSERT_TRUE(rig.device().host_heartbeat_lost());
+  CycleOutput at_fault;
+  ASSERT_GT(StepsUntilFault(rig, 10, &at_fault), 0);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  for (int i = 0; i < 10; ++i) rig.Step();
+  rig.Rearm();
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(rig.Step().fault, SafetyFault::kNone);
+  EXPECT_FALSE(rig.device().host_heartbeat_lost());
+  EXPECT_EQ(rig.device().nmt_state(), NmtState::kOperational);
+  EXPECT_NE(rig.device().applied_voltages(), MotorVoltages{});
+}
+
+TEST(Safety, StalledModelGivesZeroOutputAfterTwoPeriods) {
+  testing::ScriptedSource source;
+  SimulatedRig rig(HoldingHand(ControlMode::kCoupled), &source);
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) rig.Step();
+  source.stalled = true;
+  CycleOutput at_fault;
+  // Period 1 without an update is tolerated; period 2 is the fault.
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 2);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kModelStalled);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectEmcyAtDevice(rig, EmcyCode::kModelStalled);
+  source.stalled = false;
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kModelStalled);
+}
+
+TEST(Safety, NanFromTheModelGivesZeroOutputInTheSamePeriod) {
+  testing::ScriptedSource source;
+  SimulatedRig rig(HoldingHand(ControlMode::kCoupled), &source);
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) rig.Step();
+  source.poison = true;
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kNonFinite);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  ExpectEmcyAtDevice(rig, EmcyCode::kSoftwareNonFinite);
+  source.poison = false;
+  ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kNonFinite);
+}
+
+TEST(Safety, InfiniteCommandIsZeroedAndTrips) {
+  // A spring gain of +inf makes the spring law itself produce ±inf/NaN.
+  auto options = HoldingHand(ControlMode::kSpring);
+  options.cycle.control.spring_gain_ratio = std::numeric_limits<double>::infinity();
+  SimulatedRig rig(options);
+  ASSERT_TRUE(rig.BringUp());
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kNonFinite);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+}
+
+TEST(Safety, OutputIsAlwaysClampedToTheDeviceLimits) {
+  // A very stiff spring and a hand 50 mm away ask for far more than 10 N.
+  auto options = HoldingHand(ControlMode::kSpring);
+  options.device.hand.thrust = {HandDrive::kPosition, 0.05, 0.0, 0.0, 0.0, 0.0};
+  options.device.hand.roll = {HandDrive::kPosition, 1.0, 0.0, 0.0, 0.0, 0.0};
+  options.cycle.control.spring_stiffness_N_per_m = 2000.0;
+  options.cycle.control.spring_stiffness_Nm_per_rad = 5.0;
+  SimulatedRig rig(options);
+  ASSERT_TRUE(rig.BringUp());
+  double max_force_N = 0.0;
+  double max_torque_Nm = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    const CycleOutput& output = rig.Step();
+    max_force_N = std::max(max_force_N, std::abs(output.command.thrust_force_N));
+    max_torque_Nm = std::max(max_torque_Nm, std::abs(output.command.roll_torque_Nm));
+  }
+  EXPECT_LE(max_force_N, options.cycle.limits.max_force_N);
+  EXPECT_LE(max_torque_Nm, options.cycle.limits.max_torque_Nm);
+  EXPECT_EQ(max_force_N, options.cycle.limits.max_force_N);  // it did saturate
+}
+
+TEST(ClampCommand, ClampsAndZeroesNonFiniteValues) {
+  const OutputLimits limits{10.0, 0.3};
+  bool non_finite = false;
+  MotorCommand big{25.0, -1.0, true};
+  const MotorCommand clamped = ClampCommand(big, limits, &non_finite);
+  EXPECT_EQ(clamped.thrust_force_N, 10.0);
+  EXPECT_EQ(clamped.roll_torque_Nm, -0.3);
+  EXPECT_FALSE(non_finite);
+  MotorCommand bad{std::nan(""), 0.1, true};
+  EXPECT_EQ(ClampCommand(bad, limits, &non_finite).thrust_force_N, 0.0);
+  EXPECT_TRUE(non_finite);
+}
+
+TEST(SafetyMonitor, RejectsInvalidLimits) {
+  EXPECT_THROW(SafetyMonitor({0.0, 0.025, 2}), std::invalid_argument);
+  EXPECT_THROW(SafetyMonitor({0.005, 0.025, 0}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ves::haptics
