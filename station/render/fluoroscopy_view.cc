@@ -54,7 +54,7 @@ struct CameraAxes {
 
 CameraAxes AxesOf(const FluoroscopyCamera& camera) {
   const Eigen::AngleAxisd yaw(camera.yaw_rad, Eigen::Vector3d::UnitZ());
-  const Eigen::Vector3d right = yaw * Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d right = yaw * -Eigen::Vector3d::UnitX();  // patient's left
   const Eigen::AngleAxisd pitch(camera.pitch_rad, right);
   return {right, pitch * Eigen::Vector3d::UnitZ()};
 }

@@ -13,9 +13,10 @@ namespace ves::render {
 // Where the X-ray C-arm looks from (paper §4.3: the angle varies
 // continuously with the mouse; the image can be enlarged). Orthographic.
 // yaw 0, pitch 0 is the AP view: beam from anterior to posterior (along
-// -y of W), image right = +x (patient's left), image up = +z (cranial).
+// -y of W), shown as radiographs are, as if facing the patient: image right
+// = -x (the patient's left in the RAS frame W), image up = +z (cranial).
 // Yaw turns the C-arm about the patient's long axis z (π/2: lateral, image
-// right = +y), pitch then tilts it about the image's horizontal axis.
+// right = -y, posterior), pitch then tilts it about the image's horizontal axis.
 struct FluoroscopyCamera {
   double yaw_rad{0.0};
   double pitch_rad{0.0};
