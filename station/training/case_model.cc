@@ -1,0 +1,105 @@
+#include "station/training/case_model.h"
+
+#include <stdexcept>
+
+namespace ves::training {
+namespace {
+
+namespace m = ves::model;
+
+m::Region RegionFromProto(ves::v1::Region region) {
+  const int value = static_cast<int>(region);
+  if (value < 0 || value > static_cast<int>(m::Region::kCecum)) return m::Region::kUnspecified;
+  return static_cast<m::Region>(value);
+}
+
+m::TissueParams TissueFromProto(const ves::v1::TissueParams& t) {
+  m::TissueParams out;
+  out.suspension_stiffness_N_per_m2 = t.suspension_stiffness_n_per_m2();
+  out.suspension_damping_N_s_per_m2 = t.suspension_damping_n_s_per_m2();
+  out.wall_stiffness_N_per_m = t.wall_stiffness_n_per_m();
+  out.wall_damping_N_s_per_m = t.wall_damping_n_s_per_m();
+  out.deformation_threshold_m = t.deformation_threshold_m();
+  out.static_friction = t.static_friction();
+  out.dynamic_friction = t.dynamic_friction();
+  out.neighbor_tension_N = t.neighbor_tension_n();
+  return out;
+}
+
+double Or(double value, double fallback) { return value != 0.0 ? value : fallback; }
+
+}  // namespace
+
+m::ColonSpec ColonSpecFromCase(const ves::v1::ColonCase& colon_case,
+                               const CaseModelOptions& options) {
+  m::ColonCurve curve;
+  for (const auto& p : colon_case.centerline()) {
+    curve.control_points_m.emplace_back(p.x_m(), p.y_m(), p.z_m());
+  }
+  for (const auto& r : colon_case.radius_profile()) {
+    curve.radius_profile.push_back({r.arc_m(), r.radius_m()});
+  }
+  for (const auto& span : colon_case.regions()) {
+    curve.regions.push_back({RegionFromProto(span.region()), span.start_arc_m(), span.end_arc_m(),
+                             TissueFromProto(span.tissue())});
+  }
+  m::ColonSpec colon = m::ResampleColon(curve, options.segments);
+  if (options.stiff_colon) m::MakeSuspensionStiff(&colon);
+  return colon;
+}
+
+m::EndoscopeParams EndoscopeFromSpec(const ves::v1::EndoscopeSpec& spec) {
+  m::EndoscopeParams p;
+  p.working_length_m = Or(spec.working_length_m(), p.working_length_m);
+  p.outer_diameter_m = Or(spec.outer_diameter_m(), p.outer_diameter_m);
+  p.link_count = spec.link_count() != 0 ? static_cast<int>(spec.link_count()) : p.link_count;
+  p.tip_link_length_m = Or(spec.tip_link_length_m(), p.tip_link_length_m);
+  p.link_growth_ratio = Or(spec.link_growth_ratio(), p.link_growth_ratio);
+  p.flexural_rigidity_N_m2 = Or(spec.flexural_rigidity_n_m2(), p.flexural_rigidity_N_m2);
+  p.joint_damping_N_m_s_per_rad =
+      Or(spec.joint_damping_n_m_s_per_rad(), p.joint_damping_N_m_s_per_rad);
+  p.linear_mass_kg_per_m = Or(spec.linear_mass_kg_per_m(), p.linear_mass_kg_per_m);
+  p.bending_section_length_m = Or(spec.bending_section_length_m(), p.bending_section_length_m);
+  p.angulation_up_rad = Or(spec.angulation_up_rad(), p.angulation_up_rad);
+  p.angulation_down_rad = Or(spec.angulation_down_rad(), p.angulation_down_rad);
+  p.angulation_left_rad = Or(spec.angulation_left_rad(), p.angulation_left_rad);
+  p.angulation_right_rad = Or(spec.angulation_right_rad(), p.angulation_right_rad);
+  p.bending_section_rigidity_N_m2 =
+      Or(spec.bending_section_rigidity_n_m2(), p.bending_section_rigidity_N_m2);
+  m::ValidateEndoscope(p);
+  return p;
+}
+
+ves::v1::EndoscopeSpec DefaultEndoscopeSpec() {
+  const m::EndoscopeParams p;
+  ves::v1::EndoscopeSpec spec;
+  spec.set_id("adult-colonoscope");
+  spec.set_title("Adult colonoscope (CF-H180AL class; docs/model.md)");
+  spec.set_working_length_m(p.working_length_m);
+  spec.set_outer_diameter_m(p.outer_diameter_m);
+  spec.set_link_count(static_cast<uint32_t>(p.link_count));
+  spec.set_tip_link_length_m(p.tip_link_length_m);
+  spec.set_link_growth_ratio(p.link_growth_ratio);
+  spec.set_flexural_rigidity_n_m2(p.flexural_rigidity_N_m2);
+  spec.set_joint_damping_n_m_s_per_rad(p.joint_damping_N_m_s_per_rad);
+  spec.set_linear_mass_kg_per_m(p.linear_mass_kg_per_m);
+  spec.set_bending_section_length_m(p.bending_section_length_m);
+  spec.set_angulation_up_rad(p.angulation_up_rad);
+  spec.set_angulation_down_rad(p.angulation_down_rad);
+  spec.set_angulation_left_rad(p.angulation_left_rad);
+  spec.set_angulation_right_rad(p.angulation_right_rad);
+  spec.set_bending_section_rigidity_n_m2(p.bending_section_rigidity_N_m2);
+  return spec;
+}
+
+m::ModelParams MakeModelParams(const ves::v1::ColonCase& colon_case,
+                               const ves::v1::EndoscopeSpec& scope,
+                               const CaseModelOptions& options) {
+  m::ModelParams params;
+  params.colon = ColonSpecFromCase(colon_case, options);
+  params.scope = EndoscopeFromSpec(scope);
+  m::ValidateParams(params);
+  return params;
+}
+
+}  // namespace ves::training

@@ -1,0 +1,235 @@
+#include "station/training/input_log.h"
+
+#include <zlib.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace ves::training {
+namespace {
+
+constexpr char kMagic[4] = {'V', 'I', 'L', '1'};
+constexpr std::size_t kHeaderBytes = 4 + 8 + 4 + 4 + 4;
+constexpr int kColumns = 9;
+// A varint of a zig-zag int64 takes at most 10 bytes.
+constexpr std::uint64_t kMaxVarintBytes = 10;
+// Refuse absurd headers before allocating: 2^28 samples is 74 h at 1 kHz.
+constexpr std::uint64_t kMaxSamples = std::uint64_t{1} << 28;
+constexpr double kMaxQuantized = 1e15;
+
+std::int64_t ToUnits(double value, double resolution, const char* field) {
+  const double units = std::round(value / resolution);
+  if (!std::isfinite(value) || std::abs(units) > kMaxQuantized) {
+    throw std::invalid_argument(std::string("input sample: ") + field +
+                                " is not a finite value in range: " + std::to_string(value));
+  }
+  return static_cast<std::int64_t>(units);
+}
+
+std::array<std::int64_t, kColumns> ToColumns(const InputSample& s) {
+  return {static_cast<std::int64_t>(s.tick),
+          static_cast<std::int64_t>(s.thrust_mode),
+          ToUnits(s.insertion_m, kLogLengthResolution_m, "insertion_m"),
+          ToUnits(s.push_force_N, kLogForceResolution_N, "push_force_N"),
+          ToUnits(s.roll_rad, kLogAngleResolution_rad, "roll_rad"),
+          ToUnits(s.knob_up_down_rad, kLogAngleResolution_rad, "knob_up_down_rad"),
+          ToUnits(s.knob_left_right_rad, kLogAngleResolution_rad, "knob_left_right_rad"),
+          static_cast<std::int64_t>(s.view_mode),
+          s.fluoroscopy_on ? 1 : 0};
+}
+
+InputSample FromColumns(const std::array<std::int64_t, kColumns>& c) {
+  if (c[0] < 0) throw InputLogError("input log: negative tick " + std::to_string(c[0]));
+  if (c[1] < 0 || c[1] > 1)
+    throw InputLogError("input log: bad thrust mode " + std::to_string(c[1]));
+  if (c[7] < 0 || c[7] > 2) throw InputLogError("input log: bad view mode " + std::to_string(c[7]));
+  if (c[8] < 0 || c[8] > 1)
+    throw InputLogError("input log: bad fluoroscopy flag " + std::to_string(c[8]));
+  InputSample s;
+  s.tick = static_cast<std::uint64_t>(c[0]);
+  s.thrust_mode = static_cast<ThrustMode>(c[1]);
+  s.insertion_m = static_cast<double>(c[2]) * kLogLengthResolution_m;
+  s.push_force_N = static_cast<double>(c[3]) * kLogForceResolution_N;
+  s.roll_rad = static_cast<double>(c[4]) * kLogAngleResolution_rad;
+  s.knob_up_down_rad = static_cast<double>(c[5]) * kLogAngleResolution_rad;
+  s.knob_left_right_rad = static_cast<double>(c[6]) * kLogAngleResolution_rad;
+  s.view_mode = static_cast<ViewMode>(c[7]);
+  s.fluoroscopy_on = c[8] == 1;
+  return s;
+}
+
+void PutVarint(std::string* out, std::int64_t value) {
+  // Zig-zag so small negative deltas stay short.
+  std::uint64_t v =
+      (static_cast<std::uint64_t>(value) << 1) ^ static_cast<std::uint64_t>(value >> 63);
+  while (v >= 0x80) {
+    out->push_back(static_cast<char>((v & 0x7f) | 0x80));
+    v >>= 7;
+  }
+  out->push_back(static_cast<char>(v));
+}
+
+std::int64_t GetVarint(std::string_view raw, std::size_t* pos) {
+  std::uint64_t v = 0;
+  for (int shift = 0; shift < 64; shift += 7) {
+    if (*pos >= raw.size()) throw InputLogError("input log: data ends inside a value");
+    const auto byte = static_cast<std::uint8_t>(raw[(*pos)++]);
+    v |= static_cast<std::uint64_t>(byte & 0x7f) << shift;
+    if ((byte & 0x80) == 0) {
+      return static_cast<std::int64_t>(v >> 1) ^ -static_cast<std::int64_t>(v & 1);
+    }
+  }
+  throw InputLogError("input log: malformed value (varint longer than 10 bytes)");
+}
+
+void PutLe(std::string* out, std::uint64_t v, int bytes) {
+  for (int i = 0; i < bytes; ++i) out->push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+std::uint64_t GetLe(std::string_view in, std::size_t at, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) {
+    v |= static_cast<std::uint64_t>(static_cast<std::uint8_t>(in[at + i])) << (8 * i);
+  }
+  return v;
+}
+
+std::uint32_t Crc32(std::string_view data) {
+  return static_cast<std::uint32_t>(
+      crc32(0L, reinterpret_cast<const Bytef*>(data.data()), static_cast<uInt>(data.size())));
+}
+
+}  // namespace
+
+InputSample Quantize(const InputSample& sample) { return FromColumns(ToColumns(sample)); }
+
+std::string EncodeInputSamples(std::span<const InputSample> samples) {
+  std::vector<std::array<std::int64_t, kColumns>> rows;
+  rows.reserve(samples.size());
+  for (const InputSample& s : samples) rows.push_back(ToColumns(s));
+  std::string raw;
+  raw.reserve(samples.size() * kColumns * 2);
+  for (int c = 0; c < kColumns; ++c) {
+    std::int64_t previous = 0;
+    for (const auto& row : rows) {
+      PutVarint(&raw, row[c] - previous);
+      previous = row[c];
+    }
+  }
+  if (raw.size() > std::numeric_limits<std::uint32_t>::max()) {
+    throw std::invalid_argument("input log: too many samples to encode: " +
+                                std::to_string(samples.size()));
+  }
+  uLongf packed_size = compressBound(static_cast<uLong>(raw.size()));
+  std::string packed(packed_size, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size,
+                reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size()),
+                Z_BEST_COMPRESSION) != Z_OK) {
+    throw std::runtime_error("input log: zlib compression failed");
+  }
+  packed.resize(packed_size);
+
+  std::string out(kMagic, sizeof(kMagic));
+  PutLe(&out, samples.size(), 8);
+  PutLe(&out, raw.size(), 4);
+  PutLe(&out, Crc32(raw), 4);
+  // A second CRC over the compressed bytes: deflate ignores the padding bits
+  // of its last byte, and a flip there must still be caught.
+  PutLe(&out, Crc32(packed), 4);
+  out += packed;
+  return out;
+}
+
+std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
+  if (encoded.size() < kHeaderBytes) {
+    throw InputLogError("input log: truncated header (" + std::to_string(encoded.size()) +
+                        " bytes, need " + std::to_string(kHeaderBytes) + ")");
+  }
+  if (std::memcmp(encoded.data(), kMagic, sizeof(kMagic)) != 0) {
+    throw InputLogError("input log: not a delta-zlib-v1 log (bad magic)");
+  }
+  const std::uint64_t count = GetLe(encoded, 4, 8);
+  const std::uint64_t raw_size = GetLe(encoded, 12, 4);
+  const auto crc = static_cast<std::uint32_t>(GetLe(encoded, 16, 4));
+  const auto packed_crc = static_cast<std::uint32_t>(GetLe(encoded, 20, 4));
+  if (count > kMaxSamples) {
+    throw InputLogError("input log: implausible sample count " + std::to_string(count));
+  }
+  if (raw_size < count * kColumns || raw_size > count * kColumns * kMaxVarintBytes) {
+    throw InputLogError("input log: raw length " + std::to_string(raw_size) +
+                        " does not fit sample count " + std::to_string(count));
+  }
+  const std::string_view packed = encoded.substr(kHeaderBytes);
+  // zlib cannot expand more than about 1032:1; a larger claim is a corrupted header.
+  if (raw_size > (packed.size() + 64) * 1100) {
+    throw InputLogError("input log: raw length " + std::to_string(raw_size) + " impossible for " +
+                        std::to_string(packed.size()) + " compressed bytes");
+  }
+  if (Crc32(packed) != packed_crc) {
+    throw InputLogError(
+        "input log: CRC-32 mismatch of the compressed data (truncated or corrupted)");
+  }
+  std::string raw(raw_size, '\0');
+  uLongf raw_out = static_cast<uLongf>(raw_size);
+  const int z =
+      uncompress(reinterpret_cast<Bytef*>(raw.data()), &raw_out,
+                 reinterpret_cast<const Bytef*>(packed.data()), static_cast<uLong>(packed.size()));
+  if (z != Z_OK || raw_out != raw_size) {
+    throw InputLogError(
+        std::string("input log: compressed data is truncated or corrupted (zlib: ") +
+        (z == Z_OK ? "length mismatch" : zError(z)) + ")");
+  }
+  if (Crc32(raw) != crc) throw InputLogError("input log: CRC-32 mismatch (corrupted data)");
+
+  std::vector<std::array<std::int64_t, kColumns>> rows(count);
+  std::size_t pos = 0;
+  for (int c = 0; c < kColumns; ++c) {
+    std::int64_t value = 0;
+    for (auto& row : rows) {
+      const std::int64_t delta = GetVarint(raw, &pos);
+      // Wrapping add: corrupted deltas must not be undefined behaviour.
+      value = static_cast<std::int64_t>(static_cast<std::uint64_t>(value) +
+                                        static_cast<std::uint64_t>(delta));
+      row[c] = value;
+    }
+  }
+  if (pos != raw.size()) {
+    throw InputLogError("input log: " + std::to_string(raw.size() - pos) +
+                        " unexpected bytes after the samples");
+  }
+  std::vector<InputSample> samples;
+  samples.reserve(count);
+  for (const auto& row : rows) samples.push_back(FromColumns(row));
+  return samples;
+}
+
+v1::InputLog MakeInputLog(std::span<const InputSample> samples, double dt_s) {
+  v1::InputLog log;
+  log.set_format_version(kInputLogFormatVersion);
+  log.set_dt_s(dt_s);
+  log.set_sample_count(samples.size());
+  log.set_encoded(EncodeInputSamples(samples));
+  log.set_encoding(kInputLogEncoding);
+  return log;
+}
+
+std::vector<InputSample> DecodeInputLog(const v1::InputLog& log) {
+  if (log.format_version() != kInputLogFormatVersion || log.encoding() != kInputLogEncoding) {
+    throw InputLogError("input log: unsupported format " + std::to_string(log.format_version()) +
+                        " encoding '" + log.encoding() + "' (expected 1, " + kInputLogEncoding +
+                        ")");
+  }
+  if (!(log.dt_s() > 0.0 && log.dt_s() < 1.0)) {
+    throw InputLogError("input log: dt_s must be in (0, 1) s, got " + std::to_string(log.dt_s()));
+  }
+  std::vector<InputSample> samples = DecodeInputSamples(log.encoded());
+  if (samples.size() != log.sample_count()) {
+    throw InputLogError("input log: sample_count " + std::to_string(log.sample_count()) +
+                        " but the data holds " + std::to_string(samples.size()));
+  }
+  return samples;
+}
+
+}  // namespace ves::training

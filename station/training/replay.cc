@@ -1,0 +1,98 @@
+#include "station/training/replay.h"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "station/training/scripted_operator.h"
+#include "station/training/uuid.h"
+
+namespace ves::training {
+namespace {
+
+RunResult ResultOf(const SessionRunner& runner) {
+  const Session& s = runner.session();
+  RunResult r;
+  r.outcome = s.outcome();
+  r.metrics = s.metrics();
+  r.events = s.accumulator().Events();
+  r.score = s.score();
+  r.steps = s.steps();
+  r.diverged = runner.diverged();
+  return r;
+}
+
+}  // namespace
+
+MetricThresholds ThresholdsFor(const model::ModelParams& params) {
+  MetricThresholds t;
+  const auto& pts = params.colon.points;
+  t.cecum_arc_m = std::max(pts.back().arc_m - 0.05, 0.5 * pts.back().arc_m);
+  for (const auto& p : pts) {
+    if (p.region == model::Region::kCecum) {
+      t.cecum_arc_m = p.arc_m;
+      break;
+    }
+  }
+  return t;
+}
+
+RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
+                             std::string_view operator_kind, std::int64_t start_unix_ms,
+                             v1::SessionRecord* record, const StepCallback& on_step) {
+  auto op = MakeScriptedOperator(operator_kind, params.dt_s);
+  config.operator_kind = std::string(operator_kind);
+  SessionRunner runner(params, std::move(config));
+  runner.Start(start_unix_ms);
+  Perception perception = Perceive(params, runner.state(), runner.output());
+  while (runner.session().state() == SessionState::kRunning) {
+    const InputSample input = op->Act(perception);
+    runner.Step(input);
+    if (on_step && !runner.diverged()) on_step(runner.session().inputs().back(), runner);
+    perception = Perceive(params, runner.state(), runner.output());
+  }
+  const RunResult result = ResultOf(runner);
+  if (record != nullptr) {
+    const auto duration_ms =
+        static_cast<std::int64_t>(std::llround(result.metrics.duration_s * 1e3));
+    *record = runner.session().ToRecord(NewUuidV4(), start_unix_ms + duration_ms);
+  }
+  return result;
+}
+
+RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
+                 const v1::InputLog& log, const StepCallback& on_step) {
+  const std::vector<InputSample> inputs = DecodeInputLog(log);
+  if (log.dt_s() != params.dt_s) {
+    throw ReplayError("replay: log dt_s " + std::to_string(log.dt_s()) +
+                      " differs from the model's " + std::to_string(params.dt_s));
+  }
+  SessionRunner runner(params, config);
+  runner.Start(0);
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (inputs[i].tick != i) {
+      throw ReplayError("replay: sample " + std::to_string(i) + " has tick " +
+                        std::to_string(inputs[i].tick));
+    }
+    if (runner.session().state() != SessionState::kRunning) {
+      throw ReplayError("replay: the log continues " + std::to_string(inputs.size() - i) +
+                        " samples after the session finished");
+    }
+    runner.Step(inputs[i]);
+    if (on_step && !runner.diverged()) on_step(runner.session().inputs().back(), runner);
+  }
+  if (runner.session().state() == SessionState::kRunning) runner.session().Abort();
+  return ResultOf(runner);
+}
+
+std::string SummaryLine(const RunResult& r) {
+  char line[512];
+  std::snprintf(line, sizeof(line),
+                "outcome=%s time_to_cecum_s=%.3f pain_s=%.3f loop_s=%.3f peak_force_N=%.3f "
+                "xray_s=%.3f score=%.1f",
+                OutcomeName(r.outcome), r.metrics.time_to_cecum_s, r.metrics.pain_s,
+                r.metrics.loop_s, r.metrics.peak_insertion_force_N, r.metrics.xray_s, r.score);
+  return line;
+}
+
+}  // namespace ves::training

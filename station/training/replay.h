@@ -1,0 +1,58 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+#include "station/model/model.h"
+#include "station/training/session_runner.h"
+#include "ves/v1/session.pb.h"
+
+namespace ves::training {
+
+// Thresholds for a model colon: the cecum begins at the first segment point
+// labelled cecum (the deepest point minus 5 cm when no point is); the rest
+// are the documented defaults (docs/scoring.md).
+MetricThresholds ThresholdsFor(const model::ModelParams& params);
+
+// Refusal of a log that cannot be the record of a session on these params.
+class ReplayError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RunResult {
+  Outcome outcome{Outcome::kNone};
+  Metrics metrics;
+  std::vector<Event> events;
+  double score{0.0};
+  std::uint64_t steps{0};
+  bool diverged{false};
+
+  bool operator==(const RunResult&) const = default;
+};
+
+// Called after every step with the runner (model state, output, observation).
+using StepCallback = std::function<void(const InputSample&, const SessionRunner&)>;
+
+// Runs a scripted operator ("novice" or "expert") from the model's initial
+// state until the cecum is reached or config.time_limit_s passes. Fills
+// `record` (a fresh UUID v4, start_unix_ms as given, end = start + duration)
+// when not null.
+RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
+                             std::string_view operator_kind, std::int64_t start_unix_ms,
+                             v1::SessionRecord* record, const StepCallback& on_step = {});
+
+// Re-runs the model from a logged input sequence and recomputes every metric.
+// Deterministic: the same build gives bit-identical results. A log that ends
+// while the session still runs is an aborted session. Throws InputLogError
+// for a bad log and ReplayError for samples after the session finished or
+// ticks out of sequence.
+RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
+                 const v1::InputLog& log, const StepCallback& on_step = {});
+
+std::string SummaryLine(const RunResult& result);
+
+}  // namespace ves::training

@@ -1,0 +1,130 @@
+#include "station/training/replay.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "station/training/session_file.h"
+
+namespace ves::training {
+namespace {
+
+// A synthetic colon: 0.2 m straight, then a 90-degree bend of radius 0.15 m,
+// then 0.2 m straight; the last 4 points are labelled cecum. Small enough
+// that a 2 s session runs in well under a second.
+model::ModelParams TubeParams() {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 20; ++i) points.emplace_back(0.0, 0.0, 0.01 * i);
+  for (int i = 1; i <= 24; ++i) {
+    const double a = 0.5 * model::kPi * i / 24.0;
+    points.emplace_back(0.15 * (1.0 - std::cos(a)), 0.0, 0.2 + 0.15 * std::sin(a));
+  }
+  for (int i = 1; i <= 20; ++i) points.emplace_back(0.15 + 0.01 * i, 0.0, 0.35);
+  model::ModelParams params;
+  params.colon = model::MakeColonFromPoints(points, 0.02, model::TissueParams{});
+  for (std::size_t i = points.size() - 4; i < points.size(); ++i) {
+    params.colon.points[i].region = model::Region::kCecum;
+  }
+  return params;
+}
+
+SessionConfig Config(const model::ModelParams& params, double seconds) {
+  SessionConfig c;
+  c.case_id = "tube";
+  c.difficulty = v1::DIFFICULTY_MEDIUM;
+  c.dt_s = params.dt_s;
+  c.time_limit_s = seconds;
+  c.thresholds = ThresholdsFor(params);
+  return c;
+}
+
+TEST(Replay, ThresholdsPutTheCecumAtTheFirstCecumPoint) {
+  const auto params = TubeParams();
+  EXPECT_EQ(ThresholdsFor(params).cecum_arc_m,
+            params.colon.points[params.colon.points.size() - 4].arc_m);
+}
+
+TEST(Replay, ReproducesAScriptedSessionExactly) {
+  const auto params = TubeParams();
+  for (const char* kind : {"novice", "expert"}) {
+    v1::SessionRecord record;
+    const RunResult live = RunScriptedSession(params, Config(params, 2.0), kind, 1000, &record);
+    ASSERT_GT(live.steps, 0u) << kind;
+    EXPECT_EQ(record.operator_kind(), kind);
+    EXPECT_EQ(record.input_log().sample_count(), live.steps);
+    // Through the session file, as the server or a supervisor would get it.
+    const v1::SessionRecord back = DecodeSessionFile(EncodeSessionFile(record));
+    const RunResult replayed = Replay(params, Config(params, 2.0), back.input_log());
+    EXPECT_EQ(replayed, live) << kind << "\nlive:   " << SummaryLine(live)
+                              << "\nreplay: " << SummaryLine(replayed);
+    EXPECT_EQ(SummaryLine(replayed), SummaryLine(live));
+    EXPECT_EQ(FromProto(record.metrics()), replayed.metrics);
+  }
+}
+
+TEST(Replay, ALogEndingEarlyReplaysAsAborted) {
+  const auto params = TubeParams();
+  v1::SessionRecord record;
+  RunScriptedSession(params, Config(params, 1.0), "novice", 0, &record);
+  auto inputs = DecodeInputLog(record.input_log());
+  ASSERT_GT(inputs.size(), 100u);
+  inputs.resize(100);
+  const RunResult r = Replay(params, Config(params, 1.0), MakeInputLog(inputs, params.dt_s));
+  EXPECT_EQ(r.outcome, Outcome::kAborted);
+  EXPECT_EQ(r.steps, 100u);
+}
+
+TEST(Replay, SamplesAfterTheSessionFinishedAreRefused) {
+  const auto params = TubeParams();
+  v1::SessionRecord record;
+  RunScriptedSession(params, Config(params, 0.5), "novice", 0, &record);
+  auto inputs = DecodeInputLog(record.input_log());
+  inputs.push_back(inputs.back());
+  inputs.back().tick = inputs.size() - 1;
+  EXPECT_THROW(Replay(params, Config(params, 0.5), MakeInputLog(inputs, params.dt_s)), ReplayError);
+}
+
+TEST(Replay, CorruptedLogIsRefused) {
+  const auto params = TubeParams();
+  v1::SessionRecord record;
+  RunScriptedSession(params, Config(params, 0.5), "expert", 0, &record);
+  v1::InputLog log = record.input_log();
+  std::string bytes = log.encoded();
+  bytes[bytes.size() / 2] ^= 0x40;
+  log.set_encoded(bytes);
+  EXPECT_THROW(Replay(params, Config(params, 0.5), log), InputLogError);
+  log = record.input_log();
+  log.set_encoded(log.encoded().substr(0, log.encoded().size() - 3));
+  EXPECT_THROW(Replay(params, Config(params, 0.5), log), InputLogError);
+}
+
+TEST(Replay, RepeatTrainingRunsTheSameInputsToTheSameResult) {
+  const auto params = TubeParams();
+  v1::SessionRecord record;
+  const RunResult first = RunScriptedSession(params, Config(params, 0.5), "novice", 0, &record);
+  const auto inputs = DecodeInputLog(record.input_log());
+  SessionRunner runner(params, Config(params, 0.5));
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    runner.Start(0);
+    for (const auto& in : inputs) runner.Step(in);
+    EXPECT_EQ(runner.session().metrics(), first.metrics) << "attempt " << attempt;
+    runner.Repeat();
+  }
+  EXPECT_EQ(runner.session().repeat_count(), 2);
+}
+
+TEST(Replay, UnknownOperatorIsRefused) {
+  const auto params = TubeParams();
+  EXPECT_THROW(RunScriptedSession(params, Config(params, 0.1), "robot", 0, nullptr),
+               std::invalid_argument);
+}
+
+TEST(SessionRunner, ModelAndSessionRatesMustAgree) {
+  const auto params = TubeParams();
+  SessionConfig c = Config(params, 1.0);
+  c.dt_s = 0.002;
+  EXPECT_THROW(SessionRunner(params, c), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ves::training
