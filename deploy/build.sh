@@ -4,5 +4,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${VES_BUILD_DIR:-$root/build}"
+# ccache (cmake/VesOptions.cmake) keyed on paths relative to the checkout, so
+# a fresh clone in another folder reuses the objects of an earlier build.
+export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
 cmake --build "$build" -j "${VES_JOBS:-2}"
