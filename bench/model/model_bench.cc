@@ -1,0 +1,65 @@
+// Cost of one model Step (docs/model.md): the paper's size, the 64-link x
+// 1000-segment target, and the scaling in the number of colon segments.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "station/model/model.h"
+
+namespace {
+
+using namespace ves::model;
+
+// A 1.2 m colon that winds like a sigmoid (two loops), mobile in the middle.
+ModelParams MakeParams(int links, int segments) {
+  ColonCurve curve;
+  for (int i = 0; i <= 40; ++i) {
+    const double s = i / 40.0;
+    curve.control_points_m.emplace_back(0.06 * std::sin(2.0 * kPi * s),
+                                        0.08 * std::sin(kPi * s) * std::sin(3.0 * kPi * s),
+                                        0.5 * s);
+  }
+  curve.radius_profile = {{0.0, 0.015}, {0.1, 0.02}};
+  TissueParams fixed;
+  fixed.suspension_stiffness_N_per_m2 = 2e4;
+  TissueParams mobile;
+  mobile.suspension_stiffness_N_per_m2 = 300;
+  curve.regions = {{Region::kRectum, 0.0, 0.15, fixed},
+                   {Region::kSigmoid, 0.15, 0.6, mobile},
+                   {Region::kDescending, 0.6, 10.0, fixed}};
+  ModelParams params;
+  params.colon = ResampleColon(curve, segments);
+  params.scope.link_count = links;
+  return params;
+}
+
+void BM_Step(benchmark::State& bench, int links, int segments) {
+  const ModelParams params = MakeParams(links, segments);
+  ModelState state = MakeInitialState(params);
+  Scratch scratch = MakeScratch(params);
+  StepOutput out = MakeStepOutput(params);
+  StepInput in;
+  // Insert 0.5 m first so the scope lies in the colon with many contacts.
+  while (state.time_s < 5.0) {
+    in.insertion_m = 0.1 * state.time_s;
+    Step(params, in, &state, &scratch, &out);
+  }
+  for (auto _ : bench) {
+    in.insertion_m += 1e-5;  // 10 mm/s, as a hand would
+    Step(params, in, &state, &scratch, &out);
+    benchmark::DoNotOptimize(out.base_force_N);
+  }
+  bench.counters["contacts"] = out.contact_count;
+  bench.counters["samples"] = static_cast<double>(state.samples.size());
+}
+
+// Paper §3.6: 5 movable joints (4 bending + the base) and 150 segments.
+BENCHMARK_CAPTURE(BM_Step, paper_5joints_150seg, 5, 150)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, default_48links_150seg, 48, 150)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, target_64links_1000seg, 64, 1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, scaling_64links_250seg, 64, 250)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_Step, scaling_64links_4000seg, 64, 4000)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

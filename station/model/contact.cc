@@ -1,0 +1,177 @@
+// Contact between the scope samples and the colon (paper §3.5, eqs. 9-17).
+#include <algorithm>
+#include <cmath>
+
+#include "station/model/internal.h"
+
+namespace ves::model::internal {
+
+WallResponse CalcWallResponse(const TissueParams& tissue, double hardening_ratio, double l_m) {
+  WallResponse r;
+  if (!(l_m > 0.0)) return r;
+  const double K_d = tissue.wall_stiffness_N_per_m;
+  const double L = tissue.deformation_threshold_m;
+  if (l_m <= L) {
+    // paper eq. (9), radial term: the wall alone deforms, K_d ||l||.
+    r.force_N = K_d * l_m;
+    r.slope_N_per_m = K_d;
+  } else {
+    // paper eq. (10): beyond L the wall stops yielding and the segment point
+    // itself is pushed; the much stiffer wall hands the load to the suspension.
+    const double K_hard = hardening_ratio * K_d;
+    r.force_N = K_d * L + K_hard * (l_m - L);
+    r.slope_N_per_m = K_hard;
+    r.beyond_threshold = true;
+  }
+  return r;
+}
+
+SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
+                          const Eigen::Vector3d& p) {
+  // The lumen is the circles of radius R_i centred on the current r_i in the
+  // fixed planes P_i (paper §3.3.2): measure the sample in the two planes that
+  // bracket it and blend by its axial position between them.
+  const auto& pts = params.colon.points;
+  const int last = static_cast<int>(pts.size()) - 1;
+  const ColonPoint& A = pts[k];
+  const ColonPoint& B = pts[k + 1];
+  const Eigen::Vector3d pa = p - s.p_WColon[k];
+  const Eigen::Vector3d pb = p - s.p_WColon[k + 1];
+  const double da = pa.dot(A.rest_tangent);   // >= 0 past plane k
+  const double db = pb.dot(B.rest_tangent);   // < 0 before plane k+1
+  SegmentHit hit;
+  hit.t = da - db > 1e-12 ? std::clamp(da / (da - db), 0.0, 1.0) : 0.5;
+  const Eigen::Vector3d wa = pa - da * A.rest_tangent;
+  const Eigen::Vector3d wb = pb - db * B.rest_tangent;
+  const Eigen::Vector3d w = (1.0 - hit.t) * wa + hit.t * wb;
+  const double rho = (1.0 - hit.t) * wa.norm() + hit.t * wb.norm();
+  const double w_norm = w.norm();
+  hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w / w_norm) : A.plane_u;
+  hit.radius_m = A.radius_m + hit.t * (B.radius_m - A.radius_m);
+  const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
+  hit.penetration_m = rho + scope_radius_m - hit.radius_m;
+  if (k + 1 == last && db > 0.0) {
+    // Past the deepest point: the closed end (cecum pole) stops the tip.
+    const double axial_m = db + scope_radius_m;
+    if (axial_m > hit.penetration_m) {
+      hit.penetration_m = axial_m;
+      hit.normal = B.rest_tangent;
+    }
+  }
+  return hit;
+}
+
+// Local search: step plane by plane toward the sample, never more than
+// `window` segments, so two loops that touch in space cannot swap a sample.
+void TrackSegment(const ModelState& s, const ColonSpec& colon, int window,
+                  const Eigen::Vector3d& p, SampleContact* c) {
+  const int segments = static_cast<int>(s.p_WColon.size()) - 1;
+  int k = std::clamp(c->segment, 0, segments - 1);
+  int direction = 0;
+  for (int step = 0; step < window; ++step) {
+    const double past_next = (p - s.p_WColon[k + 1]).dot(colon.points[k + 1].rest_tangent);
+    const double past_this = (p - s.p_WColon[k]).dot(colon.points[k].rest_tangent);
+    if (past_next >= 0.0 && k + 1 < segments && direction >= 0) {
+      ++k;
+      direction = 1;
+    } else if (past_this < 0.0 && k > 0 && direction <= 0) {
+      --k;
+      direction = -1;
+    } else {
+      break;
+    }
+  }
+  c->segment = k;
+}
+
+void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, StepOutput* out) {
+  const int samples = static_cast<int>(s->samples.size());
+  const double dt = params.dt_s;
+  const double k_t = params.friction_stiffness_N_per_m;
+  out->contact_count = 0;
+  for (int i = 0; i < samples; ++i) {
+    SampleContact& c = s->contact[i];
+    sc->sample_force_W_N[i].setZero();
+    sc->sample_stiffness_N_per_m[i].setZero();
+    sc->sample_normal_force_N[i] = 0.0;
+    const bool inside = s->samples[i].arc_from_tip_m < s->inserted_m;
+    if (!inside) {
+      c = SampleContact{};
+      continue;
+    }
+    if (!c.inside) {
+      c = SampleContact{};
+      c.inside = true;  // enters at the anus: segment 0
+    }
+    const Eigen::Vector3d& p = s->p_WSample[i];
+    TrackSegment(*s, params.colon, params.contact_search_window, p, &c);
+    const SegmentHit hit = CalcSegmentHit(params, *s, c.segment, p);
+    c.segment_t = hit.t;
+    c.penetration_m = hit.penetration_m;
+    sc->sample_normal_W[i] = hit.normal;
+    if (!(hit.penetration_m > 0.0)) {
+      c.touching = false;
+      c.sliding = false;
+      c.slip_m.setZero();
+      continue;
+    }
+    c.touching = true;
+    const ColonPoint& wall = params.colon.points[hit.t < 0.5 ? c.segment : c.segment + 1];
+    const TissueParams& tissue = wall.tissue;
+    const WallResponse response =
+        CalcWallResponse(tissue, params.wall_hardening_ratio, hit.penetration_m);
+    const Eigen::Vector3d& n = hit.normal;
+    const double f_n = response.force_N;
+    const Eigen::Vector3d f_n_vec = -f_n * n;  // pushes the scope back toward the axis
+    // Elastic stick spring: the tangential force that would hold the contact.
+    c.slip_m -= c.slip_m.dot(n) * n;
+    const Eigen::Vector3d f_t = -k_t * c.slip_m;
+    const double f_t_norm = f_t.norm();
+    const double mu_s = tissue.static_friction;
+    const double mu_d = tissue.dynamic_friction;
+    const double inner = mu_s * f_n;
+    const double r0 = params.outer_cone_ratio * inner;
+    double alpha = 0.0;
+    Eigen::Vector3d F_t = f_t;
+    if (f_t_norm > inner) {
+      // paper eq. (16): alpha = (||f_t|| - F_s||f_n||) / (r0 - F_s||f_n||) between the cones.
+      alpha = f_t_norm >= r0 ? 1.0 : (f_t_norm - inner) / (r0 - inner);
+      // paper eq. (17): F = (1-alpha) f + alpha (F_d ||f_n|| f_t/||f_t|| + f_n).
+      F_t = (1.0 - alpha) * f_t + alpha * mu_d * f_n * (f_t / f_t_norm);
+      // The spring rides the outer cone: further slip keeps alpha = 1 (mu_d);
+      // a reversal brings it back through the blend, without a jump.
+      if (f_t_norm > r0) c.slip_m *= r0 / f_t_norm;
+    }
+    c.sliding = alpha > 0.0;
+    const Eigen::Vector3d F = f_n_vec + F_t;
+    sc->sample_force_W_N[i] = F;
+    sc->sample_friction_W_N[i] = F_t;
+    sc->sample_normal_force_N[i] = f_n;
+    // Linearised stiffness: wall slope + implicit wall damping D_d/dt along n,
+    // the stick spring across it. The stick spring stays in even while the
+    // contact slides: dropping it at every slip/stick switch makes the
+    // linearisation flip from step to step (chatter); the force itself is
+    // still capped by the cone at the next evaluation.
+    const double k_n = response.slope_N_per_m + tissue.wall_damping_N_s_per_m / dt;
+    const Eigen::Matrix3d nn = n * n.transpose();
+    sc->sample_stiffness_N_per_m[i] =
+        k_n * nn + k_t * (Eigen::Matrix3d::Identity() - nn);
+    sc->sample_normal_slope_N_per_m[i] = response.slope_N_per_m;
+
+    Contact& out_c = out->contacts[out->contact_count++];
+    out_c.sample = i;
+    out_c.segment = c.segment;
+    const double arc0 = params.colon.points[c.segment].arc_m;
+    out_c.colon_arc_m = arc0 + hit.t * (params.colon.points[c.segment + 1].arc_m - arc0);
+    out_c.scope_arc_from_tip_m = s->samples[i].arc_from_tip_m;
+    out_c.p_W = p;
+    out_c.normal_W = n;
+    out_c.penetration_m = hit.penetration_m;
+    out_c.normal_force_N = f_n;
+    out_c.force_on_scope_W_N = F;
+    out_c.alpha = alpha;
+    out_c.beyond_threshold = response.beyond_threshold;
+  }
+}
+
+}  // namespace ves::model::internal

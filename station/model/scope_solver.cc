@@ -1,0 +1,145 @@
+// Linearly implicit step of the quasi-static endoscope law, paper eq. (6):
+//   D q' = sum_i J_i^T F_i - K (q - q0) - G(q) + tau_input.
+// Backward Euler with the contact forces linearised (F(q + dq) ~ F - K_c J dq)
+// gives (D + dt K + dt J^T K_c J) dq = dt (J^T F - K (q - q0)). That matrix is
+// the joint-space "inertia" of a chain whose bodies carry the spatial contact
+// stiffness dt*K_c instead of inertia and whose joints carry D + dt*K as
+// armature, so the articulated-body recursion (Featherstone) solves it in O(n)
+// without ever forming J: tip to base it accumulates stiffness and the wrench
+// sum J^T F, base to tip it recovers dq. Spatial vectors are in W at its
+// origin: twists [dtheta; dx_O], wrenches [moment about O; force].
+#include <algorithm>
+
+#include "station/model/internal.h"
+
+namespace ves::model::internal {
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+constexpr double kMaxJointTurnPerStep_rad = 0.02;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// Spatial stiffness of a point spring K at p: B^T K B with B = [-p^, I].
+void AddPointStiffness(const Eigen::Matrix3d& K, const Eigen::Vector3d& p, double scale, Mat6* I) {
+  const Eigen::Matrix3d P = Hat(p);
+  const Eigen::Matrix3d PK = P * K;
+  I->topLeftCorner<3, 3>().noalias() -= scale * PK * P;
+  I->topRightCorner<3, 3>().noalias() += scale * PK;
+  I->bottomLeftCorner<3, 3>().noalias() -= scale * K * P;
+  I->bottomRightCorner<3, 3>().noalias() += scale * K;
+}
+
+void AddPointForce(const Eigen::Vector3d& F, const Eigen::Vector3d& p, double scale, Vec6* w) {
+  w->head<3>() += scale * p.cross(F);
+  w->tail<3>() += scale * F;
+}
+
+}  // namespace
+
+void SolveScope(const ModelParams& params, const StepInput& input, double target_insertion_m,
+                ModelState* s, Scratch* sc, StepOutput* out) {
+  const int n = static_cast<int>(s->link_length_m.size());
+  const double dt = params.dt_s;
+  const int root = RootLink(*s);
+  auto& IA = sc->articulated_stiffness;
+  auto& bA = sc->articulated_bias;
+  for (int k = root; k < n; ++k) {
+    IA[k].setZero();
+    bA[k].setZero();
+  }
+  // Bodies' own terms: contact stiffness and the forces on their samples
+  // (contact, gravity G(q), the external tip load): the J^T F sum starts here.
+  const int samples = static_cast<int>(s->samples.size());
+  const Eigen::Matrix3d R_entry = CalcEntryRotation(params);
+  const Eigen::Vector3d e = R_entry.col(2);
+  const Eigen::Vector3d anus = params.colon.points.front().rest_position_m;
+  Eigen::Vector3d force_sum_N = Eigen::Vector3d::Zero();
+  Eigen::Vector3d moment_sum_N_m = Eigen::Vector3d::Zero();  // about the anus
+  for (int i = 0; i < samples; ++i) {
+    if (!s->contact[i].inside) continue;
+    const int k = std::max(s->samples[i].link, root);
+    const Eigen::Vector3d& p = s->p_WSample[i];
+    Eigen::Vector3d F = sc->sample_force_W_N[i] + s->samples[i].mass_kg * params.gravity_W_m_per_s2;
+    if (i == samples - 1) F += input.tip_force_W_N;
+    force_sum_N += F;
+    moment_sum_N_m += (p - anus).cross(F);
+    AddPointForce(F, p, dt, &bA[k]);
+    if (s->contact[i].touching) AddPointStiffness(sc->sample_stiffness_N_per_m[i], p, dt, &IA[k]);
+  }
+  // Tip to base: articulated stiffness and bias of every 2-DOF bending joint.
+  auto& S = sc->motion_subspace;
+  for (int k = n - 1; k > root; --k) {
+    const Eigen::Matrix3d& R_parent = s->X_WLink[k - 1].linear();
+    const Eigen::Vector3d o = s->X_WLink[k].translation();
+    const double a = s->bend_rad[k].x();
+    const Eigen::Vector3d axis1 = R_parent.col(0);
+    const Eigen::Vector3d axis2 = std::cos(a) * R_parent.col(1) + std::sin(a) * R_parent.col(2);
+    S[k].col(0) << axis1, o.cross(axis1);
+    S[k].col(1) << axis2, o.cross(axis2);
+    double K = s->joint_stiffness_N_m_per_rad[k];
+    if (k == root + 1) {
+      // The guide clamps the scope at the anus: the first joint inside bends
+      // only the part of its proximal half-link that is past the anus.
+      const double half_sum_m = 0.5 * (s->link_length_m[k - 1] + s->link_length_m[k]);
+      const double past_anus_m = std::clamp((o - anus).dot(e), 0.0, 0.5 * s->link_length_m[k - 1]);
+      K *= half_sum_m / (0.5 * s->link_length_m[k] + past_anus_m);
+    }
+    const double D = params.scope.joint_damping_N_m_s_per_rad;
+    sc->u_matrix[k].noalias() = IA[k] * S[k];
+    Eigen::Matrix2d Dk = S[k].transpose() * sc->u_matrix[k];
+    Dk.diagonal().array() += D + dt * K;
+    sc->d_inverse[k] = Dk.inverse();
+    // paper eq. (2): T = -K (q - q0) - D q', the joint's own viscoelasticity.
+    sc->u_vector[k] = -dt * K * (s->bend_rad[k] - s->bend_rest_rad[k]) + S[k].transpose() * bA[k];
+    const Eigen::Matrix<double, 6, 2> UDinv = sc->u_matrix[k] * sc->d_inverse[k];
+    IA[k - 1].noalias() += IA[k] - UDinv * sc->u_matrix[k].transpose();
+    bA[k - 1].noalias() += bA[k] - UDinv * sc->u_vector[k];
+  }
+  // Base: roll always prescribed; thrust prescribed (kPosition) or driven by
+  // the hand's force against the thrust damping (kForce).
+  Vec6 S_thrust, S_roll;
+  S_thrust << Eigen::Vector3d::Zero(), e;
+  S_roll << e, anus.cross(e);
+  const double d_roll = input.roll_rad - s->roll_rad;
+  double d_insert = 0.0;
+  const double max_insert = params.scope.working_length_m;
+  if (input.thrust_mode == ThrustMode::kPosition) {
+    d_insert = std::clamp(target_insertion_m, 0.0, max_insert) - s->inserted_m;
+  } else {
+    const double D0 = params.thrust_damping_N_s_per_m + S_thrust.dot(IA[root] * S_thrust);
+    const double u0 = dt * input.push_force_N + S_thrust.dot(bA[root]) -
+                      S_thrust.dot(IA[root] * (S_roll * d_roll));
+    d_insert = std::clamp(s->inserted_m + u0 / D0, 0.0, max_insert) - s->inserted_m;
+  }
+  auto& delta = sc->body_displacement;
+  delta[root] = S_thrust * d_insert + S_roll * d_roll;
+  // Reaction at the base, quasi-static: every inserted point moves with the
+  // thrust and turns with the roll, so the hand holds e . sum F and the moment
+  // about the entry axis (forces at the start of the step).
+  out->base_force_N = -e.dot(force_sum_N);
+  out->roll_torque_N_m = -e.dot(moment_sum_N_m);
+  // Base to tip: joint increments and body displacements.
+  for (int k = root + 1; k < n; ++k) {
+    Eigen::Vector2d dq =
+        sc->d_inverse[k] * (sc->u_vector[k] - sc->u_matrix[k].transpose() * delta[k - 1]);
+    // The linearisation holds for small turns only; a larger one (a jammed,
+    // buckling chain) is cut to keep the step well inside it.
+    const double turn = dq.norm();
+    if (turn > kMaxJointTurnPerStep_rad) dq *= kMaxJointTurnPerStep_rad / turn;
+    delta[k] = delta[k - 1] + S[k] * dq;
+    s->bend_rad[k] += dq;
+    s->bend_rate_rad_per_s[k] = dq / dt;
+  }
+  s->inserted_m += d_insert;
+  s->insertion_rate_m_per_s = d_insert / dt;
+  s->roll_rad = input.roll_rad;
+}
+
+}  // namespace ves::model::internal

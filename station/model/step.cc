@@ -1,0 +1,147 @@
+// Step: one time step of the endoscope-colon model (docs/model.md §Time step).
+#include <algorithm>
+#include <cmath>
+
+#include "station/model/internal.h"
+#include "station/model/model.h"
+
+namespace ves::model {
+namespace {
+
+// Below this relative speed a sliding contact sticks again.
+constexpr double kRestickSpeed_m_per_s = 1e-4;
+constexpr double kStaticRecovery_s = 0.05;  // time constant of static friction's return
+
+// The knobs set the rest angles q0 of the bending section, shared evenly by
+// its joints (a positive pitch turns +z toward -y, so "up" is negative pitch).
+void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelState* s) {
+  const EndoscopeParams& scope = params.scope;
+  const int n = scope.link_count;
+  const int first = s->first_bending_link;
+  const int joints = n - first;
+  const double up = std::clamp(input.knob_up_rad, -scope.angulation_down_rad,
+                               scope.angulation_up_rad);
+  const double right = std::clamp(input.knob_right_rad, -scope.angulation_left_rad,
+                                  scope.angulation_right_rad);
+  for (int k = first; k < n; ++k) {
+    s->bend_rest_rad[k] = Eigen::Vector2d(-up / joints, right / joints);
+  }
+}
+
+bool AllFinite(const ModelState& s, const StepOutput& out) {
+  if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
+      !std::isfinite(out.roll_torque_N_m) || !s.X_WTip.matrix().allFinite()) {
+    return false;
+  }
+  for (const Eigen::Vector2d& q : s.bend_rad) {
+    if (!q.allFinite()) return false;
+  }
+  for (const Eigen::Vector2d& d : s.colon_offset_m) {
+    if (!d.allFinite()) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc,
+          StepOutput* out) {
+  const double dt = params.dt_s;
+  SetKnobRestAngles(params, input, s);
+
+  // 1. Contacts at the current shapes (eqs. 9-17).
+  internal::EvaluateContacts(params, s, sc, out);
+  const int samples = static_cast<int>(s->samples.size());
+  for (int i = 0; i < samples; ++i) sc->sample_delta_m[i] = s->p_WSample[i];
+
+  // 2. Scope: eq. (6), linearly implicit, O(n).
+  internal::SolveScope(params, input, input.insertion_m, s, sc, out);
+  internal::UpdateScopeKinematics(params, s);
+
+  // 3. Colon: suspension, coupling, contacts, linearly implicit, O(N).
+  internal::SolveColon(params, s, sc);
+
+  // 4. Friction memory: the stick spring stretches by the tangential relative
+  //    displacement of scope and wall during the step.
+  double speed2 = 0.0;
+  const auto& pts = params.colon.points;
+  for (int i = 0; i < samples; ++i) {
+    SampleContact& c = s->contact[i];
+    const Eigen::Vector3d dp = s->p_WSample[i] - sc->sample_delta_m[i];
+    sc->sample_delta_m[i] = dp;
+    if (!c.inside) continue;
+    speed2 += dp.squaredNorm();
+    if (!c.touching) continue;
+    const int k = c.segment;
+    const Eigen::Vector3d dc =
+        (1.0 - c.segment_t) * (pts[k].plane_u * sc->colon_rhs[k].x() +
+                               pts[k].plane_v * sc->colon_rhs[k].y()) +
+        c.segment_t * (pts[k + 1].plane_u * sc->colon_rhs[k + 1].x() +
+                       pts[k + 1].plane_v * sc->colon_rhs[k + 1].y());
+    const Eigen::Vector3d& n = sc->sample_normal_W[i];
+    Eigen::Vector3d rel = dp - dc;
+    rel -= rel.dot(n) * n;
+    if (c.sliding && rel.norm() < kRestickSpeed_m_per_s * dt) {
+      // At rest, static friction recovers: the stick spring relaxes toward
+      // the force it carries now (at most mu_s N), smoothly, so pushing on
+      // needs mu_s N again without a jump in the contact force.
+      const double cap_m = pts[k].tissue.static_friction * sc->sample_normal_force_N[i] /
+                           params.friction_stiffness_N_per_m;
+      Eigen::Vector3d target = -sc->sample_friction_W_N[i] / params.friction_stiffness_N_per_m;
+      if (target.norm() > 0.99 * cap_m) target *= 0.99 * cap_m / target.norm();
+      c.slip_m = target + std::exp(-dt / kStaticRecovery_s) * (c.slip_m - target);
+    }
+    c.slip_m += rel;
+  }
+  speed2 /= dt * dt;
+
+  // 5. Outputs.
+  const int N = static_cast<int>(pts.size());
+  std::fill(out->wall_force_N.begin(), out->wall_force_N.end(), 0.0);
+  std::fill(s->wall_deformation_m.begin(), s->wall_deformation_m.end(), 0.0);
+  for (int j = 0; j < out->contact_count; ++j) {
+    const Contact& contact = out->contacts[j];
+    const SampleContact& c = s->contact[contact.sample];
+    const int k = contact.segment;
+    out->wall_force_N[k] += (1.0 - c.segment_t) * contact.normal_force_N;
+    out->wall_force_N[k + 1] += c.segment_t * contact.normal_force_N;
+    const int nearest = c.segment_t < 0.5 ? k : k + 1;
+    s->wall_deformation_m[nearest] =
+        std::max(s->wall_deformation_m[nearest], contact.penetration_m);
+  }
+  out->peak_stretch_m = 0.0;
+  out->peak_stretch_arc_m = 0.0;
+  out->peak_wall_force_N = 0.0;
+  for (int i = 0; i < N; ++i) {
+    const double stretch = s->colon_offset_m[i].norm();
+    out->stretch_m[i] = stretch;
+    speed2 += s->colon_rate_m_per_s[i].squaredNorm();
+    if (stretch > out->peak_stretch_m) {
+      out->peak_stretch_m = stretch;
+      out->peak_stretch_arc_m = pts[i].arc_m;
+    }
+    out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
+  }
+  SampleContact tip = s->contact[samples - 1];
+  if (tip.inside) {
+    // Where the tip is now, along the rest centerline (a copy: the contact
+    // memory itself moves on at the next step's evaluation).
+    internal::TrackSegment(*s, params.colon, params.contact_search_window, s->p_WSample[samples - 1], &tip);
+    const int k = tip.segment;
+    const double t =
+        internal::CalcSegmentHit(params, *s, k, s->p_WSample[samples - 1]).t;
+    const double a0 = pts[k].arc_m;
+    s->tip_arc_m = a0 + t * (pts[k + 1].arc_m - a0);
+  } else {
+    s->tip_arc_m = 0.0;
+  }
+  s->time_s += dt;
+  ++s->step_count;
+  out->X_WTip = s->X_WTip;
+  out->tip_arc_m = s->tip_arc_m;
+  out->inserted_m = s->inserted_m;
+  out->velocity_norm_m_per_s = std::sqrt(speed2);
+  out->finite = AllFinite(*s, *out);
+}
+
+}  // namespace ves::model
