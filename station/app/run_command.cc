@@ -1,0 +1,468 @@
+// ves-station run: one training session on a case, from getting the case to
+// the server's acknowledgement (docs/station-run.md).
+//   headless: a scripted operator drives the model; frames and a summary go to --out.
+//   interactive: the three windows; the keyboard and mouse drive the simulated hand.
+// Either way the finished session is committed to the outbox before any upload.
+// Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments or
+// input (no such case), 1 the station failed (outbox, output folder, ...).
+#include <google/protobuf/text_format.h>
+#include <unistd.h>
+
+#include <boost/program_options.hpp>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "station/app/commands.h"
+#include "station/app/run_interactive.h"
+#include "station/app/run_sync.h"
+#include "station/app/run_views.h"
+#include "station/render/model_scene.h"
+#include "station/sync/station_paths.h"
+#include "station/training/case_run.h"
+#include "station/training/scripted_operator.h"
+#include "station/training/session_runner.h"
+#include "station/training/uuid.h"
+
+namespace ves::station {
+namespace {
+
+namespace po = boost::program_options;
+
+constexpr char kName[] = "ves-station run";
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitNotReached = 3;
+// For the crash tests: with this set, the process SIGKILLs itself right after
+// the outbox commit, before any upload (docs/station-run.md).
+constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
+
+constexpr char kUsage[] =
+    "usage: ves-station run --trainee ID --case ID [--server ADDR --token T [--tls-ca FILE]]\n"
+    "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
+    "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n\n"
+    "Gets the case (the server's latest version into the offline cache, else the cached one),\n"
+    "runs one session, commits it to the outbox, then uploads it. Headless: a scripted\n"
+    "operator drives the model; endoscope frames, fluoroscopy.png and summary.txt go to DIR.\n"
+    "Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments/input, 1 failure.";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct RunOptions {
+  std::optional<sync::ServerEndpoint> server;
+  std::string trainee_id;
+  std::string case_id;
+  std::string scope_path;
+  std::string data_dir;
+  std::string station_id;
+  bool headless{false};
+  std::string operator_kind;
+  std::filesystem::path out_dir;
+  double seconds{600.0};
+  double frame_period_s{5.0};
+  int upload_attempts{3};
+};
+
+std::string HostName() {
+  char name[256] = {};
+  if (gethostname(name, sizeof(name) - 1) != 0 || name[0] == '\0') return "station";
+  return name;
+}
+
+RunOptions ParseRunOptions(const po::variables_map& vm) {
+  RunOptions o;
+  if (!vm.count("trainee")) throw UsageError("--trainee ID is required");
+  if (!vm.count("case")) throw UsageError("--case ID is required");
+  o.trainee_id = vm["trainee"].as<std::string>();
+  o.case_id = vm["case"].as<std::string>();
+  if (vm.count("server") != vm.count("token")) {
+    throw UsageError("--server ADDR and --token T go together");
+  }
+  if (vm.count("server")) {
+    sync::ServerEndpoint endpoint;
+    endpoint.address = vm["server"].as<std::string>();
+    endpoint.token = vm["token"].as<std::string>();
+    if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    endpoint.deadline = std::chrono::seconds(10);
+    o.server = endpoint;
+  } else if (vm.count("tls-ca")) {
+    throw UsageError("--tls-ca needs --server");
+  }
+  const std::string device = vm["device"].as<std::string>();
+  if (device.rfind("can:", 0) == 0) {
+    throw UsageError("--device " + device +
+                     ": CAN devices are not available in this build of ves-station (no SocketCAN "
+                     "here); use --device sim");
+  }
+  if (device != "sim") throw UsageError("--device '" + device + "' must be sim or can:IFACE");
+  if (vm.count("scope")) o.scope_path = vm["scope"].as<std::string>();
+  o.data_dir = vm["data-dir"].as<std::string>();
+  o.station_id = vm.count("station-id") ? vm["station-id"].as<std::string>() : HostName();
+  o.headless = vm.count("headless") > 0;
+  if (o.headless) {
+    if (!vm.count("operator")) throw UsageError("--headless needs --operator novice|expert");
+    if (!vm.count("out")) throw UsageError("--headless needs --out DIR");
+    o.operator_kind = vm["operator"].as<std::string>();
+    if (o.operator_kind != "novice" && o.operator_kind != "expert") {
+      throw UsageError("--operator must be novice or expert, not '" + o.operator_kind + "'");
+    }
+    o.out_dir = vm["out"].as<std::string>();
+  } else if (vm.count("operator")) {
+    throw UsageError("--operator needs --headless (interactively, you are the operator)");
+  }
+  if (vm.count("out") && !o.headless) o.out_dir = vm["out"].as<std::string>();
+  o.seconds = vm["seconds"].as<double>();
+  if (!std::isfinite(o.seconds) || o.seconds <= 0.0 || o.seconds > 3600.0) {
+    throw UsageError("--seconds " + std::to_string(o.seconds) + " must be in (0, 3600]");
+  }
+  o.frame_period_s = vm["frame-every-s"].as<double>();
+  if (!std::isfinite(o.frame_period_s) || o.frame_period_s <= 0.0) {
+    throw UsageError("--frame-every-s " + std::to_string(o.frame_period_s) + " must be > 0");
+  }
+  o.upload_attempts = vm["upload-attempts"].as<int>();
+  if (o.upload_attempts < 1 || o.upload_attempts > 20) {
+    throw UsageError("--upload-attempts " + std::to_string(o.upload_attempts) +
+                     " must be in [1, 20]");
+  }
+  return o;
+}
+
+ves::v1::EndoscopeSpec ReadScopeFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot read scope file '" + path + "'");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ves::v1::EndoscopeSpec spec;
+  if (!google::protobuf::TextFormat::ParseFromString(text, &spec)) {
+    throw std::invalid_argument("scope file '" + path + "' is not an EndoscopeSpec textproto");
+  }
+  return spec;
+}
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+training::RunResult ResultOf(const training::SessionRunner& runner) {
+  const training::Session& s = runner.session();
+  training::RunResult r;
+  r.outcome = s.outcome();
+  r.metrics = s.metrics();
+  r.events = s.accumulator().Events();
+  r.score = s.score();
+  r.steps = s.steps();
+  r.diverged = runner.diverged();
+  return r;
+}
+
+render::EndoscopeMode ToRenderMode(training::ViewMode mode) {
+  switch (mode) {
+    case training::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
+    case training::ViewMode::kFlat: return render::EndoscopeMode::kPolygon;
+    case training::ViewMode::kTextured: break;
+  }
+  return render::EndoscopeMode::kTexture;
+}
+
+void WritePng(const std::filesystem::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) {
+    throw std::runtime_error("cannot write '" + path.string() + "'");
+  }
+}
+
+// Writes endoscope frames every frame_period_s of simulated time and, at the
+// end, the last endoscope image and the fluoroscopy with damage display. A
+// station without EGL still runs the session: it says so and writes none.
+class FrameWriter {
+ public:
+  FrameWriter(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+              std::filesystem::path dir, double period_s)
+      : params_(run.params), dir_(std::move(dir)), period_s_(period_s) {
+    try {
+      views_.emplace(params_, colon_case);
+    } catch (const std::exception& error) {
+      std::cerr << kName << ": no frames (the views cannot render here: " << error.what() << ")\n";
+    }
+  }
+
+  void OnStep(const training::InputSample& input, const training::SessionRunner& runner) {
+    if (!views_) return;
+    const double t_s = runner.state().time_s;
+    if (t_s + 1e-9 < next_frame_s_) return;
+    next_frame_s_ += period_s_;
+    char name[64];
+    std::snprintf(name, sizeof(name), "endoscope_%06.1fs.png", t_s);
+    render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
+    WritePng(dir_ / name, views_->Endoscope(scene_, ToRenderMode(input.view_mode)));
+    ++frames_;
+  }
+
+  void Finish(const training::SessionRunner& runner, training::ViewMode mode) {
+    if (!views_) return;
+    render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
+    WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, ToRenderMode(mode)));
+    FluoroscopyControls controls;
+    controls.damage_display = true;
+    WritePng(dir_ / "fluoroscopy.png", views_->Fluoroscopy(scene_, controls));
+    frames_ += 2;
+  }
+
+  int frames() const { return frames_; }
+
+ private:
+  const model::ModelParams& params_;
+  std::filesystem::path dir_;
+  double period_s_;
+  double next_frame_s_{0.0};
+  std::optional<SessionViews> views_;
+  render::SceneGeometry scene_;
+  int frames_{0};
+};
+
+// Commits the records, then (with a server) tries to deliver the outbox.
+// Returns false when a commit itself failed.
+bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
+                      const std::vector<ves::v1::SessionRecord>& records) {
+  try {
+    sync::Outbox outbox(paths.outbox_db());
+    for (const auto& record : records) {
+      outbox.Commit(record);
+      std::cout << "session " << record.uuid() << " committed to the outbox\n" << std::flush;
+    }
+    if (std::getenv(kKillAfterCommitEnv) != nullptr) std::raise(SIGKILL);
+    if (!o.server) {
+      std::cout << "no --server: the session waits in the outbox (ves-station sync delivers it)\n";
+      return true;
+    }
+    const DeliveryReport report = DeliverOutbox(*o.server, outbox, o.upload_attempts);
+    std::cout << "uploaded " << report.acknowledged << " session(s) to " << o.server->address;
+    if (report.rejected > 0) std::cout << ", " << report.rejected << " refused by the server";
+    std::cout << "; " << report.still_pending << " pending\n";
+    for (const auto& pending : outbox.Pending()) {
+      for (const auto& record : records) {
+        if (pending.uuid != record.uuid()) continue;
+        std::cout << "server unreachable (" << report.last_error << "): session " << record.uuid()
+                  << " stays in the outbox; `ves-station status` lists it, `ves-station sync` "
+                     "or a later run delivers it\n";
+      }
+    }
+    if (report.rejected > 0) {
+      std::cerr << kName << ": the server refused a session: " << report.last_error << "\n";
+    }
+    return true;
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": cannot commit the session to the outbox: " << error.what() << "\n";
+    return false;
+  }
+}
+
+// A scripted operator drives the model directly, step by step.
+int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const ObtainedCase& obtained,
+                training::CaseRun run) {
+  try {
+    std::filesystem::create_directories(o.out_dir);
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": cannot create --out '" << o.out_dir.string() << "': " << error.what()
+              << "\n";
+    return kExitFailed;
+  }
+  const int64_t start_ms = NowUnixMs();
+  auto scripted = training::MakeScriptedOperator(o.operator_kind, run.params.dt_s);
+  run.config.operator_kind = o.operator_kind;
+  training::SessionRunner runner(run.params, run.config);
+  FrameWriter frames(run, obtained.colon_case, o.out_dir, o.frame_period_s);
+  runner.Start(start_ms);
+  training::Perception perception = training::Perceive(run.params, runner.state(), runner.output());
+  training::ViewMode last_view = training::ViewMode::kTextured;
+  try {
+    while (runner.session().state() == training::SessionState::kRunning) {
+      runner.Step(scripted->Act(perception));
+      if (runner.diverged()) break;
+      const training::InputSample& logged = runner.session().inputs().back();
+      last_view = logged.view_mode;
+      frames.OnStep(logged, runner);
+      perception = training::Perceive(run.params, runner.state(), runner.output());
+    }
+    frames.Finish(runner, last_view);
+  } catch (const std::exception& error) {  // a frame that cannot be written
+    std::cerr << kName << ": " << error.what() << "\n";
+    return kExitFailed;
+  }
+  const training::RunResult result = ResultOf(runner);
+  const auto duration_ms = static_cast<int64_t>(std::llround(result.metrics.duration_s * 1e3));
+  ves::v1::SessionRecord record = runner.session().ToRecord(training::NewUuidV4(),
+                                                            start_ms + duration_ms);
+  training::CaseModelOptions case_options;
+  *record.mutable_replay_setup() =
+      training::MakeReplaySetup(obtained.colon_case, case_options, o.seconds);
+  const std::string summary = training::SummaryLine(result);
+  {
+    std::ofstream out(o.out_dir / "summary.txt");
+    out << summary << "\n";
+    if (!out.flush()) {
+      std::cerr << kName << ": cannot write '" << (o.out_dir / "summary.txt").string() << "'\n";
+      return kExitFailed;
+    }
+  }
+  std::cout << "frames: " << frames.frames() << " PNG files in " << o.out_dir.string() << "\n";
+  if (!CommitAndDeliver(o, paths, {record})) return kExitFailed;
+  std::cout << summary << "\n";
+  return result.outcome == training::Outcome::kCecumReached ? kExitOk : kExitNotReached;
+}
+
+int Run(const RunOptions& o) {
+  const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
+  std::optional<ObtainedCase> obtained;
+  ves::v1::EndoscopeSpec scope;
+  training::CaseRun run;
+  try {
+    sync::CaseCache cache(paths.cases());
+    obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
+    if (!obtained) {
+      std::cerr << kName << ": case '" << o.case_id << "' is not in the offline cache"
+                << (o.server ? " and the server did not provide it" : " (no --server given)")
+                << "\n";
+      return kExitUsage;
+    }
+    scope = o.scope_path.empty() ? training::DefaultEndoscopeSpec() : ReadScopeFile(o.scope_path);
+    run = training::PrepareCaseRun(obtained->colon_case, scope, {}, o.seconds);
+  } catch (const std::exception& error) {  // CaseError (damaged cache), invalid_argument
+    std::cerr << kName << ": " << error.what() << "\n";
+    return kExitUsage;
+  }
+  run.config.trainee_id = o.trainee_id;
+  run.config.station_id = o.station_id;
+  run.config.case_sha256_hex = obtained->entry.sha256_hex;
+  std::cout << "case " << obtained->entry.id << " v" << obtained->entry.version << " sha256="
+            << obtained->entry.sha256_hex.substr(0, 16) << "… ("
+            << (obtained->from_server ? "from the server" : "offline cache") << ")\n";
+  if (o.headless) {
+    std::cout << "device: sim (the scripted " << o.operator_kind
+              << " operator drives the model directly)\n";
+    return RunHeadless(o, paths, *obtained, std::move(run));
+  }
+  InteractiveResult interactive;
+  try {
+    interactive = RunInteractive(run, obtained->colon_case, o.seconds);
+  } catch (const std::exception& error) {  // no display
+    std::cerr << kName << ": " << error.what() << "\n";
+    return kExitFailed;
+  }
+  if (interactive.records.empty()) {
+    std::cout << "quit before the session started: nothing to record\n";
+    return kExitNotReached;
+  }
+  if (!CommitAndDeliver(o, paths, interactive.records)) return kExitFailed;
+  std::cout << training::SummaryLine(interactive.result) << "\n";
+  return interactive.result.outcome == training::Outcome::kCecumReached ? kExitOk
+                                                                        : kExitNotReached;
+}
+
+}  // namespace
+
+int RunRunCommand(const CommandArgs& args) {
+  po::options_description desc("options");
+  desc.add_options()("help,h", "show this help")(
+      "server", po::value<std::string>(), "server address host:port")(
+      "token", po::value<std::string>(), "station bearer token")(
+      "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
+      "trainee", po::value<std::string>(), "trainee id")(
+      "case", po::value<std::string>(), "case id")(
+      "device", po::value<std::string>()->default_value("sim"), "sim or can:IFACE")(
+      "scope", po::value<std::string>(), "EndoscopeSpec textproto (default: adult colonoscope)")(
+      "data-dir", po::value<std::string>()->default_value(""),
+      "station data folder (default $VES_STATION_DIR or ~/.ves-station)")(
+      "station-id", po::value<std::string>(), "this station's name (default: the host name)")(
+      "headless", "no windows: a scripted operator runs the session")(
+      "operator", po::value<std::string>(), "with --headless: novice or expert")(
+      "out", po::value<std::string>(), "with --headless: folder for frames and summary.txt")(
+      "seconds", po::value<double>()->default_value(600.0), "session time limit, s")(
+      "frame-every-s", po::value<double>()->default_value(5.0),
+      "headless: an endoscope frame per this much simulated time")(
+      "upload-attempts", po::value<int>()->default_value(3),
+      "upload passes (with backoff) before leaving the session pending");
+  RunOptions options;
+  try {
+    po::variables_map vm;
+    po::store(po::command_line_parser(args).options(desc).run(), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::cout << kUsage << "\n\n" << desc;
+      return kExitOk;
+    }
+    options = ParseRunOptions(vm);
+  } catch (const std::exception& e) {
+    std::cerr << kName << ": " << e.what() << "\n";
+    return kExitUsage;
+  }
+  return Run(options);
+}
+
+int RunSyncCommand(const CommandArgs& args) {
+  po::options_description desc("options");
+  desc.add_options()("help,h", "show this help")(
+      "server", po::value<std::string>(), "server address host:port")(
+      "token", po::value<std::string>(), "station bearer token")(
+      "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM)")(
+      "data-dir", po::value<std::string>()->default_value(""),
+      "station data folder (default $VES_STATION_DIR or ~/.ves-station)")(
+      "attempts", po::value<int>()->default_value(3), "passes (with backoff) before giving up");
+  sync::ServerEndpoint endpoint;
+  std::string data_dir;
+  int attempts = 3;
+  try {
+    po::variables_map vm;
+    po::store(po::command_line_parser(args).options(desc).run(), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::cout << "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] "
+                   "[--data-dir DIR]\n\nUploads the outbox's pending sessions. Exit status 0 "
+                   "when none is left pending, 1 when some are (server unreachable).\n\n"
+                << desc;
+      return kExitOk;
+    }
+    if (!vm.count("server") || !vm.count("token")) {
+      throw UsageError("--server ADDR and --token T are required");
+    }
+    endpoint.address = vm["server"].as<std::string>();
+    endpoint.token = vm["token"].as<std::string>();
+    if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    data_dir = vm["data-dir"].as<std::string>();
+    attempts = vm["attempts"].as<int>();
+    if (attempts < 1 || attempts > 20) {
+      throw UsageError("--attempts " + std::to_string(attempts) + " must be in [1, 20]");
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "ves-station sync: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  try {
+    sync::Outbox outbox(sync::ResolveStationPaths(data_dir).outbox_db());
+    const DeliveryReport report = DeliverOutbox(endpoint, outbox, attempts);
+    std::cout << "uploaded " << report.acknowledged << " session(s), " << report.rejected
+              << " refused, " << report.still_pending << " pending\n";
+    if (report.still_pending > 0) {
+      std::cerr << "ves-station sync: still pending: " << report.last_error << "\n";
+      return kExitFailed;
+    }
+    return kExitOk;
+  } catch (const std::exception& error) {
+    std::cerr << "ves-station sync: " << error.what() << "\n";
+    return kExitFailed;
+  }
+}
+
+}  // namespace ves::station
