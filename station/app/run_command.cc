@@ -26,6 +26,7 @@
 #include "station/app/run_interactive.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
+#include "station/training/replay.h"
 #include "station/render/model_scene.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_run.h"
@@ -150,23 +151,6 @@ ves::v1::EndoscopeSpec ReadScopeFile(const std::string& path) {
   return spec;
 }
 
-int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-training::RunResult ResultOf(const training::SessionRunner& runner) {
-  const training::Session& s = runner.session();
-  training::RunResult r;
-  r.outcome = s.outcome();
-  r.metrics = s.metrics();
-  r.events = s.accumulator().Events();
-  r.score = s.score();
-  r.steps = s.steps();
-  r.diverged = runner.diverged();
-  return r;
-}
 
 render::EndoscopeMode ToRenderMode(training::ViewMode mode) {
   switch (mode) {
@@ -301,7 +285,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
     std::cerr << kName << ": " << error.what() << "\n";
     return kExitFailed;
   }
-  const training::RunResult result = ResultOf(runner);
+  const training::RunResult result = training::ResultOf(runner);
   const auto duration_ms = static_cast<int64_t>(std::llround(result.metrics.duration_s * 1e3));
   ves::v1::SessionRecord record = runner.session().ToRecord(training::NewUuidV4(),
                                                             start_ms + duration_ms);

@@ -9,7 +9,9 @@
 #include <opencv2/highgui.hpp>
 #include <thread>
 
+#include "station/app/run_sync.h"
 #include "station/app/run_views.h"
+#include "station/training/replay.h"
 #include "station/haptics/seqlock.h"
 #include "station/render/model_scene.h"
 #include "station/training/session_runner.h"
@@ -70,23 +72,6 @@ render::EndoscopeMode ToRenderMode(ui::ViewMode mode) {
   return render::EndoscopeMode::kTexture;
 }
 
-std::int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-training::RunResult ResultOf(const training::SessionRunner& runner) {
-  const training::Session& s = runner.session();
-  training::RunResult r;
-  r.outcome = s.outcome();
-  r.metrics = s.metrics();
-  r.events = s.accumulator().Events();
-  r.score = s.score();
-  r.steps = s.steps();
-  r.diverged = runner.diverged();
-  return r;
-}
 
 std::string StateText(const training::Session& session) {
   if (session.state() == training::SessionState::kRunning) return "running";
@@ -184,7 +169,7 @@ class ModelThread {
     training::Session& session = runner_.session();
     if (session.steps() == 0) return;
     if (session.state() == training::SessionState::kRunning) session.Abort();
-    result_.result = ResultOf(runner_);
+    result_.result = training::ResultOf(runner_);
     const auto duration_ms =
         static_cast<std::int64_t>(std::llround(result_.result.metrics.duration_s * 1e3));
     ves::v1::SessionRecord record =

@@ -7,13 +7,14 @@
 #include "station/sync/uploader.h"
 
 namespace ves::station {
-namespace {
 
 int64_t NowUnixMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
+
+namespace {
 
 // Remembers the last transient failure so the caller can say why a session
 // stayed pending.

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -12,6 +13,9 @@
 // (server first, offline cache as the fallback) and delivering the outbox
 // with bounded retries. Shared by `ves-station run` and `ves-station sync`.
 namespace ves::station {
+
+// Wall-clock time in Unix milliseconds (session start/end, acknowledgements).
+int64_t NowUnixMs();
 
 // What the station could obtain for a case id.
 struct ObtainedCase {

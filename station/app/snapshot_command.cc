@@ -12,6 +12,7 @@
 
 #include "patient_db/case_format.h"
 #include "station/app/commands.h"
+#include "station/app/run_views.h"
 #include "station/model/model.h"
 #include "station/render/endoscope_view.h"
 #include "station/render/fluoroscopy_view.h"
@@ -105,23 +106,6 @@ bool Insert(const SnapshotOptions& o, const model::ModelParams& params, model::M
   return true;
 }
 
-// Both C-arm views frame the whole colon at rest, centred on its bounding box.
-render::FluoroscopyCamera FrameColon(const model::ModelParams& params, double aspect) {
-  Eigen::Vector3d low = Eigen::Vector3d::Constant(1e9);
-  Eigen::Vector3d high = Eigen::Vector3d::Constant(-1e9);
-  double radius_m = 0.0;
-  for (const auto& point : params.colon.points) {
-    low = low.cwiseMin(point.rest_position_m);
-    high = high.cwiseMax(point.rest_position_m);
-    radius_m = std::max(radius_m, point.radius_m);
-  }
-  const Eigen::Vector3d extent = high - low;
-  render::FluoroscopyCamera camera;
-  camera.center_m = 0.5 * (low + high);
-  camera.field_height_m =
-      1.15 * std::max(extent.z(), std::max(extent.x(), extent.y()) / aspect) + 4.0 * radius_m;
-  return camera;
-}
 
 void Write(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) {

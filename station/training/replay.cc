@@ -8,7 +8,6 @@
 #include "station/training/uuid.h"
 
 namespace ves::training {
-namespace {
 
 RunResult ResultOf(const SessionRunner& runner) {
   const Session& s = runner.session();
@@ -21,8 +20,6 @@ RunResult ResultOf(const SessionRunner& runner) {
   r.diverged = runner.diverged();
   return r;
 }
-
-}  // namespace
 
 MetricThresholds ThresholdsFor(const model::ModelParams& params) {
   MetricThresholds t;

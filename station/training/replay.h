@@ -34,6 +34,10 @@ struct RunResult {
   bool operator==(const RunResult&) const = default;
 };
 
+// The result of a runner's session as it stands (outcome, metrics, events,
+// score, steps).
+RunResult ResultOf(const SessionRunner& runner);
+
 // Called after every step with the runner (model state, output, observation).
 using StepCallback = std::function<void(const InputSample&, const SessionRunner&)>;
 
