@@ -12,7 +12,7 @@ namespace ves::model {
 inline constexpr double kPi = 3.14159265358979323846;
 
 struct EndoscopeParams {
-  double working_length_m{1.33};          // Olympus CF-H180AL (adult, "L" length)
+  double working_length_m{1.68};          // Olympus CF-H180AL/CF-HQ190L ("L": 1680 mm)
   double outer_diameter_m{0.0128};        // same instrument, insertion tube
   int link_count{48};                     // n >= 3
   double tip_link_length_m{0.010};        // distal link

@@ -43,7 +43,7 @@ class ScriptedOperator {
 // watches the fluoroscopy all the time and uses the wireframe view.
 class NoviceOperator final : public ScriptedOperator {
  public:
-  static constexpr double kPushForce_N = 3.0;
+  static constexpr double kPushForce_N = 6.0;
   InputSample Act(const Perception& perception) override;
 };
 
@@ -53,12 +53,12 @@ class NoviceOperator final : public ScriptedOperator {
 // and relaxing the tip, then advances again; fluoroscopy off, textured view.
 class ExpertOperator final : public ScriptedOperator {
  public:
-  static constexpr double kPushForce_N = 2.0;
+  static constexpr double kPushForce_N = 4.0;
   static constexpr double kPullForce_N = -1.5;
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
   static constexpr double kLoopStart_m = 0.04;     // slack that triggers a reduction
   static constexpr double kLoopDone_m = 0.01;
-  static constexpr double kForceLimit_N = 3.0;
+  static constexpr double kForceLimit_N = 6.0;
   static constexpr double kComplaintStretch_m = 0.025;  // the patient starts to complain
   static constexpr double kRollRate_rad_per_s = 1.0;
   static constexpr double kStallWindow_s = 1.5;  // no advance over this long is a stall

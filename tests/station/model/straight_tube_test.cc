@@ -15,7 +15,8 @@ constexpr double kNoDrift_m = 1e-12;
 
 ModelParams StraightTubeParams() {
   ModelParams params;
-  params.colon = MakeStraightTube(1.6, 0.01, 0.03, TissueParams{});
+  // Longer than the scope (working length 1.68 m), so the tip never leaves it.
+  params.colon = MakeStraightTube(2.0, 0.01, 0.03, TissueParams{});
   params.gravity_W_m_per_s2.setZero();
   return params;
 }
