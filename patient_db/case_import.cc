@@ -302,9 +302,9 @@ ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
     const double a = (*position)[0].get<double>() * metres_per_unit;
     const double b = (*position)[1].get<double>() * metres_per_unit;
     const double c = (*position)[2].get<double>() * metres_per_unit;
-    // W: +x left, +y anterior, +z superior. LPS -> (x, -y, z); RAS -> (-x, y, z).
-    in.p_W_m.push_back(system == "LPS" ? std::array<double, 3>{a, -b, c}
-                                       : std::array<double, 3>{-a, b, c});
+    // W is RAS (+x right, +y anterior, +z superior): LPS -> (-x, -y, z).
+    in.p_W_m.push_back(system == "LPS" ? std::array<double, 3>{-a, -b, c}
+                                       : std::array<double, 3>{a, b, c});
     ++index;
   }
   if (radius_csv_text) {

@@ -2,7 +2,8 @@
 """Authoring aid for the shipped synthetic colon cases (docs/case-format.md).
 
 Draws each case's centerline as a centripetal Catmull-Rom curve through
-hand-placed anatomical waypoints (patient frame W: origin at the anus, +x the
+hand-placed anatomical waypoints (drawn with +x toward the patient's left and
+written out with x negated into the patient frame W: origin at the anus, +x the
 patient's right (RAS), +y anterior, +z cranial; metres), resamples every region at
 about 2.5 cm and writes the textproto. Tissue values are the defaults of
 patient_db/case_regions.cc. Run once to create the files:

@@ -54,16 +54,16 @@ TEST(ShippedCases, StandardAdultRunsRectumToCecumAboutOneAndAHalfMetres) {
   EXPECT_NEAR(RegionLength_m(c, ves::v1::REGION_RECTUM), 0.135, 0.015);
   EXPECT_NEAR(RegionLength_m(c, ves::v1::REGION_SIGMOID), 0.40, 0.05);
   EXPECT_NEAR(RegionLength_m(c, ves::v1::REGION_TRANSVERSE), 0.46, 0.04);
-  // Anatomy in the patient frame: descending on the left (+x), ascending on the
-  // right, cecum the widest and low on the right.
+  // Anatomy in the patient frame (RAS): descending on the left (-x), ascending
+  // on the right (+x), cecum the widest and low on the right.
   const auto arcs = CalcControlPointArcs_m(c);
   for (int i = 0; i < c.centerline_size(); ++i) {
     const auto region = CalcRegionAt(c, arcs[i]);
     if (region == ves::v1::REGION_DESCENDING) {
-      EXPECT_GT(c.centerline(i).x_m(), 0.08) << i;
+      EXPECT_LT(c.centerline(i).x_m(), -0.08) << i;
     }
     if (region == ves::v1::REGION_ASCENDING) {
-      EXPECT_LT(c.centerline(i).x_m(), -0.08) << i;
+      EXPECT_GT(c.centerline(i).x_m(), 0.08) << i;
     }
   }
   double widest_m = 0.0;

@@ -123,25 +123,25 @@ const char* kPoints =
     R"({"id": "3", "position": [21.0, 22.0, 83.0]}, {"id": "4", "position": [31.0, 32.0, 123.0]})";
 
 TEST(CaseImportMarkups, LpsPositionsMapToThePatientFrame) {
-  // W = (L, A, S); LPS (x, y, z) -> (x, -y, z), then the first point to the origin.
+  // W = (R, A, S); LPS (x, y, z) -> (-x, -y, z), then the first point to the origin.
   ImportOptions options;
   options.radius_mm = 20.0;
   options.region = ves::v1::REGION_RECTUM;
   const auto c = ImportSlicerMarkups(Markups("LPS", kPoints), std::nullopt, "a.mrk.json", options);
   ASSERT_EQ(c.centerline_size(), 4);
-  EXPECT_NEAR(c.centerline(1).x_m(), 0.010, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(1).x_m(), -0.010, kPositionTolerance_m);
   EXPECT_NEAR(c.centerline(1).y_m(), -0.010, kPositionTolerance_m);
   EXPECT_NEAR(c.centerline(1).z_m(), 0.040, kPositionTolerance_m);
   EXPECT_EQ(c.id(), "a");
 }
 
 TEST(CaseImportMarkups, RasPositionsMapToThePatientFrame) {
-  // RAS (x, y, z) -> (-x, y, z).
+  // RAS is W itself: (x, y, z) -> (x, y, z).
   ImportOptions options;
   options.radius_mm = 20.0;
   options.region = ves::v1::REGION_RECTUM;
   const auto c = ImportSlicerMarkups(Markups("RAS", kPoints), std::nullopt, "a.mrk.json", options);
-  EXPECT_NEAR(c.centerline(1).x_m(), -0.010, kPositionTolerance_m);
+  EXPECT_NEAR(c.centerline(1).x_m(), 0.010, kPositionTolerance_m);
   EXPECT_NEAR(c.centerline(1).y_m(), 0.010, kPositionTolerance_m);
 }
 
