@@ -5,7 +5,6 @@
 // Either way the finished session is committed to the outbox before any upload.
 // Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments or
 // input (no such case), 1 the station failed (outbox, output folder, ...).
-#include <google/protobuf/text_format.h>
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
@@ -23,6 +22,7 @@
 #include <vector>
 
 #include "station/app/commands.h"
+#include "station/app/scope_file.h"
 #include "station/app/run_interactive.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
@@ -138,17 +138,6 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
                      " must be in [1, 20]");
   }
   return o;
-}
-
-ves::v1::EndoscopeSpec ReadScopeFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot read scope file '" + path + "'");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ves::v1::EndoscopeSpec spec;
-  if (!google::protobuf::TextFormat::ParseFromString(text, &spec)) {
-    throw std::invalid_argument("scope file '" + path + "' is not an EndoscopeSpec textproto");
-  }
-  return spec;
 }
 
 

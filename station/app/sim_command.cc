@@ -1,7 +1,6 @@
 // ves-station sim: runs the endoscope-colon model (docs/model.md) on a case
 // from the command line, pushing with a constant force or inserting at a
 // constant speed, and writes one CSV row per 10 ms of simulated time.
-#include <google/protobuf/text_format.h>
 
 #include <boost/program_options.hpp>
 #include <chrono>
@@ -15,6 +14,7 @@
 
 #include "patient_db/case_format.h"
 #include "station/app/commands.h"
+#include "station/app/scope_file.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
 #include "station/training/case_run.h"
@@ -117,18 +117,6 @@ SimOptions ParseSimOptions(const po::variables_map& vm) {
   o.dt_s = dt_ms * 1e-3;
   if (vm.count("csv")) o.csv_path = vm["csv"].as<std::string>();
   return o;
-}
-
-// Reads an EndoscopeSpec textproto; throws std::invalid_argument.
-ves::v1::EndoscopeSpec ReadScopeFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot read scope file '" + path + "'");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ves::v1::EndoscopeSpec spec;
-  if (!google::protobuf::TextFormat::ParseFromString(text, &spec)) {
-    throw std::invalid_argument("scope file '" + path + "' is not an EndoscopeSpec textproto");
-  }
-  return spec;
 }
 
 model::ModelParams BuildParams(const SimOptions& o) {
