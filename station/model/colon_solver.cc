@@ -19,7 +19,57 @@ Eigen::Matrix<double, 3, 2> PlaneBasis(const ColonPoint& p) {
   return B;
 }
 
+// Beyond a few points past the deepest contact and past every point still
+// displaced or moving, the colon is at rest and stays there: no force reaches
+// it but the coupling to points that are themselves at rest. The solve covers
+// points 1..last only (docs/model.md, "Cost"); a point within kRestOffset_m of
+// home that no contact touches is held (its suspension would return it by at
+// most that much).
+constexpr double kRestOffset_m = 1e-7;
+constexpr double kOneStep_s = 1e-3;  // a rate that moves a point less than that per ms is rest
+constexpr int kActiveMargin = 4;  // points solved past the last disturbed one
+
+int LastActivePoint(const ModelState& s, int N) {
+  int last = 0;
+  const int samples = static_cast<int>(s.samples.size());
+  for (int i = samples - 1; i >= 0; --i) {
+    if (s.contact[i].inside) last = std::max(last, s.contact[i].segment + 1);
+  }
+  for (int i = N - 1; i > last; --i) {
+    if (s.colon_offset_m[i].cwiseAbs().maxCoeff() > kRestOffset_m ||
+        s.colon_rate_m_per_s[i].cwiseAbs().maxCoeff() * kOneStep_s > kRestOffset_m) {
+      last = i;
+      break;
+    }
+  }
+  return std::min(N - 1, last + kActiveMargin);
+}
+
 }  // namespace
+
+void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
+  const auto& pts = params.colon.points;
+  const int N = static_cast<int>(pts.size());
+  const double dt = params.dt_s;
+  sc->colon_pair_k_N_per_m.assign(N, 0.0);
+  sc->colon_pair_transfer.assign(N, Eigen::Matrix2d::Zero());
+  sc->colon_suspension_N_per_m.assign(N, 0.0);
+  sc->colon_base_diag.assign(N, 0.0);
+  for (int i = 0; i < N; ++i) {
+    const TissueParams& t = pts[i].tissue;
+    const double h = pts[i].length_m;
+    sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
+    sc->colon_base_diag[i] += t.suspension_damping_N_s_per_m2 * h + dt * t.suspension_stiffness_N_per_m2 * h;
+  }
+  for (int i = 0; i + 1 < N; ++i) {
+    const double T = 0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
+    const double k = T / (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
+    sc->colon_pair_k_N_per_m[i] = k;
+    sc->colon_pair_transfer[i] = PlaneBasis(pts[i]).transpose() * PlaneBasis(pts[i + 1]);
+    sc->colon_base_diag[i] += dt * k;
+    sc->colon_base_diag[i + 1] += dt * k;
+  }
+}
 
 void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   const auto& pts = params.colon.points;
@@ -28,30 +78,24 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   auto& diag = sc->colon_diag;
   auto& upper = sc->colon_upper;
   auto& rhs = sc->colon_rhs;
-  for (int i = 0; i < N; ++i) {
-    const TissueParams& t = pts[i].tissue;
-    const double h = pts[i].length_m;
-    const double K = t.suspension_stiffness_N_per_m2 * h;
-    const double D = t.suspension_damping_N_s_per_m2 * h;
-    diag[i] = Eigen::Matrix2d::Identity() * (D + dt * K);
-    rhs[i] = -dt * K * s->colon_offset_m[i];  // K_c ||d_ri|| pulls the point home
-    upper[i].setZero();
+  const auto& d = s->colon_offset_m;
+  const int last = LastActivePoint(*s, N);
+  // Suspension (K_c ||d_ri|| pulls the point home) and the neighbour coupling,
+  // a force T/h (D_j - D_i) on the 3-D offsets D = B d; in plane i that is
+  // T/h (C_i d_j - d_i) with the constant C_i = B_i^T B_j (orthonormal B).
+  const int end = std::min(last + 1, N - 1);  // rhs of `last` needs pair (last, end)
+  for (int i = 0; i <= end; ++i) {
+    diag[i] = Eigen::Matrix2d::Identity() * sc->colon_base_diag[i];
+    rhs[i] = -dt * sc->colon_suspension_N_per_m[i] * d[i];
   }
-  // Neighbour coupling: force T/h (D_j - D_i) with D the 3-D offsets.
-  for (int i = 0; i + 1 < N; ++i) {
-    const double T = 0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
-    const double gap_m = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
-    const double k = T / gap_m;
-    const Eigen::Matrix<double, 3, 2> Bi = PlaneBasis(pts[i]);
-    const Eigen::Matrix<double, 3, 2> Bj = PlaneBasis(pts[i + 1]);
-    const Eigen::Vector3d Di = Bi * s->colon_offset_m[i];
-    const Eigen::Vector3d Dj = Bj * s->colon_offset_m[i + 1];
-    rhs[i] += dt * k * Bi.transpose() * (Dj - Di);
-    rhs[i + 1] += dt * k * Bj.transpose() * (Di - Dj);
-    diag[i].diagonal().array() += dt * k;
-    diag[i + 1].diagonal().array() += dt * k;
-    upper[i].noalias() -= dt * k * Bi.transpose() * Bj;
+  for (int i = 0; i < end; ++i) {
+    const double dtk = dt * sc->colon_pair_k_N_per_m[i];
+    const Eigen::Matrix2d& C = sc->colon_pair_transfer[i];
+    rhs[i].noalias() += dtk * (C * d[i + 1] - d[i]);
+    rhs[i + 1].noalias() += dtk * (C.transpose() * d[i] - d[i + 1]);
+    upper[i] = -dtk * C;
   }
+  upper[end].setZero();
   // Contacts: the scope (at its new shape) presses the wall outward along n;
   // the wall's friction reaction is the opposite of the scope's friction.
   const int samples = static_cast<int>(s->samples.size());
@@ -88,11 +132,12 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     diag[k + 1] += w[1] * w[1] * B[1].transpose() * K3 * B[1];
     upper[k] += w[0] * w[1] * B[0].transpose() * K3 * B[1];
   }
-  // Block Thomas elimination with point 0 held fixed (the anus).
+  // Block Thomas elimination over points 1..last with point 0 (the anus) and
+  // the points past `last` held where they are.
   auto& minv = sc->colon_work;
   rhs[0].setZero();
   minv[0].setZero();
-  for (int i = 1; i < N; ++i) {
+  for (int i = 1; i <= last; ++i) {
     Eigen::Matrix2d M = diag[i];
     Eigen::Vector2d y = rhs[i];
     if (i > 1) {
@@ -104,15 +149,19 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     minv[i] = M.inverse();
     rhs[i] = y;
   }
-  rhs[N - 1] = minv[N - 1] * rhs[N - 1];
-  for (int i = N - 2; i >= 1; --i) {
+  rhs[last] = minv[last] * rhs[last];
+  for (int i = last - 1; i >= 1; --i) {
     rhs[i] = minv[i] * (rhs[i] - upper[i] * rhs[i + 1]);
   }
   // rhs now holds the increments of d_i.
-  for (int i = 1; i < N; ++i) {
+  for (int i = 1; i <= last; ++i) {
     s->colon_offset_m[i] += rhs[i];
     s->colon_rate_m_per_s[i] = rhs[i] / dt;
     s->p_WColon[i] = pts[i].rest_position_m + PlaneBasis(pts[i]) * s->colon_offset_m[i];
+  }
+  for (int i = last + 1; i < N; ++i) {
+    rhs[i].setZero();
+    s->colon_rate_m_per_s[i].setZero();
   }
 }
 

@@ -32,6 +32,9 @@ void EvaluateContacts(const ModelParams& params, ModelState* state, Scratch* scr
 void SolveScope(const ModelParams& params, const StepInput& input, double target_insertion_m,
                 ModelState* state, Scratch* scratch, StepOutput* output);
 
+// Fills the constant parts of the colon system in scratch (MakeScratch).
+void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
+
 // Linearly implicit update of the colon points (scope held at its new shape):
 // suspension, neighbour coupling and contact stiffness in one block-tridiagonal
 // solve. Writes the colon point displacements into scratch->colon_rhs.

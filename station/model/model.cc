@@ -131,6 +131,7 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.colon_upper.resize(N);
   sc.colon_rhs.resize(N);
   sc.colon_work.resize(N);
+  internal::PrepareColonSystem(params, &sc);
   return sc;
 }
 

@@ -160,6 +160,12 @@ struct Scratch {
   std::vector<Eigen::Matrix2d> colon_upper;  // block (i, i+1)
   std::vector<Eigen::Vector2d> colon_rhs;
   std::vector<Eigen::Matrix2d> colon_work;
+  // Constant parts of the colon system, computed once by MakeScratch from the
+  // rest geometry and dt (a Scratch belongs to the params it was made from).
+  std::vector<double> colon_pair_k_N_per_m;        // [i]: coupling T/gap of points i, i+1
+  std::vector<Eigen::Matrix2d> colon_pair_transfer;  // [i]: B_i^T B_(i+1), plane i+1 -> i
+  std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i
+  std::vector<double> colon_base_diag;             // [i]: D_c h + dt (K_c h + couplings)
 };
 
 ModelState MakeInitialState(const ModelParams& params);  // validates params; may throw

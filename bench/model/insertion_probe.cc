@@ -1,0 +1,154 @@
+// insertion_probe: a position-driven insertion on a case with the knobs
+// steered toward the lumen (the simple rule of issue #3), printed once per
+// simulated second, so a model change can be judged by where the tip stalls.
+//   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "patient_db/case_format.h"
+#include "station/model/model.h"
+#include "station/training/case_model.h"
+#include "station/training/observer.h"
+#include "station/training/scripted_operator.h"
+
+namespace {
+
+using ves::model::StepInput;
+
+// AP (x right = patient's left, z up) and lateral (y, z) projections: rest
+// centerline grey, deformed colon blue, scope red.
+void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelState& state,
+               const std::string& path) {
+  const double px_per_m = 1200.0;
+  cv::Mat image(900, 1100, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto to_px = [&](double h, double v, int panel) {
+    return cv::Point(static_cast<int>(panel * 550 + 275 + h * px_per_m),
+                     static_cast<int>(850 - v * px_per_m));
+  };
+  for (int panel = 0; panel < 2; ++panel) {
+    auto project = [&](const Eigen::Vector3d& p) {
+      return panel == 0 ? to_px(-p.x(), p.z(), 0) : to_px(p.y(), p.z(), 1);
+    };
+    const auto& pts = params.colon.points;
+    for (size_t i = 1; i < pts.size(); ++i) {
+      cv::line(image, project(pts[i - 1].rest_position_m), project(pts[i].rest_position_m),
+               cv::Scalar(200, 200, 200), 1);
+      cv::line(image, project(state.p_WColon[i - 1]), project(state.p_WColon[i]),
+               cv::Scalar(255, 0, 0), 1);
+    }
+    for (size_t k = 1; k < state.p_WSample.size(); ++k) {
+      if (!state.contact[k].inside) continue;
+      cv::line(image, project(state.p_WSample[k - 1]), project(state.p_WSample[k]),
+               cv::Scalar(0, 0, 255), 2);
+    }
+    cv::circle(image, project(state.X_WTip.translation()), 5, cv::Scalar(0, 0, 0), 2);
+  }
+  cv::imwrite(path, image);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: insertion_probe CASE_FILE [speed_mm_s] [seconds] [segments]\n");
+    return 2;
+  }
+  const double speed_m_per_s = (argc > 2 ? std::atof(argv[2]) : 20.0) / 1000.0;
+  const double seconds = argc > 3 ? std::atof(argv[3]) : 120.0;
+  ves::training::CaseModelOptions options;
+  if (argc > 4) options.segments = std::atoi(argv[4]);
+  const auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
+  auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
+                                               options);
+  // Experiments: PROBE_MU scales friction, PROBE_SOFT_K sets the suspension of
+  // the mobile (soft) points, PROBE_EI scales the tube rigidity.
+  for (auto& point : params.colon.points) {
+    if (const char* mu = std::getenv("PROBE_MU")) {
+      point.tissue.static_friction *= std::atof(mu);
+      point.tissue.dynamic_friction *= std::atof(mu);
+    }
+    if (const char* k = std::getenv("PROBE_SOFT_K");
+        k && point.tissue.suspension_stiffness_N_per_m2 < 1000.0) {
+      point.tissue.suspension_stiffness_N_per_m2 = std::atof(k);
+    }
+  }
+  if (const char* ei = std::getenv("PROBE_EI")) params.scope.flexural_rigidity_N_m2 *= std::atof(ei);
+  auto state = ves::model::MakeInitialState(params);
+  auto scratch = ves::model::MakeScratch(params);
+  auto out = ves::model::MakeStepOutput(params);
+
+  const double reduce_from_m =
+      std::getenv("PROBE_REDUCE_FROM") ? std::atof(std::getenv("PROBE_REDUCE_FROM")) : 1e9;
+  const double slack_start_m =
+      std::getenv("PROBE_SLACK") ? std::atof(std::getenv("PROBE_SLACK")) : 0.10;
+  bool withdrawing = false;
+  double command_m = 0.0;
+  StepInput in;
+  in.thrust_mode = ves::model::ThrustMode::kPosition;
+  const double gain_per_s = 8.0;
+  std::printf("t_s inserted_m tip_arc_m base_N stretch_m@arc wall_N@arc knob_up knob_right "
+              "lumen_off_deg contacts\n");
+  int next_print = 0;
+  while (state.time_s < seconds) {
+    const auto p = ves::training::Perceive(params, state, out);
+    const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
+    const double right_err = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
+    in.knob_up_rad = std::clamp(in.knob_up_rad + gain_per_s * up_err * params.dt_s,
+                                -p.angulation_up_rad, p.angulation_up_rad);
+    in.knob_right_rad = std::clamp(in.knob_right_rad + gain_per_s * right_err * params.dt_s,
+                                   -p.angulation_right_rad, p.angulation_right_rad);
+    // Loop reduction: when the scope goes in but the tip does not follow,
+    // withdraw (knobs held, tip hooked) until the slack is gone.
+    const double slack_m = state.inserted_m - state.tip_arc_m;
+    if (!withdrawing && state.tip_arc_m > reduce_from_m &&
+        (slack_m > slack_start_m || out.base_force_N > 8.0)) withdrawing = true;
+    if (withdrawing && slack_m < 0.03) withdrawing = false;
+    command_m += (withdrawing ? -1.0 : 1.0) * speed_m_per_s * params.dt_s;
+    command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
+    in.insertion_m = command_m;
+    ves::model::Step(params, in, &state, &scratch, &out);
+    if (!out.finite) {
+      std::printf("diverged at t=%.3f\n", state.time_s);
+      return 1;
+    }
+    if (const char* dump = std::getenv("PROBE_DUMP_AT"); dump && next_print == std::atoi(dump) &&
+                                                         state.time_s >= next_print) {
+      DumpShape(params, state, "/tmp/probe_" + std::to_string(next_print) + ".png");
+    }
+    if (state.time_s >= next_print) {
+      ++next_print;
+      int wall_i = 0;
+      for (size_t i = 0; i < out.wall_force_N.size(); ++i)
+        if (out.wall_force_N[i] > out.wall_force_N[wall_i]) wall_i = static_cast<int>(i);
+      std::printf("%5.1f %.3f %.3f %6.2f %.3f@%.2f %5.2f@%.2f %5.2f %5.2f %5.1f %d\n", state.time_s,
+                  state.inserted_m, state.tip_arc_m, out.base_force_N, out.peak_stretch_m,
+                  out.peak_stretch_arc_m, out.peak_wall_force_N,
+                  params.colon.points[wall_i].arc_m, in.knob_up_rad, in.knob_right_rad,
+                  std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) * 180 / M_PI,
+                  out.contact_count);
+      if (std::getenv("PROBE_TIP")) {
+        const auto& c = state.contact.back();
+        const Eigen::Vector3d tip = state.X_WTip.translation();
+        std::printf("    tip (%.3f %.3f %.3f) seg %d t %.2f pen %.4f offset %.4f\n", tip.x(), tip.y(),
+                    tip.z(), c.segment, c.segment_t, c.penetration_m,
+                    state.colon_offset_m[c.segment].norm());
+      }
+      if (std::getenv("PROBE_CONTACTS")) {
+        for (int j = 0; j < out.contact_count; ++j) {
+          const auto& c = out.contacts[j];
+          if (c.normal_force_N < 0.2) continue;
+          const Eigen::Vector3d axis = state.X_WLink[state.samples[c.sample].link].linear().col(2);
+          std::printf("    from_tip %.3f colon_arc %.3f N %.2f alpha %.2f axial_on_scope %.2f\n",
+                      c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.alpha,
+                      c.force_on_scope_W_N.dot(axis));
+        }
+      }
+    }
+  }
+  return 0;
+}
