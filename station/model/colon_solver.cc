@@ -84,16 +84,17 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   // a force T/h (D_j - D_i) on the 3-D offsets D = B d; in plane i that is
   // T/h (C_i d_j - d_i) with the constant C_i = B_i^T B_j (orthonormal B).
   const int end = std::min(last + 1, N - 1);  // rhs of `last` needs pair (last, end)
+  const auto& pair_k = sc->colon_pair_k_N_per_m;
+  const auto& C = sc->colon_pair_transfer;
   for (int i = 0; i <= end; ++i) {
     diag[i] = Eigen::Matrix2d::Identity() * sc->colon_base_diag[i];
-    rhs[i] = -dt * sc->colon_suspension_N_per_m[i] * d[i];
-  }
-  for (int i = 0; i < end; ++i) {
-    const double dtk = dt * sc->colon_pair_k_N_per_m[i];
-    const Eigen::Matrix2d& C = sc->colon_pair_transfer[i];
-    rhs[i].noalias() += dtk * (C * d[i + 1] - d[i]);
-    rhs[i + 1].noalias() += dtk * (C.transpose() * d[i] - d[i + 1]);
-    upper[i] = -dtk * C;
+    Eigen::Vector2d r = -dt * sc->colon_suspension_N_per_m[i] * d[i];
+    if (i > 0) r.noalias() += dt * pair_k[i - 1] * (C[i - 1].transpose() * d[i - 1] - d[i]);
+    if (i < end) {
+      r.noalias() += dt * pair_k[i] * (C[i] * d[i + 1] - d[i]);
+      upper[i] = -dt * pair_k[i] * C[i];
+    }
+    rhs[i] = r;
   }
   upper[end].setZero();
   // Contacts: the scope (at its new shape) presses the wall outward along n;
@@ -133,32 +134,30 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     upper[k] += w[0] * w[1] * B[0].transpose() * K3 * B[1];
   }
   // Block Thomas elimination over points 1..last with point 0 (the anus) and
-  // the points past `last` held where they are.
-  auto& minv = sc->colon_work;
-  rhs[0].setZero();
-  minv[0].setZero();
+  // the points past `last` held where they are: forward, G_i = M_i^-1 U_i and
+  // y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with M_i = D_i - U_(i-1)^T G_(i-1);
+  // back, x_i = y_i - G_i x_(i+1). One 2x2 inverse per point.
+  auto& gain = sc->colon_work;
   for (int i = 1; i <= last; ++i) {
     Eigen::Matrix2d M = diag[i];
     Eigen::Vector2d y = rhs[i];
     if (i > 1) {
-      const Eigen::Matrix2d L = upper[i - 1].transpose();  // block (i, i-1)
-      const Eigen::Matrix2d LMinv = L * minv[i - 1];
-      M.noalias() -= LMinv * upper[i - 1];
-      y.noalias() -= LMinv * rhs[i - 1];
+      M.noalias() -= upper[i - 1].transpose() * gain[i - 1];
+      y.noalias() -= upper[i - 1].transpose() * rhs[i - 1];
     }
-    minv[i] = M.inverse();
-    rhs[i] = y;
+    const Eigen::Matrix2d M_inv = M.inverse();
+    gain[i].noalias() = M_inv * upper[i];
+    rhs[i].noalias() = M_inv * y;
   }
-  rhs[last] = minv[last] * rhs[last];
-  for (int i = last - 1; i >= 1; --i) {
-    rhs[i] = minv[i] * (rhs[i] - upper[i] * rhs[i + 1]);
-  }
-  // rhs now holds the increments of d_i.
-  for (int i = 1; i <= last; ++i) {
+  // Back substitution; rhs becomes the increments of d_i.
+  const double inv_dt = 1.0 / dt;
+  for (int i = last; i >= 1; --i) {
+    if (i < last) rhs[i].noalias() -= gain[i] * rhs[i + 1];
     s->colon_offset_m[i] += rhs[i];
-    s->colon_rate_m_per_s[i] = rhs[i] / dt;
+    s->colon_rate_m_per_s[i] = rhs[i] * inv_dt;
     s->p_WColon[i] = pts[i].rest_position_m + PlaneBasis(pts[i]) * s->colon_offset_m[i];
   }
+  rhs[0].setZero();
   for (int i = last + 1; i < N; ++i) {
     rhs[i].setZero();
     s->colon_rate_m_per_s[i].setZero();
