@@ -59,10 +59,12 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     const TissueParams& t = pts[i].tissue;
     const double h = pts[i].length_m;
     sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
-    sc->colon_base_diag[i] += t.suspension_damping_N_s_per_m2 * h + dt * t.suspension_stiffness_N_per_m2 * h;
+    sc->colon_base_diag[i] +=
+        t.suspension_damping_N_s_per_m2 * h + dt * sc->colon_suspension_N_per_m[i];
   }
   for (int i = 0; i + 1 < N; ++i) {
-    const double T = 0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
+    const double T =
+        0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
     const double k = T / (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
     sc->colon_pair_k_N_per_m[i] = k;
     sc->colon_pair_transfer[i] = PlaneBasis(pts[i]).transpose() * PlaneBasis(pts[i + 1]);
@@ -116,22 +118,25 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     }
     const Eigen::Vector3d f_wall = r.force_N * hit.normal - sc->sample_friction_W_N[i];
     const double w[2] = {1.0 - hit.t, hit.t};
-    Eigen::Matrix<double, 3, 2> B[2];
+    Eigen::Vector2d v[2];  // the normal in the two planes, B_j^T n
     for (int j = 0; j < 2; ++j) {
-      B[j] = PlaneBasis(pts[k + j]);
-      rhs[k + j] += dt * w[j] * (B[j].transpose() * f_wall);
+      const Eigen::Matrix<double, 3, 2> B = PlaneBasis(pts[k + j]);
+      rhs[k + j].noalias() += dt * w[j] * (B.transpose() * f_wall);
+      v[j].noalias() = B.transpose() * hit.normal;
     }
     // The wall force falls as the points follow the scope (d f / d r = -slope
     // n n^T), the wall damping D_d (eq. 9) and the friction stick spring act on
     // the relative motion from this side too; all implicit, otherwise a light
-    // colon point jumps by the whole force in one step and chatters.
-    const Eigen::Matrix3d nn = hit.normal * hit.normal.transpose();
-    const Eigen::Matrix3d K3 =
-        (dt * r.slope_N_per_m + tissue.wall_damping_N_s_per_m) * nn +
-        dt * params.friction_stiffness_N_per_m * (Eigen::Matrix3d::Identity() - nn);
-    diag[k] += w[0] * w[0] * B[0].transpose() * K3 * B[0];
-    diag[k + 1] += w[1] * w[1] * B[1].transpose() * K3 * B[1];
-    upper[k] += w[0] * w[1] * B[0].transpose() * K3 * B[1];
+    // colon point jumps by the whole force in one step and chatters. With
+    // K3 = a n n^T + b (I - n n^T): B_j^T K3 B_l = b B_j^T B_l + (a - b) v_j v_l^T.
+    const double a = dt * r.slope_N_per_m + tissue.wall_damping_N_s_per_m;
+    const double b = dt * params.friction_stiffness_N_per_m;
+    diag[k].noalias() += w[0] * w[0] * (a - b) * v[0] * v[0].transpose();
+    diag[k].diagonal().array() += w[0] * w[0] * b;
+    diag[k + 1].noalias() += w[1] * w[1] * (a - b) * v[1] * v[1].transpose();
+    diag[k + 1].diagonal().array() += w[1] * w[1] * b;
+    upper[k].noalias() +=
+        w[0] * w[1] * (b * sc->colon_pair_transfer[k] + (a - b) * v[0] * v[1].transpose());
   }
   // Block Thomas elimination over points 1..last with point 0 (the anus) and
   // the points past `last` held where they are: forward, G_i = M_i^-1 U_i and

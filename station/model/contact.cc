@@ -92,7 +92,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
   for (int i = 0; i < samples; ++i) {
     SampleContact& c = s->contact[i];
     sc->sample_force_W_N[i].setZero();
-    sc->sample_stiffness_N_per_m[i].setZero();
+    sc->sample_normal_stiffness_N_per_m[i] = 0.0;
     sc->sample_normal_force_N[i] = 0.0;
     const bool inside = s->samples[i].arc_from_tip_m < s->inserted_m;
     if (!inside) {
@@ -153,9 +153,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
     // linearisation flip from step to step (chatter); the force itself is
     // still capped by the cone at the next evaluation.
     const double k_n = response.slope_N_per_m + tissue.wall_damping_N_s_per_m / dt;
-    const Eigen::Matrix3d nn = n * n.transpose();
-    sc->sample_stiffness_N_per_m[i] =
-        k_n * nn + k_t * (Eigen::Matrix3d::Identity() - nn);
+    sc->sample_normal_stiffness_N_per_m[i] = k_n;
     sc->sample_normal_slope_N_per_m[i] = response.slope_N_per_m;
 
     Contact& out_c = out->contacts[out->contact_count++];

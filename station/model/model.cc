@@ -120,7 +120,7 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.body_displacement.resize(n);
   const size_t samples = CountSamples(params);
   sc.sample_force_W_N.assign(samples, Eigen::Vector3d::Zero());
-  sc.sample_stiffness_N_per_m.assign(samples, Eigen::Matrix3d::Zero());
+  sc.sample_normal_stiffness_N_per_m.assign(samples, 0.0);
   sc.sample_normal_W.assign(samples, Eigen::Vector3d::Zero());
   sc.sample_friction_W_N.assign(samples, Eigen::Vector3d::Zero());
   sc.sample_normal_force_N.assign(samples, 0.0);

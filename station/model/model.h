@@ -150,7 +150,9 @@ struct Scratch {
   std::vector<Eigen::Vector2d> u_vector;
   std::vector<Eigen::Matrix<double, 6, 1>> body_displacement;
   std::vector<Eigen::Vector3d> sample_force_W_N;
-  std::vector<Eigen::Matrix3d> sample_stiffness_N_per_m;
+  // Linearised contact stiffness k_n n n^T + k_t (I - n n^T) of each touching
+  // sample, kept as k_n (k_t = friction_stiffness_N_per_m, n = sample_normal_W).
+  std::vector<double> sample_normal_stiffness_N_per_m;
   std::vector<Eigen::Vector3d> sample_normal_W;
   std::vector<Eigen::Vector3d> sample_friction_W_N;
   std::vector<double> sample_normal_force_N;

@@ -26,14 +26,24 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
   return m;
 }
 
-// Spatial stiffness of a point spring K at p: B^T K B with B = [-p^, I].
-void AddPointStiffness(const Eigen::Matrix3d& K, const Eigen::Vector3d& p, double scale, Mat6* I) {
+// Spatial stiffness of a point spring K at p: B^T K B with B = [-p^, I], for
+// a contact spring K = b I + c n n^T (b = k_t, c = k_n - k_t). With P = p^ and
+// m = P n: P K = b P + c m n^T, K P = b P - c n m^T and
+// P K P = b (p p^T - |p|^2 I) - c m m^T, so no 3x3 products are needed.
+void AddPointStiffness(double k_n, double k_t, const Eigen::Vector3d& n, const Eigen::Vector3d& p,
+                       double scale, Mat6* I) {
+  const double b = scale * k_t;
+  const double c = scale * (k_n - k_t);
   const Eigen::Matrix3d P = Hat(p);
-  const Eigen::Matrix3d PK = P * K;
-  I->topLeftCorner<3, 3>().noalias() -= scale * PK * P;
-  I->topRightCorner<3, 3>().noalias() += scale * PK;
-  I->bottomLeftCorner<3, 3>().noalias() -= scale * K * P;
-  I->bottomRightCorner<3, 3>().noalias() += scale * K;
+  const Eigen::Vector3d m = p.cross(n);
+  Eigen::Matrix3d PKP = b * (p * p.transpose());
+  PKP.diagonal().array() -= b * p.squaredNorm();
+  PKP.noalias() -= c * m * m.transpose();
+  I->topLeftCorner<3, 3>() -= PKP;
+  I->topRightCorner<3, 3>().noalias() += b * P + c * m * n.transpose();
+  I->bottomLeftCorner<3, 3>().noalias() -= b * P - c * n * m.transpose();
+  I->bottomRightCorner<3, 3>().noalias() += c * n * n.transpose();
+  I->bottomRightCorner<3, 3>().diagonal().array() += b;
 }
 
 void AddPointForce(const Eigen::Vector3d& F, const Eigen::Vector3d& p, double scale, Vec6* w) {
@@ -71,7 +81,10 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
     force_sum_N += F;
     moment_sum_N_m += (p - anus).cross(F);
     AddPointForce(F, p, dt, &bA[k]);
-    if (s->contact[i].touching) AddPointStiffness(sc->sample_stiffness_N_per_m[i], p, dt, &IA[k]);
+    if (s->contact[i].touching) {
+      AddPointStiffness(sc->sample_normal_stiffness_N_per_m[i], params.friction_stiffness_N_per_m,
+                        sc->sample_normal_W[i], p, dt, &IA[k]);
+    }
   }
   // Tip to base: articulated stiffness and bias of every 2-DOF bending joint.
   auto& S = sc->motion_subspace;

@@ -126,7 +126,8 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   if (tip.inside) {
     // Where the tip is now, along the rest centerline (a copy: the contact
     // memory itself moves on at the next step's evaluation).
-    internal::TrackSegment(*s, params.colon, params.contact_search_window, s->p_WSample[samples - 1], &tip);
+    internal::TrackSegment(*s, params.colon, params.contact_search_window,
+                           s->p_WSample[samples - 1], &tip);
     const int k = tip.segment;
     const double t =
         internal::CalcSegmentHit(params, *s, k, s->p_WSample[samples - 1]).t;

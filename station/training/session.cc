@@ -1,5 +1,6 @@
 #include "station/training/session.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace ves::training {
@@ -30,6 +31,12 @@ Session::Session(SessionConfig config) : config_(std::move(config)), metrics_(co
     throw std::invalid_argument("session: thresholds.cecum_arc_m must be > 0, got " +
                                 std::to_string(config_.thresholds.cecum_arc_m));
   }
+  // The whole run's log up front: Record runs on the haptic loop's thread,
+  // which must not reallocate (a 10-minute session at 1 kHz is ~600k samples).
+  // Pages are only touched as the log grows; capped at an hour.
+  constexpr double kReserveLimit_s = 3600.0;
+  inputs_.reserve(
+      static_cast<size_t>(std::min(config_.time_limit_s, kReserveLimit_s) / config_.dt_s) + 2);
 }
 
 void Session::Start(std::int64_t start_unix_ms) {
