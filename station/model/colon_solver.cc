@@ -138,12 +138,17 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     upper[k].noalias() +=
         w[0] * w[1] * (b * sc->colon_pair_transfer[k] + (a - b) * v[0] * v[1].transpose());
   }
-  // Block Thomas elimination over points 1..last with point 0 (the anus) and
-  // the points past `last` held where they are: forward, G_i = M_i^-1 U_i and
+  // Block tridiagonal solve over points 1..last, point 0 (the anus) and the
+  // points past `last` held where they are. Twisted ("burn at both ends")
+  // elimination: the top half from point 1 down, G_i = M_i^-1 U_i and
   // y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with M_i = D_i - U_(i-1)^T G_(i-1);
-  // back, x_i = y_i - G_i x_(i+1). One 2x2 inverse per point.
-  auto& gain = sc->colon_work;
-  for (int i = 1; i <= last; ++i) {
+  // the bottom half from `last` up, H_i = N_i^-1 U_(i-1)^T and
+  // w_i = N_i^-1 (r_i - U_i w_(i+1)) with N_i = D_i - U_i H_(i+1). The two
+  // chains are independent, so the CPU overlaps them (each point's 2x2
+  // inverse is a long dependency); they meet at p, p+1.
+  auto& gain = sc->colon_work;  // G_i for i <= p, H_i for i > p
+  const int p = (last + 1) / 2;
+  auto eliminate_top = [&](int i) {
     Eigen::Matrix2d M = diag[i];
     Eigen::Vector2d y = rhs[i];
     if (i > 1) {
@@ -153,11 +158,36 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     const Eigen::Matrix2d M_inv = M.inverse();
     gain[i].noalias() = M_inv * upper[i];
     rhs[i].noalias() = M_inv * y;
+  };
+  auto eliminate_bottom = [&](int i) {
+    Eigen::Matrix2d M = diag[i];
+    Eigen::Vector2d z = rhs[i];
+    if (i < last) {
+      M.noalias() -= upper[i] * gain[i + 1];
+      z.noalias() -= upper[i] * rhs[i + 1];
+    }
+    const Eigen::Matrix2d M_inv = M.inverse();
+    gain[i].noalias() = M_inv * upper[i - 1].transpose();
+    rhs[i].noalias() = M_inv * z;
+  };
+  for (int j = 0; j < last - p || j < p; ++j) {
+    if (1 + j <= p) eliminate_top(1 + j);
+    if (last - j > p) eliminate_bottom(last - j);
   }
-  // Back substitution; rhs becomes the increments of d_i.
+  // Meet: x_p = y_p - G_p x_(p+1) and x_(p+1) = w_(p+1) - H_(p+1) x_p.
+  if (last > p) {
+    const Eigen::Matrix2d A = Eigen::Matrix2d::Identity() - gain[p] * gain[p + 1];
+    const Eigen::Vector2d x_p = A.inverse() * (rhs[p] - gain[p] * rhs[p + 1]);
+    rhs[p] = x_p;
+    rhs[p + 1] -= gain[p + 1] * x_p;
+  }
+  // Substitute outward from the meeting point; rhs becomes the increments of d_i.
+  for (int j = 1; p - j >= 1 || p + 1 + j <= last; ++j) {
+    if (p - j >= 1) rhs[p - j].noalias() -= gain[p - j] * rhs[p - j + 1];
+    if (p + 1 + j <= last) rhs[p + 1 + j].noalias() -= gain[p + 1 + j] * rhs[p + j];
+  }
   const double inv_dt = 1.0 / dt;
-  for (int i = last; i >= 1; --i) {
-    if (i < last) rhs[i].noalias() -= gain[i] * rhs[i + 1];
+  for (int i = 1; i <= last; ++i) {
     s->colon_offset_m[i] += rhs[i];
     s->colon_rate_m_per_s[i] = rhs[i] * inv_dt;
     s->p_WColon[i] = pts[i].rest_position_m + PlaneBasis(pts[i]) * s->colon_offset_m[i];

@@ -91,10 +91,12 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
   out->contact_count = 0;
   for (int i = 0; i < samples; ++i) {
     SampleContact& c = s->contact[i];
+    const bool inside = s->samples[i].arc_from_tip_m < s->inserted_m;
+    // Still outside the anus: everything below was zeroed when it came out.
+    if (!inside && !c.inside) continue;
     sc->sample_force_W_N[i].setZero();
     sc->sample_normal_stiffness_N_per_m[i] = 0.0;
     sc->sample_normal_force_N[i] = 0.0;
-    const bool inside = s->samples[i].arc_from_tip_m < s->inserted_m;
     if (!inside) {
       c = SampleContact{};
       continue;
