@@ -59,6 +59,22 @@ class PgStore final : public Store {
                                                     const std::string& case_id) override;
   StoreResult<int64_t> CountSessions() override;
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) override;
+  StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
+  StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) override;
+  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution) override;
+  StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) override;
+  StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) override;
+  StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) override;
+  StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
+                                                          const std::string& group) override;
+  StoreStatus AddAssignment(const AssignmentRow& row) override;
+  StoreResult<std::vector<AssignmentRow>> ListAssignments(const std::string& trainee_id) override;
+  StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) override;
+  StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) override;
+  StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
+      const std::string& trainee_id) override;
+  StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
+                                                                   int limit) override;
 
   int schema_version() const { return schema_version_; }
 

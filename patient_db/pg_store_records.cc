@@ -280,7 +280,14 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
       if (inserted.count(row.uuid)) {
         first[row.uuid] = row;
         first[row.uuid].body.clear();
+        first[row.uuid].lesson_id.clear();
         results[i].outcome = SessionPut::kStored;
+        if (!row.lesson_id.empty()) {  // queued for the lesson judge with the session itself
+          tx.exec_params(
+              "INSERT INTO lesson_sessions (session_uuid, lesson_id, trainee_id) "
+              "VALUES ($1, $2, $3)",
+              row.uuid, row.lesson_id, row.trainee_id);
+        }
       } else {
         lookup.push_back(row.uuid);
         first[row.uuid] = SessionRow{};  // filled in below

@@ -37,6 +37,22 @@ class SqliteStore final : public Store {
                                                     const std::string& case_id) override;
   StoreResult<int64_t> CountSessions() override;
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) override;
+  StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
+  StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) override;
+  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution) override;
+  StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) override;
+  StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) override;
+  StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) override;
+  StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
+                                                          const std::string& group) override;
+  StoreStatus AddAssignment(const AssignmentRow& row) override;
+  StoreResult<std::vector<AssignmentRow>> ListAssignments(const std::string& trainee_id) override;
+  StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) override;
+  StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) override;
+  StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
+      const std::string& trainee_id) override;
+  StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
+                                                                   int limit) override;
 
   // The schema version after migration.
   int schema_version() const { return schema_version_; }
@@ -48,6 +64,7 @@ class SqliteStore final : public Store {
   void Migrate();
   StoreStatus WriteSession(const SessionRow& row, SessionPutResult* result);
   StoreStatus WriteAudit(const AuditRow& row);
+  StoreResult<CurriculumRow> ReadCurriculum(SqliteDb& db, const std::string& curriculum_id);
   StoreResult<std::vector<std::string>> ReadShares(SqliteDb& db, const std::string& case_id,
                                                    uint32_t version);
 

@@ -271,9 +271,18 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
   s->Bind(11, row.time_to_cecum_s).Bind(12, row.pain_s).Bind(13, row.score);
   s->Bind(14, row.body_sha256_hex).Bind(15, row.stored_unix_ms).BindBlob(16, row.body);
   if (!Run(s, &rc)) return Internal(db, "insert session " + row.uuid);
+  if (!row.lesson_id.empty()) {  // queued for the lesson judge with the session itself
+    s = db.Prepare(
+        "INSERT INTO lesson_sessions (session_uuid, lesson_id, trainee_id) VALUES (?, ?, ?)",
+        nullptr);
+    if (!s) return Internal(db, "queue lesson session");
+    s->Bind(1, row.uuid).Bind(2, row.lesson_id).Bind(3, row.trainee_id);
+    if (!Run(s, &rc)) return Internal(db, "queue lesson session " + row.uuid);
+  }
   result->outcome = SessionPut::kStored;
   result->first = row;
   result->first.body.clear();
+  result->first.lesson_id.clear();
   return StoreStatus::Ok();
 }
 

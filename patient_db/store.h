@@ -108,6 +108,9 @@ struct SessionRow {
   std::string body_sha256_hex;
   int64_t stored_unix_ms = 0;
   std::string body;  // serialized ves.v1.SessionRecord; empty in listings
+  // Non-empty: the record names a lesson; CommitBatch queues it for judging
+  // (table lesson_sessions) in the same transaction. Not read back.
+  std::string lesson_id;
   bool operator==(const SessionRow&) const = default;
 };
 
@@ -122,6 +125,45 @@ struct AuditRow {
   std::string target;
   std::string result;
   bool operator==(const AuditRow&) const = default;
+};
+
+// A curriculum (docs/lessons.md): searchable columns plus the serialized
+// ves.v1.Curriculum. Curricula are immutable once stored.
+struct CurriculumRow {
+  std::string curriculum_id;
+  std::string institution;  // owner
+  std::string title;
+  std::vector<std::string> lesson_ids;  // in order; each unique across curricula
+  std::string created_by;  // token id
+  int64_t created_unix_ms = 0;
+  std::string body_sha256_hex;
+  std::string body;  // serialized ves.v1.Curriculum
+  bool operator==(const CurriculumRow&) const = default;
+};
+
+// A curriculum given to one trainee or to a group of an institution.
+struct AssignmentRow {
+  std::string curriculum_id;
+  bool to_group = false;
+  std::string assignee;     // trainee id, or group name
+  std::string institution;  // the trainee's or the group's
+  std::string assigned_by;  // token id
+  int64_t assigned_unix_ms = 0;
+  bool operator==(const AssignmentRow&) const = default;
+};
+
+// The server's judgement of one lesson session (one per session, never changed).
+struct LessonVerdictRow {
+  std::string session_uuid;
+  std::string trainee_id;
+  std::string curriculum_id;
+  std::string lesson_id;
+  bool passed = false;
+  double score = 0;
+  int64_t session_start_unix_ms = 0;
+  int64_t judged_unix_ms = 0;
+  std::string detail;  // one line per criterion
+  bool operator==(const LessonVerdictRow&) const = default;
 };
 
 // What one group commit writes, in one durable transaction.
@@ -176,6 +218,38 @@ class Store {
 
   // Oldest first, at most `limit`.
   virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) = 0;
+
+  // ---- Lessons (docs/lessons.md) ----
+  // Stores the curriculum and its lesson ids. The same id and body hash again:
+  // true (already stored). The same id with another body, or a lesson id used
+  // by another curriculum: kAlreadyExists.
+  virtual StoreResult<bool> PutCurriculum(const CurriculumRow& row) = 0;
+  virtual StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) = 0;
+  // By id; institution empty: all.
+  virtual StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution) = 0;
+  // The curriculum holding the lesson (kNotFound when none).
+  virtual StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) = 0;
+  // One group per trainee; "" removes it.
+  virtual StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) = 0;
+  virtual StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) = 0;
+  // Trainee ids of the group, sorted.
+  virtual StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
+                                                                  const std::string& group) = 0;
+  // Idempotent: the same assignment again keeps the first row.
+  virtual StoreStatus AddAssignment(const AssignmentRow& row) = 0;
+  // The trainee's assignments, direct and through their group, oldest first.
+  virtual StoreResult<std::vector<AssignmentRow>> ListAssignments(
+      const std::string& trainee_id) = 0;
+  // false when the session already had a verdict (the first one is kept).
+  virtual StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) = 0;
+  virtual StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) = 0;
+  // The trainee's verdicts, oldest session first.
+  virtual StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
+      const std::string& trainee_id) = 0;
+  // Lesson sessions stored without a verdict yet (oldest first, at most `limit`);
+  // trainee_id empty: everyone's.
+  virtual StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(
+      const std::string& trainee_id, int limit) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

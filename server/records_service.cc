@@ -214,12 +214,14 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.body = DeterministicBytes(rec);
   row.body_sha256_hex = Sha256HexOf(row.body);
   row.stored_unix_ms = NowUnixMs();
+  row.lesson_id = rec.lesson_id();  // queued for the lesson judge in the same transaction
   const std::string body_sha = row.body_sha256_hex;
+  LessonJudge* judge = rec.lesson_id().empty() ? nullptr : deps_.judge;
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
-      [reactor, response, body_sha](const patient_db::StoreStatus& status,
-                                    const patient_db::SessionPutResult& result) {
+      [reactor, response, body_sha, judge](const patient_db::StoreStatus& status,
+                                           const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
           reactor->Finish(ToGrpcStatus(status));
           return;
@@ -231,6 +233,9 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
                                      "sha256 " + result.first.body_sha256_hex + ", this one " +
                                      body_sha + "); a changed record needs a new uuid"));
           return;
+        }
+        if (judge && result.outcome == patient_db::SessionPut::kStored) {
+          judge->Enqueue(result.first.uuid);  // durable now; judged off the gRPC threads
         }
         response->set_uuid(result.first.uuid);
         response->set_body_sha256_hex(result.first.body_sha256_hex);

@@ -97,11 +97,13 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
     : options_(std::move(options)), store_(std::move(store)) {
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
-  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get()};
+  judge_ = std::make_unique<LessonJudge>(store_.get());
+  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);
   trainees_ = std::make_unique<TraineesService>(deps);
   admin_ = std::make_unique<AdminService>(deps);
+  lessons_ = std::make_unique<LessonsService>(deps);
 }
 
 VesServer::~VesServer() { Shutdown(std::chrono::milliseconds(0)); }
@@ -114,6 +116,7 @@ void VesServer::Start() {
   builder.RegisterService(sessions_.get());
   builder.RegisterService(trainees_.get());
   builder.RegisterService(admin_.get());
+  builder.RegisterService(lessons_.get());
   builder.SetMaxReceiveMessageSize(options_.max_receive_message_bytes);
   builder.SetMaxSendMessageSize(options_.max_send_message_bytes);
   // Keepalive: ping idle clients every 30 s, drop them after 10 s of silence;
@@ -134,6 +137,7 @@ void VesServer::Start() {
     throw std::runtime_error("cannot listen on '" + options_.listen +
                              "' (address in use or invalid)");
   }
+  judge_->Start();
 }
 
 void VesServer::Shutdown(std::chrono::milliseconds grace) {
@@ -143,6 +147,7 @@ void VesServer::Shutdown(std::chrono::milliseconds grace) {
     server_->Shutdown(std::chrono::system_clock::now() + grace);
     server_->Wait();
   }
+  judge_->Stop();  // sessions it did not reach are judged on the next start
   writer_->Stop();
 }
 

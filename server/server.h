@@ -46,6 +46,7 @@ class VesServer {
   // (then cancels them), commits what the writer holds. Idempotent.
   void Shutdown(std::chrono::milliseconds grace);
   uint64_t commit_batches() const { return writer_->batches(); }
+  LessonJudge& judge() { return *judge_; }
 
  private:
   ServerOptions options_;
@@ -56,6 +57,8 @@ class VesServer {
   std::unique_ptr<SessionsService> sessions_;
   std::unique_ptr<TraineesService> trainees_;
   std::unique_ptr<AdminService> admin_;
+  std::unique_ptr<LessonJudge> judge_;
+  std::unique_ptr<LessonsService> lessons_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;
   bool shut_down_ = false;

@@ -10,6 +10,7 @@
 
 #include "patient_db/store.h"
 #include "server/auth.h"
+#include "server/lesson_judge.h"
 #include "server/session_writer.h"
 #include "ves/v1/services.grpc.pb.h"
 
@@ -27,6 +28,7 @@ struct ServiceDeps {
   patient_db::Store* store = nullptr;
   SessionWriter* writer = nullptr;
   Authenticator* auth = nullptr;
+  LessonJudge* judge = nullptr;  // lesson sessions are queued here once stored (may be null)
 };
 
 // Recently served case bundles by hash (content-addressed, so never stale).
@@ -107,6 +109,36 @@ class AdminService final : public ves::v1::Admin::CallbackService {
   grpc::ServerUnaryReactor* ListAudit(grpc::CallbackServerContext* ctx,
                                       const ves::v1::ListAuditRequest* request,
                                       ves::v1::ListAuditResponse* response) override;
+
+ private:
+  ServiceDeps deps_;
+};
+
+// Curricula, assignments, next lesson, progress, verdicts (docs/lessons.md).
+class LessonsService final : public ves::v1::Lessons::CallbackService {
+ public:
+  explicit LessonsService(ServiceDeps deps) : deps_(deps) {}
+  grpc::ServerUnaryReactor* CreateCurriculum(grpc::CallbackServerContext* ctx,
+                                             const ves::v1::CreateCurriculumRequest* request,
+                                             ves::v1::CreateCurriculumResponse* response) override;
+  grpc::ServerUnaryReactor* ListCurricula(grpc::CallbackServerContext* ctx,
+                                          const ves::v1::ListCurriculaRequest* request,
+                                          ves::v1::ListCurriculaResponse* response) override;
+  grpc::ServerUnaryReactor* AssignCurriculum(grpc::CallbackServerContext* ctx,
+                                             const ves::v1::AssignCurriculumRequest* request,
+                                             ves::v1::AssignCurriculumResponse* response) override;
+  grpc::ServerUnaryReactor* SetTraineeGroup(grpc::CallbackServerContext* ctx,
+                                            const ves::v1::SetTraineeGroupRequest* request,
+                                            ves::v1::SetTraineeGroupResponse* response) override;
+  grpc::ServerUnaryReactor* GetNextLesson(grpc::CallbackServerContext* ctx,
+                                          const ves::v1::GetNextLessonRequest* request,
+                                          ves::v1::GetNextLessonResponse* response) override;
+  grpc::ServerUnaryReactor* GetProgress(grpc::CallbackServerContext* ctx,
+                                        const ves::v1::GetProgressRequest* request,
+                                        ves::v1::GetProgressResponse* response) override;
+  grpc::ServerUnaryReactor* GetLessonVerdict(grpc::CallbackServerContext* ctx,
+                                             const ves::v1::GetLessonVerdictRequest* request,
+                                             ves::v1::GetLessonVerdictResponse* response) override;
 
  private:
   ServiceDeps deps_;

@@ -6,13 +6,22 @@
 // stand-in that burns --model-load-us per period (--model synthetic).
 // Prints the period error percentiles (wake-up minus deadline), overruns and
 // the model's time per period.
+// The loop sleeps to the deadline minus a margin that follows the recent
+// sleep overshoot within [--spin-margin-us, --spin-margin-max-us] and spins
+// the rest (both 0: sleeps all the way, the loop as it was before the spin);
+// the sleep's own overshoot and the margin used are printed too, to show
+// where the period error comes from.
 //   haptic_loop_bench [--seconds 30] [--model tube|synthetic] [--model-load-us 20]
-//                     [--no-realtime]
+//                     [--spin-margin-us 100] [--spin-margin-max-us 600]
+//                     [--cpu-latency-us -1] [--no-realtime]
+// --cpu-latency-us -1 leaves the CPU idle states alone (no /dev/cpu_dma_latency request).
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <string>
 #include <memory>
 #include <numbers>
 #include <thread>
@@ -104,11 +113,22 @@ ves::model::ModelParams BendTubeModel() {
   return params;
 }
 
+// "1.23 0.98 0.75 ..." from /proc/loadavg: how busy the machine was.
+std::string ReadLoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  std::string line;
+  std::getline(in, line);
+  return line + "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   double seconds = 30.0;
   double load_us = 20.0;
+  double spin_margin_us = hx::LoopOptions{}.spin_margin_s * 1e6;
+  double spin_margin_max_us = hx::LoopOptions{}.spin_margin_max_s * 1e6;
+  int cpu_latency_us = hx::LoopOptions{}.cpu_latency_us;
   std::string model_name = "tube";
   po::options_description description("usage: haptic_loop_bench [options]");
   description.add_options()("help,h", "show this help")(
@@ -117,6 +137,12 @@ int main(int argc, char** argv) {
       "synthetic model compute per period, µs")("model",
                                                 po::value(&model_name)->default_value("tube"),
                                                 "tube (the endoscope-colon model) or synthetic")(
+      "spin-margin-us", po::value(&spin_margin_us)->default_value(spin_margin_us),
+      "least spin margin (sleep to the deadline minus the margin, spin the rest)")(
+      "spin-margin-max-us", po::value(&spin_margin_max_us)->default_value(spin_margin_max_us),
+      "largest spin margin; both 0: no spinning")(
+      "cpu-latency-us", po::value(&cpu_latency_us)->default_value(cpu_latency_us),
+      "hold the CPU wake-up latency (PM QoS) at or below this; -1: do not")(
       "no-realtime", "do not try SCHED_FIFO/mlockall");
   po::variables_map values;
   try {
@@ -130,9 +156,11 @@ int main(int argc, char** argv) {
     std::cout << description << "\n";
     return 0;
   }
-  if (!(seconds > 0.0 && seconds <= 3600.0) || !(load_us >= 0.0 && load_us < 900.0)) {
-    std::cerr << "haptic_loop_bench: --seconds must be in (0, 3600] and --model-load-us in "
-                 "[0, 900)\n";
+  if (!(seconds > 0.0 && seconds <= 3600.0) || !(load_us >= 0.0 && load_us < 900.0) ||
+      !(spin_margin_us >= 0.0 && spin_margin_max_us >= spin_margin_us &&
+        spin_margin_max_us < 1000.0)) {
+    std::cerr << "haptic_loop_bench: --seconds must be in (0, 3600], --model-load-us in "
+                 "[0, 900) and 0 <= --spin-margin-us <= --spin-margin-max-us < 1000\n";
     return 2;
   }
   if (model_name != "tube" && model_name != "synthetic") {
@@ -141,6 +169,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const bool realtime = values.count("no-realtime") == 0;
+  const std::string load_before = ReadLoadAverage();
   std::unique_ptr<hx::BaseResponseSource> model;
   if (model_name == "tube") {
     // The device's zero is 100 mm in; the hand moves ±30 mm about 130 mm.
@@ -169,6 +198,9 @@ int main(int argc, char** argv) {
   cycle.SetInitialDeviceState(state);
   hx::LoopOptions loop_options;
   loop_options.realtime = realtime;
+  loop_options.spin_margin_s = spin_margin_us * 1e-6;
+  loop_options.spin_margin_max_s = spin_margin_max_us * 1e-6;
+  loop_options.cpu_latency_us = cpu_latency_us;
   hx::HapticLoop loop(&cycle, loop_options);
   loop.Start();
   if (!loop.ArmAfter(20, 2.0)) {
@@ -189,12 +221,22 @@ int main(int argc, char** argv) {
     std::printf("haptic_loop_bench: %.0f s, model=synthetic %.0f us/period, %s\n", seconds, load_us,
                 realtime ? "realtime requested" : "normal scheduling");
   }
+  std::printf("spin_margin_us=[%.0f, %.0f] cpu_latency_us=%d load_before=%s", spin_margin_us,
+              spin_margin_max_us, cpu_latency_us, load_before.c_str());
   std::printf("model_us mean=%.1f max=%.1f\n", timed_model.mean_us(), timed_model.max_us());
   std::printf("cycles=%llu overruns=%llu\n", static_cast<unsigned long long>(stats.cycles),
               static_cast<unsigned long long>(stats.overruns));
   std::printf("period_error_us p50=%.0f p99=%.0f p99.9=%.0f max=%.1f\n",
               us(stats.period_error.PercentileNs(0.5)), us(stats.period_error.PercentileNs(0.99)),
               us(stats.period_error.PercentileNs(0.999)), us(stats.period_error.max_ns()));
+  std::printf("sleep_overshoot_us p50=%.0f p99=%.0f p99.9=%.0f max=%.1f (sleeps=%llu)\n",
+              us(stats.sleep_overshoot.PercentileNs(0.5)),
+              us(stats.sleep_overshoot.PercentileNs(0.99)),
+              us(stats.sleep_overshoot.PercentileNs(0.999)), us(stats.sleep_overshoot.max_ns()),
+              static_cast<unsigned long long>(stats.sleep_overshoot.count()));
+  std::printf("spin_margin_used_us p50=%.0f p99=%.0f max=%.1f\n",
+              us(stats.spin_margin.PercentileNs(0.5)), us(stats.spin_margin.PercentileNs(0.99)),
+              us(stats.spin_margin.max_ns()));
   std::printf(
       "frames_sent=%llu frames_received=%llu lost_frames=%llu safe_state_trips=%llu "
       "last_fault=%s\n",

@@ -82,6 +82,52 @@ CREATE TABLE audit_log (
 );
 CREATE INDEX audit_by_time ON audit_log(at_unix_ms);
 )sql"},
+      {2, "lessons: curricula, groups, assignments, lesson sessions, verdicts", R"sql(
+CREATE TABLE curricula (
+  curriculum_id TEXT PRIMARY KEY,
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  title TEXT NOT NULL,
+  created_by TEXT NOT NULL,
+  created_unix_ms BIGINT NOT NULL,
+  body_sha256_hex TEXT NOT NULL,
+  body BLOB NOT NULL
+);
+CREATE TABLE lessons (
+  lesson_id TEXT PRIMARY KEY,
+  curriculum_id TEXT NOT NULL REFERENCES curricula(curriculum_id),
+  position INTEGER NOT NULL
+);
+CREATE TABLE trainee_groups (
+  trainee_id TEXT PRIMARY KEY REFERENCES trainees(trainee_id),
+  group_name TEXT NOT NULL
+);
+CREATE TABLE curriculum_assignments (
+  curriculum_id TEXT NOT NULL REFERENCES curricula(curriculum_id),
+  assignee_kind TEXT NOT NULL CHECK (assignee_kind IN ('trainee', 'group')),
+  assignee TEXT NOT NULL,
+  institution TEXT NOT NULL,
+  assigned_by TEXT NOT NULL,
+  assigned_unix_ms BIGINT NOT NULL,
+  PRIMARY KEY (curriculum_id, assignee_kind, assignee, institution)
+);
+CREATE TABLE lesson_sessions (
+  session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
+  lesson_id TEXT NOT NULL,
+  trainee_id TEXT NOT NULL
+);
+CREATE TABLE lesson_verdicts (
+  session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
+  trainee_id TEXT NOT NULL,
+  curriculum_id TEXT NOT NULL,
+  lesson_id TEXT NOT NULL,
+  passed INTEGER NOT NULL,
+  score DOUBLE PRECISION NOT NULL,
+  session_start_unix_ms BIGINT NOT NULL,
+  judged_unix_ms BIGINT NOT NULL,
+  detail TEXT NOT NULL
+);
+CREATE INDEX lesson_verdicts_by_trainee ON lesson_verdicts(trainee_id, session_start_unix_ms);
+)sql"},
   };
   return kMigrations;
 }

@@ -32,4 +32,10 @@ int RunCaseUpload(const CommandArgs& args);
 int RunCaseList(const CommandArgs& args);
 int RunCaseDownload(const CommandArgs& args);
 
+// Lessons (docs/lessons.md): lessons_command.cc.
+int RunCurriculumCommand(const CommandArgs& args);
+int RunAssignCommand(const CommandArgs& args);
+int RunProgressCommand(const CommandArgs& args);
+int RunGroupCommand(const CommandArgs& args);
+
 }  // namespace ves::admin

@@ -7,6 +7,7 @@
 // input (no such case), 1 the station failed (outbox, output folder, ...).
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <stdexcept>
@@ -22,12 +24,17 @@
 #include <vector>
 
 #include "station/app/commands.h"
+#include "station/app/haptic_session.h"
 #include "station/app/scope_file.h"
 #include "station/app/run_interactive.h"
+#include "station/app/run_lesson.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
-#include "station/training/replay.h"
+#include "station/haptics/candump_log.h"
+#include "station/haptics/sim_rig.h"
 #include "station/render/model_scene.h"
+#include "station/training/replay.h"
+#include "station/training/session_file.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_run.h"
 #include "station/training/scripted_operator.h"
@@ -47,14 +54,21 @@ constexpr int kExitNotReached = 3;
 // For the crash tests: with this set, the process SIGKILLs itself right after
 // the outbox commit, before any upload (docs/station-run.md).
 constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
+// Frames the --can-log ring holds before dropping (the writer thread drains it;
+// headless runs faster than real time).
+constexpr std::size_t kCanLogCapacity = std::size_t{1} << 18;
 
 constexpr char kUsage[] =
-    "usage: ves-station run --trainee ID --case ID [--server ADDR --token T [--tls-ca FILE]]\n"
+    "usage: ves-station run --trainee ID --case ID|--lesson next [--server ADDR --token T\n"
+    "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
-    "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n\n"
+    "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
+    "                       [--can-log FILE]\n\n"
     "Gets the case (the server's latest version into the offline cache, else the cached one),\n"
-    "runs one session, commits it to the outbox, then uploads it. Headless: a scripted\n"
-    "operator drives the model; endoscope frames, fluoroscopy.png and summary.txt go to DIR.\n"
+    "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
+    "or SocketCAN), commits it to the outbox, then uploads it. Headless: a scripted operator's\n"
+    "hand drives the simulated device; endoscope frames, fluoroscopy.png, summary.txt,\n"
+    "device.txt and session.session go to DIR.\n"
     "Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments/input, 1 failure.";
 
 struct UsageError : std::runtime_error {
@@ -65,11 +79,17 @@ struct RunOptions {
   std::optional<sync::ServerEndpoint> server;
   std::string trainee_id;
   std::string case_id;
+  std::string lesson;  // "next": run the trainee's next lesson (docs/lessons.md)
+  bool seconds_given{false};
+  double verdict_wait_s{30.0};
+  std::optional<LessonPlan> lesson_plan;  // set by Run when --lesson
   std::string scope_path;
   std::string data_dir;
   std::string station_id;
   bool headless{false};
   std::string operator_kind;
+  std::string can_interface;  // empty: the simulated device
+  std::string can_log;
   std::filesystem::path out_dir;
   double seconds{600.0};
   double frame_period_s{5.0};
@@ -85,9 +105,20 @@ std::string HostName() {
 RunOptions ParseRunOptions(const po::variables_map& vm) {
   RunOptions o;
   if (!vm.count("trainee")) throw UsageError("--trainee ID is required");
-  if (!vm.count("case")) throw UsageError("--case ID is required");
+  if (vm.count("case") == vm.count("lesson")) {
+    throw UsageError("give --case ID or --lesson next (one of them)");
+  }
+  if (vm.count("lesson")) {
+    o.lesson = vm["lesson"].as<std::string>();
+    if (o.lesson != "next") throw UsageError("--lesson '" + o.lesson + "' must be next");
+    if (vm.count("scope")) {
+      throw UsageError("--scope cannot be used with --lesson: the lesson names its scope");
+    }
+  }
+  o.seconds_given = !vm["seconds"].defaulted();
+  o.verdict_wait_s = vm["verdict-wait-s"].as<double>();
   o.trainee_id = vm["trainee"].as<std::string>();
-  o.case_id = vm["case"].as<std::string>();
+  if (vm.count("case")) o.case_id = vm["case"].as<std::string>();
   if (vm.count("server") != vm.count("token")) {
     throw UsageError("--server ADDR and --token T go together");
   }
@@ -102,12 +133,12 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
     throw UsageError("--tls-ca needs --server");
   }
   const std::string device = vm["device"].as<std::string>();
-  if (device.rfind("can:", 0) == 0) {
-    throw UsageError("--device " + device +
-                     ": CAN devices are not available in this build of ves-station (no SocketCAN "
-                     "here); use --device sim");
+  if (device.rfind("can:", 0) == 0 && device.size() > 4) {
+    o.can_interface = device.substr(4);
+  } else if (device != "sim") {
+    throw UsageError("--device '" + device + "' must be sim or can:IFACE");
   }
-  if (device != "sim") throw UsageError("--device '" + device + "' must be sim or can:IFACE");
+  if (vm.count("can-log")) o.can_log = vm["can-log"].as<std::string>();
   if (vm.count("scope")) o.scope_path = vm["scope"].as<std::string>();
   o.data_dir = vm["data-dir"].as<std::string>();
   o.station_id = vm.count("station-id") ? vm["station-id"].as<std::string>() : HostName();
@@ -120,6 +151,10 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
       throw UsageError("--operator must be novice or expert, not '" + o.operator_kind + "'");
     }
     o.out_dir = vm["out"].as<std::string>();
+    if (!o.can_interface.empty()) {
+      throw UsageError("--headless moves the simulated hand: it needs --device sim, not can:" +
+                       o.can_interface);
+    }
   } else if (vm.count("operator")) {
     throw UsageError("--operator needs --headless (interactively, you are the operator)");
   }
@@ -183,14 +218,18 @@ class FrameWriter {
     ++frames_;
   }
 
-  void Finish(const training::SessionRunner& runner, training::ViewMode mode) {
+  // A lesson without fluoroscopy renders none (show_fluoroscopy false).
+  void Finish(const training::SessionRunner& runner, training::ViewMode mode,
+              bool show_fluoroscopy = true) {
     if (!views_) return;
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
     WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, ToRenderMode(mode)));
+    ++frames_;
+    if (!show_fluoroscopy) return;
     FluoroscopyControls controls;
     controls.damage_display = true;
     WritePng(dir_ / "fluoroscopy.png", views_->Fluoroscopy(scene_, controls));
-    frames_ += 2;
+    ++frames_;
   }
 
   int frames() const { return frames_; }
@@ -242,7 +281,21 @@ bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
   }
 }
 
-// A scripted operator drives the model directly, step by step.
+// Writes `line` and a newline to `path`; false when that fails.
+bool WriteTextFile(const std::filesystem::path& path, const std::string& line) {
+  std::ofstream out(path);
+  out << line << "\n";
+  if (out.flush()) return true;
+  std::cerr << kName << ": cannot write '" << path.string() << "'\n";
+  return false;
+}
+
+// A scripted operator's hand on the simulated VES-IV: its push force (or
+// position) and roll move the simulated hand, the device reports encoders and
+// the force sensor over the socketpair CAN bus to Ves4Device, and the coupled
+// HapticCycle steps the model from the encoders and renders its response. On
+// simulated time (SimulatedRig: no sleeping, deterministic), but the same
+// HapticCycle code the 1 kHz loop runs.
 int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const ObtainedCase& obtained,
                 training::CaseRun run) {
   try {
@@ -257,23 +310,70 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   run.config.operator_kind = o.operator_kind;
   training::SessionRunner runner(run.params, run.config);
   FrameWriter frames(run, obtained.colon_case, o.out_dir, o.frame_period_s);
-  runner.Start(start_ms);
+
+  haptics::SeqLock<ModelControls> controls;
+  SessionModelSource source(&runner, &controls);
+  haptics::SimulatedRigOptions rig_options;
+  rig_options.cycle.period_s = run.params.dt_s;
+  rig_options.cycle.control.mode = haptics::ControlMode::kCoupled;
+  haptics::SimulatedRig rig(rig_options, &source);
+  std::unique_ptr<haptics::CanFrameRecorder> recorder;
+  try {
+    if (!o.can_log.empty()) {
+      recorder = std::make_unique<haptics::CanFrameRecorder>(
+          o.can_log, "sim0", static_cast<double>(start_ms) * 1e-3, kCanLogCapacity);
+      rig.driver().SetRecorder(recorder.get());
+    }
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": --can-log: " << error.what() << "\n";
+    return kExitFailed;
+  }
+  if (!rig.BringUp()) {
+    std::cerr << kName << ": the simulated device did not become operational\n";
+    return kExitFailed;
+  }
+  const haptics::DeviceState& device = rig.cycle().device_state();
+  source.Start(start_ms, device.insertion_m, device.roll_rad);
   training::Perception perception = training::Perceive(run.params, runner.state(), runner.output());
   training::ViewMode last_view = training::ViewMode::kTextured;
   try {
     while (runner.session().state() == training::SessionState::kRunning) {
-      runner.Step(scripted->Act(perception));
+      const training::InputSample act =
+          o.lesson_plan ? ApplyLessonAids(o.lesson_plan->lesson.aids(), scripted->Act(perception))
+                        : scripted->Act(perception);
+      rig.device().set_hand(HandForSample(act, source.insertion_offset_m()));
+      controls.Store(ModelControls{act.knob_up_down_rad, act.knob_left_right_rad, act.view_mode,
+                                   act.fluoroscopy_on});
+      rig.Step();
       if (runner.diverged()) break;
+      if (!source.stepped()) {
+        // A running session always steps unless the device reads NaN: give up.
+        std::cerr << kName << ": the device reported non-finite readings: session aborted\n";
+        runner.session().Abort();
+        break;
+      }
       const training::InputSample& logged = runner.session().inputs().back();
       last_view = logged.view_mode;
       frames.OnStep(logged, runner);
       perception = training::Perceive(run.params, runner.state(), runner.output());
     }
-    frames.Finish(runner, last_view);
+    frames.Finish(runner, last_view,
+                  !o.lesson_plan || o.lesson_plan->lesson.aids().fluoroscopy_allowed());
   } catch (const std::exception& error) {  // a frame that cannot be written
     std::cerr << kName << ": " << error.what() << "\n";
     return kExitFailed;
   }
+  if (recorder) recorder->Close();
+  const std::string device_line =
+      DeviceReportLine("sim", "socketpair", rig.driver().counters(), source,
+                       rig.cycle().safety().trips(), rig.cycle().safety().fault());
+  std::cout << device_line;
+  if (recorder) {
+    std::cout << " can_log=" << o.can_log << " can_log_frames=" << recorder->written()
+              << " can_log_dropped=" << recorder->dropped();
+  }
+  std::cout << "\n";
+  if (!WriteTextFile(o.out_dir / "device.txt", device_line)) return kExitFailed;
   const training::RunResult result = training::ResultOf(runner);
   const auto duration_ms = static_cast<int64_t>(std::llround(result.metrics.duration_s * 1e3));
   ves::v1::SessionRecord record = runner.session().ToRecord(training::NewUuidV4(),
@@ -281,36 +381,75 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   training::CaseModelOptions case_options;
   *record.mutable_replay_setup() =
       training::MakeReplaySetup(obtained.colon_case, case_options, o.seconds);
+  if (o.lesson_plan) record.set_lesson_id(o.lesson_plan->lesson.lesson_id());
   const std::string summary = training::SummaryLine(result);
+  if (!WriteTextFile(o.out_dir / "summary.txt", summary)) return kExitFailed;
   {
-    std::ofstream out(o.out_dir / "summary.txt");
-    out << summary << "\n";
+    // The record as `ves-station replay` reads it: the model alone re-runs it.
+    std::ofstream out(o.out_dir / "session.session", std::ios::binary);
+    out << training::EncodeSessionFile(record);
     if (!out.flush()) {
-      std::cerr << kName << ": cannot write '" << (o.out_dir / "summary.txt").string() << "'\n";
+      std::cerr << kName << ": cannot write '" << (o.out_dir / "session.session").string()
+                << "'\n";
       return kExitFailed;
     }
   }
   std::cout << "frames: " << frames.frames() << " PNG files in " << o.out_dir.string() << "\n";
+  std::optional<sync::LessonCache> lessons;
+  if (o.lesson_plan) {
+    bool wireframe_used = false;
+    for (const auto& in : runner.session().inputs()) {
+      wireframe_used = wireframe_used || in.view_mode == training::ViewMode::kWireframe;
+    }
+    PrintStationVerdict(o.lesson_plan->lesson, record, wireframe_used, std::cout);
+    lessons.emplace(paths.lessons());
+    lessons->AddAwaited({record.uuid(), record.lesson_id()});
+  }
   if (!CommitAndDeliver(o, paths, {record})) return kExitFailed;
+  if (lessons && o.server) {
+    CollectServerVerdicts(*o.server, *lessons, record.uuid(), o.verdict_wait_s, std::cout);
+  }
   std::cout << summary << "\n";
   return result.outcome == training::Outcome::kCecumReached ? kExitOk : kExitNotReached;
 }
 
-int Run(const RunOptions& o) {
+int Run(RunOptions o) {
+  // The real device first: a missing interface is bad input, said before anything else.
+  InteractiveDevice device;
+  device.can_log = o.can_log;
+  if (!o.can_interface.empty()) {
+    try {
+      device.can_bus = haptics::CanBus::OpenSocketCan(o.can_interface);
+    } catch (const std::exception& error) {
+      std::cerr << kName << ": --device can:" << o.can_interface << ": " << error.what() << "\n";
+      return kExitUsage;
+    }
+  }
   const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
   std::optional<ObtainedCase> obtained;
   ves::v1::EndoscopeSpec scope;
   training::CaseRun run;
   try {
     sync::CaseCache cache(paths.cases());
-    obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
+    if (!o.lesson.empty()) {  // LessonRefused: no lesson, or its case fails verification
+      sync::LessonCache lesson_cache(paths.lessons());
+      o.lesson_plan = ObtainNextLesson(o.server, o.trainee_id, lesson_cache, std::cerr);
+      // The lesson sets the time limit; --seconds may only shorten it (a practice cut).
+      const double limit_s = o.lesson_plan->lesson.time_limit_s();
+      o.seconds = o.seconds_given ? std::min(o.seconds, limit_s) : limit_s;
+      obtained = ObtainLessonCase(o.server, o.lesson_plan->lesson, cache, std::cerr);
+    } else {
+      obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
+    }
     if (!obtained) {
       std::cerr << kName << ": case '" << o.case_id << "' is not in the offline cache"
                 << (o.server ? " and the server did not provide it" : " (no --server given)")
                 << "\n";
       return kExitUsage;
     }
-    scope = o.scope_path.empty() ? training::DefaultEndoscopeSpec() : ReadScopeFile(o.scope_path);
+    scope = o.lesson_plan          ? o.lesson_plan->lesson.scope()
+            : o.scope_path.empty() ? training::DefaultEndoscopeSpec()
+                                   : ReadScopeFile(o.scope_path);
     run = training::PrepareCaseRun(obtained->colon_case, scope, {}, o.seconds);
   } catch (const std::exception& error) {  // CaseError (damaged cache), invalid_argument
     std::cerr << kName << ": " << error.what() << "\n";
@@ -322,23 +461,42 @@ int Run(const RunOptions& o) {
   std::cout << "case " << obtained->entry.id << " v" << obtained->entry.version << " sha256="
             << obtained->entry.sha256_hex.substr(0, 16) << "… ("
             << (obtained->from_server ? "from the server" : "offline cache") << ")\n";
+  if (o.lesson_plan) PrintLessonBrief(*o.lesson_plan, o.seconds, std::cout);
   if (o.headless) {
     std::cout << "device: sim (the scripted " << o.operator_kind
-              << " operator drives the model directly)\n";
+              << " operator's hand on the simulated VES-IV, over CAN frames to the coupled "
+                 "haptic cycle)\n";
     return RunHeadless(o, paths, *obtained, std::move(run));
   }
   InteractiveResult interactive;
   try {
-    interactive = RunInteractive(run, obtained->colon_case, o.seconds);
-  } catch (const std::exception& error) {  // no display
+    interactive = RunInteractive(run, obtained->colon_case, o.seconds, std::move(device),
+                                 o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr);
+  } catch (const std::exception& error) {  // no display, the device did not come up
     std::cerr << kName << ": " << error.what() << "\n";
     return kExitFailed;
   }
+  std::cout << interactive.device_report << "\n";
   if (interactive.records.empty()) {
     std::cout << "quit before the session started: nothing to record\n";
     return kExitNotReached;
   }
+  std::optional<sync::LessonCache> lessons;
+  // Every repeat is an attempt. The aids were enforced: a wireframe-free lesson
+  // cannot have used the wireframe view.
+  if (o.lesson_plan) {
+    lessons.emplace(paths.lessons());
+    for (auto& record : interactive.records) {
+      record.set_lesson_id(o.lesson_plan->lesson.lesson_id());
+      PrintStationVerdict(o.lesson_plan->lesson, record, /*wireframe_used=*/false, std::cout);
+      lessons->AddAwaited({record.uuid(), record.lesson_id()});
+    }
+  }
   if (!CommitAndDeliver(o, paths, interactive.records)) return kExitFailed;
+  if (lessons && o.server) {
+    CollectServerVerdicts(*o.server, *lessons, interactive.records.back().uuid(),
+                          o.verdict_wait_s, std::cout);
+  }
   std::cout << training::SummaryLine(interactive.result) << "\n";
   return interactive.result.outcome == training::Outcome::kCecumReached ? kExitOk
                                                                         : kExitNotReached;
@@ -354,6 +512,10 @@ int RunRunCommand(const CommandArgs& args) {
       "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
       "trainee", po::value<std::string>(), "trainee id")(
       "case", po::value<std::string>(), "case id")(
+      "lesson", po::value<std::string>(),
+      "next: the trainee's next lesson instead of --case (docs/lessons.md)")(
+      "verdict-wait-s", po::value<double>()->default_value(30.0),
+      "with --lesson: how long to wait for the server's verdict after the upload")(
       "device", po::value<std::string>()->default_value("sim"), "sim or can:IFACE")(
       "scope", po::value<std::string>(), "EndoscopeSpec textproto (default: adult colonoscope)")(
       "data-dir", po::value<std::string>()->default_value(""),
@@ -366,7 +528,8 @@ int RunRunCommand(const CommandArgs& args) {
       "frame-every-s", po::value<double>()->default_value(5.0),
       "headless: an endoscope frame per this much simulated time")(
       "upload-attempts", po::value<int>()->default_value(3),
-      "upload passes (with backoff) before leaving the session pending");
+      "upload passes (with backoff) before leaving the session pending")(
+      "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format");
   RunOptions options;
   try {
     po::variables_map vm;
@@ -392,10 +555,13 @@ int RunSyncCommand(const CommandArgs& args) {
       "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM)")(
       "data-dir", po::value<std::string>()->default_value(""),
       "station data folder (default $VES_STATION_DIR or ~/.ves-station)")(
-      "attempts", po::value<int>()->default_value(3), "passes (with backoff) before giving up");
+      "attempts", po::value<int>()->default_value(3), "passes (with backoff) before giving up")(
+      "verdict-wait-s", po::value<double>()->default_value(30.0),
+      "how long to wait for the server's verdicts on uploaded lesson sessions");
   sync::ServerEndpoint endpoint;
   std::string data_dir;
   int attempts = 3;
+  double verdict_wait_s = 30.0;
   try {
     po::variables_map vm;
     po::store(po::command_line_parser(args).options(desc).run(), vm);
@@ -415,6 +581,7 @@ int RunSyncCommand(const CommandArgs& args) {
     if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
     data_dir = vm["data-dir"].as<std::string>();
     attempts = vm["attempts"].as<int>();
+    verdict_wait_s = vm["verdict-wait-s"].as<double>();
     if (attempts < 1 || attempts > 20) {
       throw UsageError("--attempts " + std::to_string(attempts) + " must be in [1, 20]");
     }
@@ -427,6 +594,11 @@ int RunSyncCommand(const CommandArgs& args) {
     const DeliveryReport report = DeliverOutbox(endpoint, outbox, attempts);
     std::cout << "uploaded " << report.acknowledged << " session(s), " << report.rejected
               << " refused, " << report.still_pending << " pending\n";
+    // Lesson sessions uploaded now or earlier: their server verdicts arrive here.
+    sync::LessonCache lessons(sync::ResolveStationPaths(data_dir).lessons());
+    if (!lessons.Awaited().empty()) {
+      CollectServerVerdicts(endpoint, lessons, "*", verdict_wait_s, std::cout);
+    }
     if (report.still_pending > 0) {
       std::cerr << "ves-station sync: still pending: " << report.last_error << "\n";
       return kExitFailed;

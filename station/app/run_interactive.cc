@@ -4,15 +4,26 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 #include <mutex>
-#include <string>
 #include <opencv2/highgui.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
 #include <thread>
 
+#include "station/app/haptic_session.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
-#include "station/training/replay.h"
+#include "station/haptics/candump_log.h"
+#include "station/haptics/haptic_loop.h"
+#include "station/haptics/realtime.h"
 #include "station/haptics/seqlock.h"
+#include "station/haptics/sim_rig.h"
+#include "station/haptics/simulated_ball_drive.h"
+#include "station/haptics/ves4_device.h"
+#include "station/training/replay.h"
 #include "station/render/model_scene.h"
 #include "station/training/session_runner.h"
 #include "station/training/uuid.h"
@@ -22,35 +33,37 @@
 namespace ves::station {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // The simulated hand follows the keyboard's insertion target no faster than a
 // person pushes a colonoscope, so a key press is a push, not a jump.
 constexpr double kHandSpeed_m_per_s = 0.15;
-constexpr auto kPublishPeriod = std::chrono::milliseconds(16);  // ~60 Hz to the UI
-constexpr auto kMaxLag = std::chrono::milliseconds(50);  // behind more: drop the backlog
 constexpr int kPollMs = 5;
 constexpr int kViewHeight = 480;      // SessionViews' default image size
 constexpr int kQtWindowWidth = 1500;  // highgui's Qt window with its toolbar
 constexpr int kWindowMargin = 80;     // title bar and status line
 
-// UI -> model: what the hand and the panel ask for (trivially copyable, SeqLock).
-struct HandCommand {
+// UI -> simulated hand: where the keyboard wants the scope (device coordinates).
+struct HandTarget {
   double insertion_m{0.0};
   double roll_rad{0.0};
-  double knob_up_down_rad{0.0};
-  double knob_left_right_rad{0.0};
-  training::ViewMode view_mode{training::ViewMode::kTextured};
-  bool fluoroscopy_on{false};
-  bool quit{false};
-  std::uint32_t repeat_count{0};
 };
 
-// Model -> UI: the latest scene and live metrics. The model thread only
-// try_locks it, so a slow frame on the UI side never stalls a model step.
+// Loop -> UI: the model's state every kPublishSteps steps, copied under a
+// mutex the loop thread only try_locks (same sizes each time: no allocation),
+// so a slow UI frame never stalls the haptic loop (it skips a publication).
+struct PanelNumbers {
+  training::SessionState state{training::SessionState::kReady};
+  training::Outcome outcome{training::Outcome::kNone};
+  double elapsed_s{0.0};
+  double excessive_force_N{5.0};
+  double pain_s{0.0};
+  double loop_s{0.0};
+  double xray_s{0.0};
+  double redout_fraction{0.0};
+};
 struct Published {
-  render::SceneGeometry scene;
-  ui::PanelModel panel;
+  model::ModelState state;
+  model::StepOutput output;
+  PanelNumbers numbers;
   std::uint64_t sequence{0};
 };
 
@@ -73,98 +86,124 @@ render::EndoscopeMode ToRenderMode(ui::ViewMode mode) {
 }
 
 
-std::string StateText(const training::Session& session) {
-  if (session.state() == training::SessionState::kRunning) return "running";
-  if (session.state() == training::SessionState::kReady) return "ready";
-  return std::string("finished: ") + training::OutcomeName(session.outcome()) +
-         " (r: repeat, q: quit)";
+std::string StateText(const PanelNumbers& numbers, haptics::SafetyFault fault) {
+  std::string text;
+  if (numbers.state == training::SessionState::kRunning) {
+    text = "running";
+  } else if (numbers.state == training::SessionState::kReady) {
+    text = "ready";
+  } else {
+    text = std::string("finished: ") + training::OutcomeName(numbers.outcome) +
+           " (r: repeat, q: quit)";
+  }
+  if (fault != haptics::SafetyFault::kNone) {
+    text += std::string(" | device safe: ") + haptics::ToString(fault) + " (r re-arms)";
+  }
+  return text;
 }
 
-// The model thread: 1 kHz steps paced by the steady clock, the hand command
-// read lock-free, finished sessions collected as records.
-class ModelThread {
+// The simulated VES-IV served against the wall clock on its own thread, its
+// hand gripping the scope and pulling it toward the keyboard's target, which
+// it follows no faster than a person pushes a colonoscope (a key press is a
+// push, not a jump). The target comes lock-free from the UI.
+class SimulatedHandThread {
  public:
-  ModelThread(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
-              double time_limit_s, const haptics::SeqLock<HandCommand>* hand,
-              std::mutex* published_mutex, Published* published)
-      : runner_(run.params, run.config),
-        colon_case_(colon_case),
-        time_limit_s_(time_limit_s),
-        hand_(hand),
-        published_mutex_(published_mutex),
-        published_(published) {}
-
-  void Run() {
-    runner_.Start(start_ms_ = NowUnixMs());
-    const auto period = std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(runner_.params().dt_s));
-    auto next = Clock::now();
-    auto next_publish = next;
-    std::uint32_t repeats_seen = 0;
-    double commanded_m = 0.0;
-    while (true) {
-      HandCommand command;
-      hand_->Load(&command);
-      if (command.quit) break;
-      if (command.repeat_count != repeats_seen) {
-        repeats_seen = command.repeat_count;
-        FinishAndKeep();
-        runner_.Repeat();
-        commanded_m = 0.0;
-        runner_.Start(start_ms_ = NowUnixMs());
-      }
-      if (runner_.session().state() == training::SessionState::kRunning) {
-        const double max_move_m = kHandSpeed_m_per_s * runner_.params().dt_s;
-        commanded_m += std::clamp(command.insertion_m - commanded_m, -max_move_m, max_move_m);
-        training::InputSample input;
-        input.thrust_mode = training::ThrustMode::kPosition;
-        input.insertion_m = std::max(0.0, commanded_m);
-        input.roll_rad = command.roll_rad;
-        input.knob_up_down_rad = command.knob_up_down_rad;
-        input.knob_left_right_rad = command.knob_left_right_rad;
-        input.view_mode = command.view_mode;
-        input.fluoroscopy_on = command.fluoroscopy_on;
-        runner_.Step(input);
-      }
-      const auto now = Clock::now();
-      if (now >= next_publish) {
-        if (Publish()) next_publish = now + kPublishPeriod;
-      }
-      next += period;
-      if (now - next > kMaxLag) next = now;  // fell behind (a stall): do not race to catch up
-      std::this_thread::sleep_until(next);
-    }
-    FinishAndKeep();
+  SimulatedHandThread(haptics::SimulatedBallDrive* device,
+                      const haptics::SeqLock<HandTarget>* target)
+      : device_(device), target_(target) {
+    thread_ = std::thread([this] { Main(); });
+  }
+  ~SimulatedHandThread() { Stop(); }
+  void Stop() {
+    running_.store(false, std::memory_order_release);
+    if (thread_.joinable()) thread_.join();
   }
 
-  InteractiveResult TakeResult() { return std::move(result_); }
+ private:
+  void Main() {
+    haptics::TryEnableRealtime(kDeviceThreadPriority, "simulated device");
+    double commanded_m = 0.0;
+    double last_s = haptics::MonotonicSeconds();
+    while (running_.load(std::memory_order_acquire)) {
+      HandTarget target;
+      target_->Load(&target);
+      const double now_s = haptics::MonotonicSeconds();
+      const double max_move_m = kHandSpeed_m_per_s * (now_s - last_s);
+      last_s = now_s;
+      commanded_m += std::clamp(target.insertion_m - commanded_m, -max_move_m, max_move_m);
+      device_->set_hand(HandAtTargets(commanded_m, target.roll_rad));
+      device_->ServiceWait(2, now_s);
+    }
+  }
+
+  static constexpr int kDeviceThreadPriority = 79;  // just below the haptic loop
+  haptics::SimulatedBallDrive* device_;
+  const haptics::SeqLock<HandTarget>* target_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+// The session side of the loop thread: repeats asked for by the UI, records
+// of finished sessions, publication of the model state to the UI.
+class LoopSession {
+ public:
+  LoopSession(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+              double time_limit_s, const haptics::SeqLock<ModelControls>* controls,
+              std::mutex* published_mutex, Published* published)
+      : runner_(run.params, run.config),
+        source_(&runner_, controls),
+        colon_case_(colon_case),
+        time_limit_s_(time_limit_s),
+        published_mutex_(published_mutex),
+        published_(published) {
+    source_.set_before_update([this](double insertion_m, double roll_rad) {
+      const std::uint32_t requested = repeat_requests_.load(std::memory_order_acquire);
+      if (requested == repeats_done_) return;
+      repeats_done_ = requested;
+      FinishAndKeep();
+      runner_.Repeat();
+      source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
+    });
+    source_.set_after_step([this](const training::SessionRunner&) {
+      if (++steps_since_publish_ >= kPublishSteps && Publish()) steps_since_publish_ = 0;
+    });
+  }
+
+  void Start(double device_insertion_m, double device_roll_rad) {
+    source_.Start(start_ms_ = NowUnixMs(), device_insertion_m, device_roll_rad);
+    Publish();
+  }
+  // UI thread: the loop finishes the current session and starts another.
+  void RequestRepeat() { repeat_requests_.fetch_add(1, std::memory_order_acq_rel); }
+  // After the loop stopped (its thread joined).
+  InteractiveResult Finish() {
+    FinishAndKeep();
+    return std::move(result_);
+  }
+  SessionModelSource* source() { return &source_; }
 
  private:
-  // Non-blocking: skipped (and retried next step) while the UI copies.
   bool Publish() {
     std::unique_lock<std::mutex> lock(*published_mutex_, std::try_to_lock);
     if (!lock.owns_lock()) return false;
-    render::FillSceneFromModel(runner_.params(), runner_.state(), &runner_.output(), {},
-                               &published_->scene);
     const training::Session& session = runner_.session();
     const training::Metrics metrics = session.metrics();
-    ui::PanelModel& panel = published_->panel;
-    panel.case_names = {colon_case_.id()};
-    panel.scope_names = {"default"};
-    panel.session_state = StateText(session);
-    panel.elapsed_s = metrics.duration_s;
-    panel.inserted_m = runner_.state().inserted_m;
-    panel.tip_arc_m = runner_.state().tip_arc_m;
-    panel.base_force_N = runner_.observation().base_force_N;
-    panel.excessive_force_N = session.config().thresholds.excessive_wall_force_N;
-    panel.pain_s = metrics.pain_s;
-    panel.loop_s = metrics.loop_s;
-    panel.xray_s = metrics.xray_s;
-    panel.redout_fraction = runner_.observation().redout_fraction;
+    published_->state = runner_.state();
+    published_->output = runner_.output();
+    PanelNumbers& numbers = published_->numbers;
+    numbers.state = session.state();
+    numbers.outcome = session.outcome();
+    numbers.elapsed_s = metrics.duration_s;
+    numbers.excessive_force_N = session.config().thresholds.excessive_wall_force_N;
+    numbers.pain_s = metrics.pain_s;
+    numbers.loop_s = metrics.loop_s;
+    numbers.xray_s = metrics.xray_s;
+    numbers.redout_fraction = runner_.observation().redout_fraction;
     ++published_->sequence;
     return true;
   }
 
+  // A one-off on repeat (loop thread) and at the end (UI thread, loop stopped).
   void FinishAndKeep() {
     training::Session& session = runner_.session();
     if (session.steps() == 0) return;
@@ -178,12 +217,16 @@ class ModelThread {
     result_.records.push_back(std::move(record));
   }
 
+  static constexpr int kPublishSteps = 16;  // ~60 Hz to the UI at 1 kHz
   training::SessionRunner runner_;
+  SessionModelSource source_;
   const ves::v1::ColonCase& colon_case_;
   double time_limit_s_;
-  const haptics::SeqLock<HandCommand>* hand_;
   std::mutex* published_mutex_;
   Published* published_;
+  std::atomic<std::uint32_t> repeat_requests_{0};
+  std::uint32_t repeats_done_{0};
+  int steps_since_publish_{0};
   std::int64_t start_ms_{0};
   InteractiveResult result_;
 };
@@ -191,7 +234,8 @@ class ModelThread {
 }  // namespace
 
 InteractiveResult RunInteractive(const training::CaseRun& run,
-                                 const ves::v1::ColonCase& colon_case, double time_limit_s) {
+                                 const ves::v1::ColonCase& colon_case, double time_limit_s,
+                                 InteractiveDevice device, const ves::v1::LessonAids* lesson_aids) {
   ui::StationWindows windows;  // throws first when there is no display
   // Tiled rather than stacked at the screen's corner: the two views one above
   // the other, the panel to their right (Qt's toolbar makes windows wide).
@@ -199,27 +243,115 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   cv::moveWindow(ui::StationWindows::kFluoroscopyWindow, 0, kViewHeight + kWindowMargin);
   cv::moveWindow(ui::StationWindows::kPanelWindow, kQtWindowWidth + kWindowMargin, 0);
   SessionViews views(run.params, colon_case);
-  haptics::SeqLock<HandCommand> hand;
+
+  // The bus: SocketCAN to the real device, or a socketpair to the simulated one.
+  const bool simulated = !device.can_bus.has_value();
+  std::optional<haptics::CanBus> device_end;
+  haptics::CanBus host_end = [&] {
+    if (!simulated) return std::move(*device.can_bus);
+    auto [host, sim] = haptics::CanBus::CreateSocketPair();
+    device_end.emplace(std::move(sim));
+    return std::move(host);
+  }();
+  const std::string bus_name = simulated ? "socketpair" : host_end.name();
+  haptics::SimulatedBallDriveOptions device_options;
+  device_options.period_s = run.params.dt_s;
+  haptics::Ves4DeviceOptions driver_options;
+  driver_options.period_s = run.params.dt_s;
+  haptics::Ves4Device driver(std::move(host_end), device_options.params, driver_options);
+  std::unique_ptr<haptics::CanFrameRecorder> recorder;
+  if (!device.can_log.empty()) {
+    recorder = std::make_unique<haptics::CanFrameRecorder>(
+        device.can_log, simulated ? "sim0" : bus_name, haptics::MonotonicToEpochOffsetSeconds());
+    driver.SetRecorder(recorder.get());
+  }
+  haptics::SeqLock<HandTarget> hand;
+  std::unique_ptr<haptics::SimulatedBallDrive> simulated_device;
+  std::unique_ptr<SimulatedHandThread> hand_thread;
+  if (simulated) {
+    simulated_device =
+        std::make_unique<haptics::SimulatedBallDrive>(std::move(*device_end), device_options);
+    hand_thread = std::make_unique<SimulatedHandThread>(simulated_device.get(), &hand);
+  }
+  haptics::DeviceState device_state;
+  if (!haptics::BringUpDevice(&driver, &device_state, 2.0)) {
+    throw std::runtime_error("the VES-IV on " + bus_name +
+                             " did not become operational within 2 s");
+  }
+
+  haptics::SeqLock<ModelControls> model_controls;
   std::mutex published_mutex;
   Published published;
-  ModelThread model(run, colon_case, time_limit_s, &hand, &published_mutex, &published);
-  std::thread model_thread([&model] { model.Run(); });
+  LoopSession session(run, colon_case, time_limit_s, &model_controls, &published_mutex,
+                      &published);
+  session.Start(device_state.insertion_m, device_state.roll_rad);
+  haptics::CycleOptions cycle_options;
+  cycle_options.period_s = run.params.dt_s;
+  cycle_options.control.mode = haptics::ControlMode::kCoupled;
+  haptics::HapticCycle cycle(&driver, session.source(), cycle_options);
+  cycle.SetInitialDeviceState(device_state);
+  haptics::LoopOptions loop_options;
+  loop_options.period_s = run.params.dt_s;
+  haptics::HapticLoop loop(&cycle, loop_options);
+  loop.Start();
+  const auto stop_all = [&] {
+    loop.Stop();
+    if (hand_thread) hand_thread->Stop();
+    if (recorder) recorder->Close();
+  };
+  if (!loop.ArmAfter(20, 2.0)) {
+    stop_all();
+    throw std::runtime_error("the haptic loop did not start");
+  }
 
   ui::ControlState controls;
-  HandCommand command;
+  // A lesson's aids that are off stay off, whatever the keys and panel ask.
+  auto enforce_aids = [lesson_aids](ui::ControlState* c) {
+    if (lesson_aids == nullptr) return;
+    if (!lesson_aids->fluoroscopy_allowed()) c->fluoroscopy_visible = false;
+    if (!lesson_aids->wireframe_allowed() && c->view_mode == ui::ViewMode::kWireframe) {
+      c->view_mode = ui::ViewMode::kPolygon;
+    }
+  };
+  enforce_aids(&controls);
   render::SceneGeometry scene;
+  model::ModelState shown_state;
+  model::StepOutput shown_output;
   ui::PanelModel panel;
+  panel.case_names = {colon_case.id()};
+  panel.scope_names = {"default"};
+  PanelNumbers numbers;
   std::uint64_t shown_sequence = 0;
   try {
     while (!controls.quit_requested) {
+      bool fresh = false;
       {
+        // Only copies under the lock (the loop skips a publication meanwhile).
         std::lock_guard<std::mutex> lock(published_mutex);
         if (published.sequence != shown_sequence) {
-          scene = published.scene;
-          panel = published.panel;
+          shown_state = published.state;
+          shown_output = published.output;
+          numbers = published.numbers;
           shown_sequence = published.sequence;
+          fresh = true;
         }
       }
+      if (fresh) {
+        render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
+        panel.inserted_m = shown_state.inserted_m;
+        panel.tip_arc_m = shown_state.tip_arc_m;
+      }
+      haptics::HapticSnapshot snapshot;
+      loop.latest().Load(&snapshot);
+      panel.session_state = StateText(numbers, snapshot.fault);
+      panel.elapsed_s = numbers.elapsed_s;
+      // The gauge: what the motors render to the hand, + resists insertion.
+      panel.base_force_N = -snapshot.base_thrust_force_N;
+      panel.excessive_force_N = numbers.excessive_force_N;
+      panel.pain_s = numbers.pain_s;
+      panel.loop_s = numbers.loop_s;
+      panel.xray_s = numbers.xray_s;
+      panel.redout_fraction = numbers.redout_fraction;
       if (shown_sequence > 0) {
         FluoroscopyControls fluoro;
         fluoro.yaw_rad = controls.fluoro_yaw_rad;
@@ -232,28 +364,36 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
         windows.Show(endoscope, fluoroscopy, ui::DrawControlPanel(panel, controls));
       }
       windows.Poll(kPollMs, panel, &controls);
+      enforce_aids(&controls);
       if (controls.repeat_requested) {
+        // The hand stays where it is; the new session maps the model onto it.
         controls.repeat_requested = false;
-        controls.hand_insertion_m = 0.0;
-        ++command.repeat_count;
+        session.RequestRepeat();
+        if (snapshot.fault != haptics::SafetyFault::kNone) loop.RequestRearm();
       }
-      command.insertion_m = controls.hand_insertion_m;
-      command.roll_rad = controls.hand_roll_rad;
-      command.knob_up_down_rad = controls.knob_up_down_rad;
-      command.knob_left_right_rad = controls.knob_left_right_rad;
-      command.view_mode = ToTrainingMode(controls.view_mode);
-      command.fluoroscopy_on = controls.fluoroscopy_visible;
-      command.quit = controls.quit_requested;
-      hand.Store(command);
+      hand.Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
+      model_controls.Store(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
+                                         ToTrainingMode(controls.view_mode),
+                                         controls.fluoroscopy_visible});
     }
   } catch (...) {
-    command.quit = true;
-    hand.Store(command);
-    model_thread.join();
+    stop_all();
     throw;
   }
-  model_thread.join();
-  return model.TakeResult();
+  stop_all();
+  InteractiveResult result = session.Finish();
+  result.device_report =
+      DeviceReportLine(simulated ? "sim" : "can:" + bus_name, bus_name, driver.counters(),
+                       *session.source(), cycle.safety().trips(), cycle.safety().fault());
+  const haptics::LoopStats& stats = loop.stats();
+  char timing[160];
+  std::snprintf(timing, sizeof(timing),
+                " loop_cycles=%llu overruns=%llu p99_period_error_us=%.0f",
+                static_cast<unsigned long long>(stats.cycles),
+                static_cast<unsigned long long>(stats.overruns),
+                static_cast<double>(stats.period_error.PercentileNs(0.99)) / 1000.0);
+  result.device_report += timing;
+  return result;
 }
 
 }  // namespace ves::station

@@ -1,7 +1,9 @@
 #include "station/haptics/haptic_loop.h"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -15,6 +17,16 @@ constexpr long long kNanosPerSecond = 1000000000LL;
 timespec ToTimespec(long long ns) {
   return timespec{static_cast<time_t>(ns / kNanosPerSecond),
                   static_cast<long>(ns % kNanosPerSecond)};
+}
+
+// Per period: the overshoot peak halves in ln(2)/(1 − 0.999) ≈ 690 periods.
+constexpr double kOvershootPeakDecay = 0.999;
+
+// Tells the core we are spinning (x86 PAUSE): kinder to a hyperthread sibling.
+inline void SpinPause() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
 }
 
 }  // namespace
@@ -43,6 +55,14 @@ HapticLoop::HapticLoop(HapticCycle* cycle, LoopOptions options, SpscRing<HapticS
     throw std::invalid_argument("HapticLoop period_s must be in [1e-4, 1], got " +
                                 std::to_string(options_.period_s));
   }
+  if (!(options_.spin_margin_s >= 0.0 && options_.spin_margin_max_s >= options_.spin_margin_s &&
+        options_.spin_margin_max_s < options_.period_s && options_.spin_guard_s >= 0.0)) {
+    throw std::invalid_argument(
+        "HapticLoop needs 0 <= spin_margin_s <= spin_margin_max_s < period_s and "
+        "spin_guard_s >= 0, got " +
+        std::to_string(options_.spin_margin_s) + ", " +
+        std::to_string(options_.spin_margin_max_s) + ", " + std::to_string(options_.spin_guard_s));
+  }
 }
 
 HapticLoop::~HapticLoop() { Stop(); }
@@ -70,13 +90,36 @@ void HapticLoop::Stop() {
 
 void HapticLoop::Main() {
   if (options_.realtime) TryEnableRealtime(options_.realtime_priority, "haptic loop");
+  std::optional<CpuLatencyRequest> latency;
+  if (options_.realtime && options_.cpu_latency_us >= 0) latency.emplace(options_.cpu_latency_us);
   const auto period_ns = static_cast<long long>(options_.period_s * 1e9 + 0.5);
+  const auto min_margin_ns = static_cast<long long>(options_.spin_margin_s * 1e9 + 0.5);
+  const auto max_margin_ns = static_cast<long long>(options_.spin_margin_max_s * 1e9 + 0.5);
+  const auto guard_ns = static_cast<long long>(options_.spin_guard_s * 1e9 + 0.5);
+  double overshoot_peak_ns = 0.0;  // decaying peak of the sleeps' overshoot
   long long deadline_ns = MonotonicNanoseconds() + period_ns;
   while (running_.load(std::memory_order_acquire)) {
-    const timespec deadline = ToTimespec(deadline_ns);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, nullptr) == EINTR) {
+    const long long margin_ns = std::clamp(
+        static_cast<long long>(overshoot_peak_ns) + guard_ns, min_margin_ns, max_margin_ns);
+    stats_.spin_margin.Add(margin_ns);
+    const long long sleep_target_ns = deadline_ns - margin_ns;
+    long long wake_ns = MonotonicNanoseconds();
+    if (wake_ns < sleep_target_ns) {
+      const timespec target = ToTimespec(sleep_target_ns);
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &target, nullptr) == EINTR) {
+      }
+      wake_ns = MonotonicNanoseconds();
+      const long long overshoot_ns = wake_ns - sleep_target_ns;
+      stats_.sleep_overshoot.Add(overshoot_ns);
+      // A stall of milliseconds (host preemption) counts as the cap, so the
+      // margin comes back down within about a second after it.
+      overshoot_peak_ns = std::max(static_cast<double>(std::min(overshoot_ns, max_margin_ns)),
+                                   overshoot_peak_ns * kOvershootPeakDecay);
     }
-    const long long wake_ns = MonotonicNanoseconds();
+    while (wake_ns < deadline_ns) {
+      SpinPause();
+      wake_ns = MonotonicNanoseconds();
+    }
     stats_.period_error.Add(wake_ns - deadline_ns);
     if (rearm_requested_.exchange(false, std::memory_order_acq_rel)) cycle_->Rearm();
     const double now_s = static_cast<double>(wake_ns) * 1e-9;

@@ -1,9 +1,13 @@
 #pragma once
 
 // HapticLoop: runs a HapticCycle at 1 kHz on its own thread, on absolute
-// deadlines (clock_nanosleep, TIMER_ABSTIME, CLOCK_MONOTONIC), SCHED_FIFO and
-// mlockall when permitted. It records the period error (wake-up minus
-// deadline) in a histogram and counts overruns (a period that ends after the
+// deadlines (CLOCK_MONOTONIC), SCHED_FIFO and mlockall when permitted. Each
+// period it sleeps (clock_nanosleep, TIMER_ABSTIME) to the deadline minus a
+// spin margin, then spins on the clock to the deadline: a sleeping core — on a
+// VM, a halted vCPU the host has to schedule again — wakes tens to hundreds of
+// µs late, the spin absorbs that. It records the period error (start of the
+// cycle minus deadline) and the sleep's own overshoot in histograms and counts
+// overruns (a period that ends after the
 // next deadline; the missed deadlines are skipped, not bunched). Each period's
 // state goes to readers through a SeqLock (latest value, e.g. the render
 // thread) and an optional SPSC ring (every period, e.g. a CSV writer).
@@ -40,10 +44,25 @@ struct LoopOptions {
   double period_s{0.001};
   bool realtime{true};  // try SCHED_FIFO + mlockall
   int realtime_priority{80};
+  // Sleep ends a margin before the deadline; the rest is spun. The margin
+  // follows the sleeps' recent overshoot (a peak that decays by half every
+  // ~0.7 s) plus spin_guard_s, kept within [spin_margin_s, spin_margin_max_s]:
+  // little spinning when wake-ups are prompt, up to the cap under load.
+  // Both 0: sleep to the deadline (no spinning). Both must be below period_s.
+  double spin_margin_s{100e-6};
+  double spin_margin_max_s{600e-6};
+  double spin_guard_s{50e-6};
+  // With realtime: hold the CPUs' wake-up latency at or below this while the
+  // loop runs (CpuLatencyRequest); negative (default): leave the idle states
+  // alone — on the development VM it made no measurable difference (the
+  // wake-up delay there is the hypervisor's timer path, not a C-state exit).
+  int cpu_latency_us{-1};
 };
 
 struct LoopStats {
   PeriodHistogram period_error{};
+  PeriodHistogram sleep_overshoot{};  // wake-up minus the sleep's own target
+  PeriodHistogram spin_margin{};      // the margin used, per period
   std::uint64_t cycles{0};
   std::uint64_t overruns{0};
 };

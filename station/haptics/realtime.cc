@@ -6,7 +6,11 @@
 #include <sys/mman.h>
 #include <sys/prctl.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <ctime>
 
@@ -35,6 +39,25 @@ RealtimeStatus TryEnableRealtime(int priority, const char* thread_name) {
     spdlog::warn("{}; timing will suffer under load", status.detail);
   }
   return status;
+}
+
+CpuLatencyRequest::CpuLatencyRequest(int max_latency_us) {
+  fd_ = open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+  const std::int32_t value = max_latency_us;
+  if (fd_ >= 0 && write(fd_, &value, sizeof(value)) == static_cast<ssize_t>(sizeof(value))) {
+    spdlog::info("haptic loop: CPU wake-up latency held at <= {} us (/dev/cpu_dma_latency)",
+                 max_latency_us);
+    return;
+  }
+  spdlog::warn("haptic loop: cannot hold the CPU wake-up latency (/dev/cpu_dma_latency: {}); "
+               "idle CPUs may wake the loop late",
+               std::strerror(errno));
+  if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+}
+
+CpuLatencyRequest::~CpuLatencyRequest() {
+  if (fd_ >= 0) close(fd_);  // closing withdraws the request
 }
 
 double MonotonicSeconds() { return static_cast<double>(MonotonicNanoseconds()) * 1e-9; }

@@ -16,6 +16,23 @@ struct RealtimeStatus {
 
 RealtimeStatus TryEnableRealtime(int priority, const char* thread_name);
 
+// While it lives, asks the kernel's PM QoS (/dev/cpu_dma_latency, as
+// cyclictest does) to keep the CPUs out of idle states whose exit latency
+// exceeds max_latency_us: with 0 an idle CPU polls instead of halting, so a
+// timer wakes the loop without a C-state exit (on a VM: without the host
+// rescheduling a halted vCPU). Costs idle power. Not permitted: one log line.
+class CpuLatencyRequest {
+ public:
+  explicit CpuLatencyRequest(int max_latency_us);
+  ~CpuLatencyRequest();
+  CpuLatencyRequest(const CpuLatencyRequest&) = delete;
+  CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
+  bool active() const { return fd_ >= 0; }
+
+ private:
+  int fd_{-1};
+};
+
 // CLOCK_MONOTONIC in seconds / nanoseconds.
 double MonotonicSeconds();
 long long MonotonicNanoseconds();

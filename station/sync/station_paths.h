@@ -10,6 +10,7 @@ struct StationPaths {
   std::filesystem::path root;
   std::filesystem::path cases() const { return root / "cases"; }
   std::filesystem::path outbox_db() const { return root / "outbox.db"; }
+  std::filesystem::path lessons() const { return root / "lessons"; }  // docs/lessons.md
 };
 
 // `--data-dir` when given, else $VES_STATION_DIR, else $HOME/.ves-station,

@@ -80,6 +80,33 @@ class SkippedStore final : public Store {
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int) override { return {}; }
+  StoreResult<bool> PutCurriculum(const CurriculumRow&) override { return Skipped(); }
+  StoreResult<CurriculumRow> GetCurriculum(const std::string&) override { return Skipped(); }
+  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string&) override {
+    return {};
+  }
+  StoreResult<std::string> FindLessonCurriculum(const std::string&) override { return Skipped(); }
+  StoreStatus SetTraineeGroup(const std::string&, const std::string&) override { return {}; }
+  StoreResult<std::string> GetTraineeGroup(const std::string&) override { return Skipped(); }
+  StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string&,
+                                                          const std::string&) override {
+    return {};
+  }
+  StoreStatus AddAssignment(const AssignmentRow&) override { return {}; }
+  StoreResult<std::vector<AssignmentRow>> ListAssignments(const std::string&) override {
+    return {};
+  }
+  StoreResult<bool> PutLessonVerdict(const LessonVerdictRow&) override { return Skipped(); }
+  StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string&) override {
+    return Skipped();
+  }
+  StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(const std::string&) override {
+    return {};
+  }
+  StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string&,
+                                                                   int) override {
+    return {};
+  }
 
  private:
   static StoreStatus Skipped() {

@@ -1,0 +1,299 @@
+// PgStore: curricula, groups, assignments and lesson verdicts
+// (docs/lessons.md). Schema: migration 2, the same SQL as SQLite.
+#include <pqxx/pqxx>
+
+#include "patient_db/pg_store.h"
+
+namespace ves::patient_db {
+namespace {
+
+constexpr const char* kVerdictColumns =
+    "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
+    "judged_unix_ms, detail";
+
+LessonVerdictRow ReadVerdictRow(const pqxx::row& r) {
+  LessonVerdictRow v;
+  v.session_uuid = r[0].as<std::string>();
+  v.trainee_id = r[1].as<std::string>();
+  v.curriculum_id = r[2].as<std::string>();
+  v.lesson_id = r[3].as<std::string>();
+  v.passed = r[4].as<int>() != 0;
+  v.score = r[5].as<double>();
+  v.session_start_unix_ms = r[6].as<int64_t>();
+  v.judged_unix_ms = r[7].as<int64_t>();
+  v.detail = r[8].as<std::string>();
+  return v;
+}
+
+// Reads one curriculum with its lesson ids; kNotFound when absent.
+StoreStatus ReadCurriculum(pqxx::transaction_base& tx, const std::string& id, CurriculumRow* out) {
+  pqxx::result r = tx.exec_params(
+      "SELECT curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, "
+      "body FROM curricula WHERE curriculum_id = $1",
+      id);
+  if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no curriculum '" + id + "'");
+  CurriculumRow row;
+  row.curriculum_id = r[0][0].as<std::string>();
+  row.institution = r[0][1].as<std::string>();
+  row.title = r[0][2].as<std::string>();
+  row.created_by = r[0][3].as<std::string>();
+  row.created_unix_ms = r[0][4].as<int64_t>();
+  row.body_sha256_hex = r[0][5].as<std::string>();
+  row.body = pqxx::binarystring(r[0][6]).str();
+  for (const auto& l : tx.exec_params(
+           "SELECT lesson_id FROM lessons WHERE curriculum_id = $1 ORDER BY position", id)) {
+    row.lesson_ids.push_back(l[0].as<std::string>());
+  }
+  *out = std::move(row);
+  return StoreStatus::Ok();
+}
+
+}  // namespace
+
+StoreResult<bool> PgStore::PutCurriculum(const CurriculumRow& row) {
+  const std::string name = "curriculum '" + row.curriculum_id + "'";
+  bool already = false;
+  StoreStatus st = Transact("put " + name, TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    already = false;
+    pqxx::result inserted = tx.exec_params(
+        "INSERT INTO curricula (curriculum_id, institution, title, created_by, created_unix_ms, "
+        "body_sha256_hex, body) VALUES ($1, $2, $3, $4, $5, $6, $7) "
+        "ON CONFLICT (curriculum_id) DO NOTHING RETURNING 1",
+        row.curriculum_id, row.institution, row.title, row.created_by, row.created_unix_ms,
+        row.body_sha256_hex, pqxx::binarystring(row.body));
+    if (inserted.empty()) {
+      CurriculumRow existing;
+      StoreStatus read = ReadCurriculum(tx, row.curriculum_id, &existing);
+      if (!read.ok()) return read;
+      if (existing.body_sha256_hex != row.body_sha256_hex) {
+        return StoreStatus::Error(StoreCode::kAlreadyExists,
+                                  name + " is already stored with other content; curricula are "
+                                         "immutable, give the new one another id");
+      }
+      already = true;
+      return StoreStatus::Ok();
+    }
+    for (size_t i = 0; i < row.lesson_ids.size(); ++i) {
+      pqxx::result lesson = tx.exec_params(
+          "INSERT INTO lessons (lesson_id, curriculum_id, position) VALUES ($1, $2, $3) "
+          "ON CONFLICT (lesson_id) DO NOTHING RETURNING 1",
+          row.lesson_ids[i], row.curriculum_id, static_cast<int64_t>(i));
+      if (lesson.empty()) {
+        return StoreStatus::Error(
+            StoreCode::kAlreadyExists,
+            "lesson id '" + row.lesson_ids[i] + "' is already used by another curriculum");
+      }
+    }
+    return StoreStatus::Ok();
+  });
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument,
+                              name + ": unknown institution '" + row.institution + "'");
+  }
+  if (!st.ok()) return st;
+  return already;
+}
+
+StoreResult<CurriculumRow> PgStore::GetCurriculum(const std::string& curriculum_id) {
+  CurriculumRow out;
+  StoreStatus st = Transact("get curriculum", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    return ReadCurriculum(tx, curriculum_id, &out);
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution) {
+  std::vector<CurriculumRow> out;
+  StoreStatus st = Transact("list curricula", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    pqxx::result ids = tx.exec_params(
+        "SELECT curriculum_id FROM curricula WHERE ($1 = '' OR institution = $1) "
+        "ORDER BY curriculum_id COLLATE \"C\"",
+        institution);
+    for (const auto& id : ids) {
+      CurriculumRow row;
+      StoreStatus read = ReadCurriculum(tx, id[0].as<std::string>(), &row);
+      if (!read.ok()) return read;
+      out.push_back(std::move(row));
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::string> PgStore::FindLessonCurriculum(const std::string& lesson_id) {
+  std::string out;
+  StoreStatus st = Transact("find lesson", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r =
+        tx.exec_params("SELECT curriculum_id FROM lessons WHERE lesson_id = $1", lesson_id);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no lesson '" + lesson_id + "'");
+    out = r[0][0].as<std::string>();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreStatus PgStore::SetTraineeGroup(const std::string& trainee_id, const std::string& group) {
+  StoreStatus st = Transact("set trainee group", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    if (group.empty()) {
+      tx.exec_params("DELETE FROM trainee_groups WHERE trainee_id = $1", trainee_id);
+    } else {
+      tx.exec_params(
+          "INSERT INTO trainee_groups (trainee_id, group_name) VALUES ($1, $2) "
+          "ON CONFLICT (trainee_id) DO UPDATE SET group_name = excluded.group_name",
+          trainee_id, group);
+    }
+    return StoreStatus::Ok();
+  });
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
+  }
+  return st;
+}
+
+StoreResult<std::string> PgStore::GetTraineeGroup(const std::string& trainee_id) {
+  std::string out;
+  StoreStatus st = Transact("get trainee group", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "SELECT group_name FROM trainee_groups WHERE trainee_id = $1", trainee_id);
+    out = r.empty() ? std::string() : r[0][0].as<std::string>();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<std::string>> PgStore::ListGroupTrainees(const std::string& institution,
+                                                                 const std::string& group) {
+  std::vector<std::string> out;
+  StoreStatus st = Transact("list group", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const auto& r : tx.exec_params(
+             "SELECT g.trainee_id FROM trainee_groups g JOIN trainees t ON t.trainee_id = "
+             "g.trainee_id WHERE t.institution = $1 AND g.group_name = $2 "
+             "ORDER BY g.trainee_id COLLATE \"C\"",
+             institution, group)) {
+      out.push_back(r[0].as<std::string>());
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreStatus PgStore::AddAssignment(const AssignmentRow& a) {
+  StoreStatus st = Transact("assign curriculum", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    tx.exec_params(
+        "INSERT INTO curriculum_assignments (curriculum_id, assignee_kind, assignee, "
+        "institution, assigned_by, assigned_unix_ms) VALUES ($1, $2, $3, $4, $5, $6) "
+        "ON CONFLICT DO NOTHING",
+        a.curriculum_id, std::string(a.to_group ? "group" : "trainee"), a.assignee,
+        a.institution, a.assigned_by, a.assigned_unix_ms);
+    return StoreStatus::Ok();
+  });
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no curriculum '" + a.curriculum_id + "'");
+  }
+  return st;
+}
+
+StoreResult<std::vector<AssignmentRow>> PgStore::ListAssignments(const std::string& trainee_id) {
+  std::vector<AssignmentRow> out;
+  StoreStatus st = Transact("list assignments", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const auto& r : tx.exec_params(
+             "SELECT a.curriculum_id, a.assignee_kind, a.assignee, a.institution, "
+             "a.assigned_by, a.assigned_unix_ms FROM curriculum_assignments a "
+             "JOIN trainees t ON t.trainee_id = $1 "
+             "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
+             "WHERE (a.assignee_kind = 'trainee' AND a.assignee = t.trainee_id) "
+             "OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
+             "AND a.institution = t.institution) "
+             "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
+             trainee_id)) {
+      out.push_back({r[0].as<std::string>(), r[1].as<std::string>() == "group",
+                     r[2].as<std::string>(), r[3].as<std::string>(), r[4].as<std::string>(),
+                     r[5].as<int64_t>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<bool> PgStore::PutLessonVerdict(const LessonVerdictRow& v) {
+  bool inserted = false;
+  StoreStatus st = Transact("put verdict", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
+            ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) "
+            "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
+        v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
+        v.session_start_unix_ms, v.judged_unix_ms, v.detail);
+    inserted = !r.empty();
+    return StoreStatus::Ok();
+  });
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + v.session_uuid + "'");
+  }
+  if (!st.ok()) return st;
+  return inserted;
+}
+
+StoreResult<LessonVerdictRow> PgStore::GetLessonVerdict(const std::string& session_uuid) {
+  LessonVerdictRow out;
+  StoreStatus st = Transact("get verdict", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(std::string("SELECT ") + kVerdictColumns +
+                                        " FROM lesson_verdicts WHERE session_uuid = $1",
+                                    session_uuid);
+    if (r.empty()) {
+      return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
+    }
+    out = ReadVerdictRow(r[0]);
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<LessonVerdictRow>> PgStore::ListLessonVerdicts(
+    const std::string& trainee_id) {
+  std::vector<LessonVerdictRow> out;
+  StoreStatus st = Transact("list verdicts", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const auto& r : tx.exec_params(
+             std::string("SELECT ") + kVerdictColumns +
+                 " FROM lesson_verdicts WHERE trainee_id = $1 "
+                 "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
+             trainee_id)) {
+      out.push_back(ReadVerdictRow(r));
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<std::string>> PgStore::ListUnjudgedLessonSessions(
+    const std::string& trainee_id, int limit) {
+  std::vector<std::string> out;
+  StoreStatus st = Transact("list unjudged", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const auto& r : tx.exec_params(
+             "SELECT l.session_uuid FROM lesson_sessions l JOIN sessions s ON s.uuid = "
+             "l.session_uuid LEFT JOIN lesson_verdicts v ON v.session_uuid = l.session_uuid "
+             "WHERE v.session_uuid IS NULL AND ($1 = '' OR l.trainee_id = $1) "
+             "ORDER BY s.stored_unix_ms, l.session_uuid COLLATE \"C\" LIMIT $2",
+             trainee_id, int64_t{limit})) {
+      out.push_back(r[0].as<std::string>());
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+}  // namespace ves::patient_db

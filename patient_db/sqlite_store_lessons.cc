@@ -1,0 +1,346 @@
+// SqliteStore: curricula, groups, assignments and lesson verdicts
+// (docs/lessons.md). Schema: migration 2.
+#include <optional>
+
+#include "patient_db/sqlite_store.h"
+
+namespace ves::patient_db {
+namespace {
+
+StoreStatus Internal(SqliteDb& db, const std::string& what) {
+  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
+}
+
+bool Run(SqliteStatement* s, int* rc) {
+  *rc = SQLITE_OK;
+  s->Step(rc);
+  s->Reset();
+  return *rc == SQLITE_OK;
+}
+
+bool IsConstraint(int rc) { return (rc & 0xff) == SQLITE_CONSTRAINT; }
+
+constexpr const char* kVerdictColumns =
+    "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
+    "judged_unix_ms, detail";
+
+LessonVerdictRow ReadVerdictRow(const SqliteStatement& s) {
+  LessonVerdictRow v;
+  v.session_uuid = s.Text(0);
+  v.trainee_id = s.Text(1);
+  v.curriculum_id = s.Text(2);
+  v.lesson_id = s.Text(3);
+  v.passed = s.Int(4) != 0;
+  v.score = s.Real(5);
+  v.session_start_unix_ms = s.Int(6);
+  v.judged_unix_ms = s.Int(7);
+  v.detail = s.Text(8);
+  return v;
+}
+
+}  // namespace
+
+StoreResult<CurriculumRow> SqliteStore::ReadCurriculum(SqliteDb& db, const std::string& id) {
+  SqliteStatement* s = db.Prepare(
+      "SELECT curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, "
+      "body FROM curricula WHERE curriculum_id = ?",
+      nullptr);
+  if (!s) return Internal(db, "get curriculum");
+  s->Bind(1, id);
+  int rc = SQLITE_OK;
+  std::optional<CurriculumRow> row;
+  if (s->Step(&rc)) {
+    row.emplace();
+    row->curriculum_id = s->Text(0);
+    row->institution = s->Text(1);
+    row->title = s->Text(2);
+    row->created_by = s->Text(3);
+    row->created_unix_ms = s->Int(4);
+    row->body_sha256_hex = s->Text(5);
+    row->body = s->Blob(6);
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "get curriculum");
+  if (!row) return StoreStatus::Error(StoreCode::kNotFound, "no curriculum '" + id + "'");
+  s = db.Prepare("SELECT lesson_id FROM lessons WHERE curriculum_id = ? ORDER BY position",
+                 nullptr);
+  if (!s) return Internal(db, "get curriculum lessons");
+  s->Bind(1, id);
+  while (s->Step(&rc)) row->lesson_ids.push_back(s->Text(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "get curriculum lessons");
+  return std::move(*row);
+}
+
+StoreResult<bool> SqliteStore::PutCurriculum(const CurriculumRow& row) {
+  std::lock_guard lock(write_mutex_);
+  SqliteDb& db = *writer_;
+  std::string error;
+  if (!db.Exec("BEGIN IMMEDIATE", &error)) {
+    return StoreStatus::Error(StoreCode::kInternal, "put curriculum: " + error);
+  }
+  auto fail = [&](StoreStatus status) {
+    db.Exec("ROLLBACK", nullptr);
+    return status;
+  };
+  const std::string name = "curriculum '" + row.curriculum_id + "'";
+  auto existing = ReadCurriculum(db, row.curriculum_id);
+  if (existing.ok()) {
+    db.Exec("ROLLBACK", nullptr);
+    if (existing.value.body_sha256_hex == row.body_sha256_hex) return true;
+    return StoreStatus::Error(StoreCode::kAlreadyExists,
+                              name + " is already stored with other content; curricula are "
+                                     "immutable, give the new one another id");
+  }
+  if (existing.status.code != StoreCode::kNotFound) return fail(existing.status);
+  SqliteStatement* s = db.Prepare(
+      "INSERT INTO curricula (curriculum_id, institution, title, created_by, created_unix_ms, "
+      "body_sha256_hex, body) VALUES (?, ?, ?, ?, ?, ?, ?)",
+      nullptr);
+  if (!s) return fail(Internal(db, "put " + name));
+  s->Bind(1, row.curriculum_id).Bind(2, row.institution).Bind(3, row.title);
+  s->Bind(4, row.created_by).Bind(5, row.created_unix_ms).Bind(6, row.body_sha256_hex);
+  s->BindBlob(7, row.body);
+  int rc = SQLITE_OK;
+  if (!Run(s, &rc)) {
+    if (IsConstraint(rc)) {
+      return fail(StoreStatus::Error(StoreCode::kInvalidArgument,
+                                     name + ": unknown institution '" + row.institution + "'"));
+    }
+    return fail(Internal(db, "put " + name));
+  }
+  for (size_t i = 0; i < row.lesson_ids.size(); ++i) {
+    s = db.Prepare("INSERT INTO lessons (lesson_id, curriculum_id, position) VALUES (?, ?, ?)",
+                   nullptr);
+    if (!s) return fail(Internal(db, "put lesson"));
+    s->Bind(1, row.lesson_ids[i]).Bind(2, row.curriculum_id).Bind(3, static_cast<int64_t>(i));
+    if (!Run(s, &rc)) {
+      if (IsConstraint(rc)) {
+        return fail(StoreStatus::Error(
+            StoreCode::kAlreadyExists,
+            "lesson id '" + row.lesson_ids[i] + "' is already used by another curriculum"));
+      }
+      return fail(Internal(db, "put lesson"));
+    }
+  }
+  if (!db.Exec("COMMIT", &error)) {
+    return fail(StoreStatus::Error(StoreCode::kInternal, "commit " + name + ": " + error));
+  }
+  return false;
+}
+
+StoreResult<CurriculumRow> SqliteStore::GetCurriculum(const std::string& curriculum_id) {
+  Reader r = Read();
+  return ReadCurriculum(r.db(), curriculum_id);
+}
+
+StoreResult<std::vector<CurriculumRow>> SqliteStore::ListCurricula(
+    const std::string& institution) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT curriculum_id FROM curricula WHERE (? = '' OR institution = ?) "
+      "ORDER BY curriculum_id",
+      nullptr);
+  if (!s) return Internal(r.db(), "list curricula");
+  s->Bind(1, institution).Bind(2, institution);
+  int rc = SQLITE_OK;
+  std::vector<std::string> ids;
+  while (s->Step(&rc)) ids.push_back(s->Text(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list curricula");
+  std::vector<CurriculumRow> out;
+  for (const std::string& id : ids) {
+    auto row = ReadCurriculum(r.db(), id);
+    if (!row.ok()) return row.status;
+    out.push_back(std::move(row.value));
+  }
+  return out;
+}
+
+StoreResult<std::string> SqliteStore::FindLessonCurriculum(const std::string& lesson_id) {
+  Reader r = Read();
+  SqliteStatement* s =
+      r.db().Prepare("SELECT curriculum_id FROM lessons WHERE lesson_id = ?", nullptr);
+  if (!s) return Internal(r.db(), "find lesson");
+  s->Bind(1, lesson_id);
+  int rc = SQLITE_OK;
+  std::optional<std::string> id;
+  if (s->Step(&rc)) id = s->Text(0);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "find lesson");
+  if (!id) return StoreStatus::Error(StoreCode::kNotFound, "no lesson '" + lesson_id + "'");
+  return std::move(*id);
+}
+
+StoreStatus SqliteStore::SetTraineeGroup(const std::string& trainee_id, const std::string& group) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s =
+      group.empty()
+          ? writer_->Prepare("DELETE FROM trainee_groups WHERE trainee_id = ?", nullptr)
+          : writer_->Prepare(
+                "INSERT INTO trainee_groups (trainee_id, group_name) VALUES (?, ?) "
+                "ON CONFLICT (trainee_id) DO UPDATE SET group_name = excluded.group_name",
+                nullptr);
+  if (!s) return Internal(*writer_, "set trainee group");
+  s->Bind(1, trainee_id);
+  if (!group.empty()) s->Bind(2, group);
+  int rc = SQLITE_OK;
+  if (!Run(s, &rc)) {
+    if (IsConstraint(rc)) {
+      return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
+    }
+    return Internal(*writer_, "set trainee group");
+  }
+  return StoreStatus::Ok();
+}
+
+StoreResult<std::string> SqliteStore::GetTraineeGroup(const std::string& trainee_id) {
+  Reader r = Read();
+  SqliteStatement* s =
+      r.db().Prepare("SELECT group_name FROM trainee_groups WHERE trainee_id = ?", nullptr);
+  if (!s) return Internal(r.db(), "get trainee group");
+  s->Bind(1, trainee_id);
+  int rc = SQLITE_OK;
+  std::string group;
+  if (s->Step(&rc)) group = s->Text(0);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get trainee group");
+  return group;
+}
+
+StoreResult<std::vector<std::string>> SqliteStore::ListGroupTrainees(
+    const std::string& institution, const std::string& group) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT g.trainee_id FROM trainee_groups g JOIN trainees t ON t.trainee_id = g.trainee_id "
+      "WHERE t.institution = ? AND g.group_name = ? ORDER BY g.trainee_id",
+      nullptr);
+  if (!s) return Internal(r.db(), "list group");
+  s->Bind(1, institution).Bind(2, group);
+  int rc = SQLITE_OK;
+  std::vector<std::string> out;
+  while (s->Step(&rc)) out.push_back(s->Text(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list group");
+  return out;
+}
+
+StoreStatus SqliteStore::AddAssignment(const AssignmentRow& a) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s = writer_->Prepare(
+      "INSERT INTO curriculum_assignments (curriculum_id, assignee_kind, assignee, institution, "
+      "assigned_by, assigned_unix_ms) VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT DO NOTHING",
+      nullptr);
+  if (!s) return Internal(*writer_, "assign curriculum");
+  s->Bind(1, a.curriculum_id).Bind(2, a.to_group ? "group" : "trainee").Bind(3, a.assignee);
+  s->Bind(4, a.institution).Bind(5, a.assigned_by).Bind(6, a.assigned_unix_ms);
+  int rc = SQLITE_OK;
+  if (!Run(s, &rc)) {
+    if (IsConstraint(rc)) {
+      return StoreStatus::Error(StoreCode::kNotFound,
+                                "no curriculum '" + a.curriculum_id + "'");
+    }
+    return Internal(*writer_, "assign curriculum");
+  }
+  return StoreStatus::Ok();
+}
+
+StoreResult<std::vector<AssignmentRow>> SqliteStore::ListAssignments(
+    const std::string& trainee_id) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT a.curriculum_id, a.assignee_kind, a.assignee, a.institution, a.assigned_by, "
+      "a.assigned_unix_ms FROM curriculum_assignments a JOIN trainees t ON t.trainee_id = ? "
+      "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
+      "WHERE (a.assignee_kind = 'trainee' AND a.assignee = t.trainee_id) "
+      "OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
+      "AND a.institution = t.institution) "
+      "ORDER BY a.assigned_unix_ms, a.curriculum_id",
+      nullptr);
+  if (!s) return Internal(r.db(), "list assignments");
+  s->Bind(1, trainee_id);
+  int rc = SQLITE_OK;
+  std::vector<AssignmentRow> out;
+  while (s->Step(&rc)) {
+    out.push_back({s->Text(0), s->Text(1) == "group", s->Text(2), s->Text(3), s->Text(4),
+                   s->Int(5)});
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list assignments");
+  return out;
+}
+
+StoreResult<bool> SqliteStore::PutLessonVerdict(const LessonVerdictRow& v) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s = writer_->Prepare(
+      std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
+          ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
+      nullptr);
+  if (!s) return Internal(*writer_, "put verdict");
+  s->Bind(1, v.session_uuid).Bind(2, v.trainee_id).Bind(3, v.curriculum_id);
+  s->Bind(4, v.lesson_id).Bind(5, int64_t{v.passed}).Bind(6, v.score);
+  s->Bind(7, v.session_start_unix_ms).Bind(8, v.judged_unix_ms).Bind(9, v.detail);
+  int rc = SQLITE_OK;
+  if (!Run(s, &rc)) {
+    if (IsConstraint(rc)) {
+      return StoreStatus::Error(StoreCode::kNotFound, "no session '" + v.session_uuid + "'");
+    }
+    return Internal(*writer_, "put verdict");
+  }
+  return sqlite3_changes(writer_->raw()) > 0;
+}
+
+StoreResult<LessonVerdictRow> SqliteStore::GetLessonVerdict(const std::string& session_uuid) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      std::string("SELECT ") + kVerdictColumns + " FROM lesson_verdicts WHERE session_uuid = ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "get verdict");
+  s->Bind(1, session_uuid);
+  int rc = SQLITE_OK;
+  std::optional<LessonVerdictRow> v;
+  if (s->Step(&rc)) v = ReadVerdictRow(*s);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "get verdict");
+  if (!v) return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
+  return std::move(*v);
+}
+
+StoreResult<std::vector<LessonVerdictRow>> SqliteStore::ListLessonVerdicts(
+    const std::string& trainee_id) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      std::string("SELECT ") + kVerdictColumns +
+          " FROM lesson_verdicts WHERE trainee_id = ? ORDER BY session_start_unix_ms, "
+          "session_uuid",
+      nullptr);
+  if (!s) return Internal(r.db(), "list verdicts");
+  s->Bind(1, trainee_id);
+  int rc = SQLITE_OK;
+  std::vector<LessonVerdictRow> out;
+  while (s->Step(&rc)) out.push_back(ReadVerdictRow(*s));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list verdicts");
+  return out;
+}
+
+StoreResult<std::vector<std::string>> SqliteStore::ListUnjudgedLessonSessions(
+    const std::string& trainee_id, int limit) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT l.session_uuid FROM lesson_sessions l JOIN sessions s ON s.uuid = l.session_uuid "
+      "LEFT JOIN lesson_verdicts v ON v.session_uuid = l.session_uuid "
+      "WHERE v.session_uuid IS NULL AND (? = '' OR l.trainee_id = ?) "
+      "ORDER BY s.stored_unix_ms, l.session_uuid LIMIT ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "list unjudged");
+  s->Bind(1, trainee_id).Bind(2, trainee_id).Bind(3, int64_t{limit});
+  int rc = SQLITE_OK;
+  std::vector<std::string> out;
+  while (s->Step(&rc)) out.push_back(s->Text(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list unjudged");
+  return out;
+}
+
+}  // namespace ves::patient_db

@@ -1,0 +1,182 @@
+#include "server/lesson_judge.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "patient_db/case_bundle.h"
+#include "station/training/lesson_gate.h"
+#include "ves/v1/session.pb.h"
+
+namespace ves::server {
+namespace {
+
+using patient_db::StoreCode;
+using patient_db::StoreStatus;
+
+int64_t WallUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string JoinLines(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& l : lines) out += (out.empty() ? "" : "\n") + l;
+  return out;
+}
+
+}  // namespace
+
+LessonJudge::LessonJudge(patient_db::Store* store) : store_(store) {}
+
+LessonJudge::~LessonJudge() { Stop(); }
+
+void LessonJudge::Start() {
+  auto pending = store_->ListUnjudgedLessonSessions("", 100000);
+  if (!pending.ok()) {
+    spdlog::error("lesson judge: cannot list unjudged sessions: {}", pending.status.message);
+  } else {
+    if (!pending.value.empty()) {
+      spdlog::info("lesson judge: {} stored lesson session(s) wait for a verdict",
+                   pending.value.size());
+    }
+    for (const std::string& uuid : pending.value) Enqueue(uuid);
+  }
+  thread_ = std::thread([this] { Loop(); });
+}
+
+void LessonJudge::Enqueue(const std::string& session_uuid) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!queued_.insert(session_uuid).second) return;
+    queue_.push_back(session_uuid);
+  }
+  wake_.notify_one();
+}
+
+void LessonJudge::Stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  cancel_ = true;
+  wake_.notify_one();
+  if (thread_.joinable()) thread_.join();
+}
+
+uint64_t LessonJudge::judged() const {
+  std::lock_guard lock(mutex_);
+  return judged_;
+}
+
+void LessonJudge::Loop() {
+  for (;;) {
+    std::string uuid;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+      // Left in the queue on stop: still without a verdict in the store, so
+      // the next start queues them again.
+      if (stopping_) return;
+      uuid = queue_.front();
+      queue_.pop_front();
+    }
+    const auto start = std::chrono::steady_clock::now();
+    auto verdict = JudgeStored(uuid);
+    const double ms = std::chrono::duration<double, std::milli>(
+                          std::chrono::steady_clock::now() - start).count();
+    if (verdict.ok()) {
+      spdlog::info("lesson judge: session {} lesson {}: {} (score {:.1f}, replay {:.0f} ms)", uuid,
+                   verdict.value.lesson_id, verdict.value.passed ? "PASSED" : "FAILED",
+                   verdict.value.score, ms);
+    } else {
+      spdlog::error("lesson judge: session {}: {}", uuid, verdict.status.message);
+    }
+    std::lock_guard lock(mutex_);
+    queued_.erase(uuid);
+    ++judged_;
+  }
+}
+
+patient_db::StoreResult<ves::v1::ColonCase> LessonJudge::LessonCase(const ves::v1::Lesson& lesson) {
+  const std::string& sha = lesson.case_ref().payload_sha256_hex();
+  {
+    std::lock_guard lock(cases_mutex_);
+    auto it = cases_.find(sha);
+    if (it != cases_.end()) return it->second;
+  }
+  auto row = store_->GetCase(lesson.case_ref().case_id(), lesson.case_ref().version());
+  if (!row.ok()) return row.status;
+  auto blob = store_->GetBlob(row.value.sha256_hex);
+  if (!blob.ok()) return blob.status;
+  ves::v1::ColonCase colon_case;
+  try {
+    colon_case = patient_db::DecodeCaseBundle(blob.value, "stored case " + row.value.case_id);
+  } catch (const std::exception& error) {
+    return StoreStatus::Error(StoreCode::kInternal, error.what());
+  }
+  if (patient_db::CasePayloadSha256Hex(colon_case) != sha) {
+    return StoreStatus::Error(StoreCode::kInternal, "stored case " + row.value.case_id +
+                                                        " does not match the lesson's hash");
+  }
+  std::lock_guard lock(cases_mutex_);
+  cases_[sha] = colon_case;
+  return colon_case;
+}
+
+patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
+    const std::string& session_uuid) {
+  auto stored = store_->GetSession(session_uuid);
+  if (!stored.ok()) return stored.status;
+  ves::v1::SessionRecord record;
+  if (!record.ParseFromString(stored.value.body)) {
+    return StoreStatus::Error(StoreCode::kInternal, "stored session is corrupt");
+  }
+  patient_db::LessonVerdictRow v;
+  v.session_uuid = session_uuid;
+  v.trainee_id = record.trainee_id();
+  v.lesson_id = record.lesson_id();
+  v.session_start_unix_ms = record.start_unix_ms();
+  std::vector<std::string> checks;
+  auto curriculum_id = store_->FindLessonCurriculum(record.lesson_id());
+  ves::v1::Curriculum curriculum;
+  const ves::v1::Lesson* lesson = nullptr;
+  if (curriculum_id.ok()) {
+    auto row = store_->GetCurriculum(curriculum_id.value);
+    if (!row.ok()) return row.status;
+    if (!curriculum.ParseFromString(row.value.body)) {
+      return StoreStatus::Error(StoreCode::kInternal, "stored curriculum is corrupt");
+    }
+    v.curriculum_id = curriculum.curriculum_id();
+    for (const auto& l : curriculum.lessons()) {
+      if (l.lesson_id() == record.lesson_id()) lesson = &l;
+    }
+  } else if (curriculum_id.status.code != StoreCode::kNotFound) {
+    return curriculum_id.status;
+  }
+  if (lesson == nullptr) {
+    // A verdict all the same, so the session is not judged again and again.
+    checks.push_back("lesson '" + record.lesson_id() + "' is not on this server: FAILED");
+  } else {
+    auto colon_case = LessonCase(*lesson);
+    if (!colon_case.ok()) return colon_case.status;  // stays unjudged; retried on restart
+    training::GateResult gate;
+    try {
+      gate = training::JudgeLessonSession(*lesson, colon_case.value, record, &cancel_);
+    } catch (const training::JudgeCancelled& cancelled) {
+      return StoreStatus::Error(StoreCode::kInternal, cancelled.what());  // judged next start
+    }
+    v.passed = gate.passed;
+    v.score = gate.score;
+    checks = gate.checks;
+  }
+  v.detail = JoinLines(checks);
+  v.judged_unix_ms = WallUnixMs();
+  auto put = store_->PutLessonVerdict(v);
+  if (!put.ok()) return put.status;
+  if (!put.value) return store_->GetLessonVerdict(session_uuid);  // judged before: that one stands
+  return v;
+}
+
+}  // namespace ves::server

@@ -1,0 +1,65 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
+#include <thread>
+
+#include "patient_db/store.h"
+#include "ves/v1/case.pb.h"
+#include "ves/v1/lesson.pb.h"
+
+// The server's lesson judge (docs/lessons.md): a worker thread that takes
+// stored lesson sessions, re-runs each from its input log on the lesson's
+// case (training::JudgeLessonSession) and records the verdict. Replaying costs
+// CPU (a 60 s session about 2.4 s), so it never runs on a gRPC thread: an
+// upload is acknowledged once the session is durable, and the session is
+// queued for judging in the same transaction (table lesson_sessions), so a
+// server killed before the verdict judges it when it starts again.
+namespace ves::server {
+
+class LessonJudge {
+ public:
+  explicit LessonJudge(patient_db::Store* store);
+  ~LessonJudge();  // Stop()
+  LessonJudge(const LessonJudge&) = delete;
+  LessonJudge& operator=(const LessonJudge&) = delete;
+
+  // Queues every stored lesson session without a verdict, then serves Enqueue.
+  void Start();
+  // A lesson session was stored: judge it soon.
+  void Enqueue(const std::string& session_uuid);
+  // Cancels the replay under way and stops; what was not judged keeps no
+  // verdict and is judged on the next start. Idempotent.
+  void Stop();
+
+  // Judges one stored session now and records the verdict (also used by tests).
+  patient_db::StoreResult<patient_db::LessonVerdictRow> JudgeStored(
+      const std::string& session_uuid);
+
+  uint64_t judged() const;
+
+ private:
+  void Loop();
+  // The lesson's case as stored, decoded (cached by payload hash).
+  patient_db::StoreResult<ves::v1::ColonCase> LessonCase(const ves::v1::Lesson& lesson);
+
+  patient_db::Store* store_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::string> queue_;  // guarded by mutex_
+  std::set<std::string> queued_;   // guarded by mutex_
+  bool stopping_ = false;          // guarded by mutex_
+  std::atomic<bool> cancel_{false};  // read by the replay under way
+  uint64_t judged_ = 0;            // guarded by mutex_
+  std::thread thread_;
+  std::mutex cases_mutex_;
+  std::map<std::string, ves::v1::ColonCase> cases_;  // by payload hash; guarded by cases_mutex_
+};
+
+}  // namespace ves::server

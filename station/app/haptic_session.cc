@@ -1,0 +1,126 @@
+#include "station/app/haptic_session.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ves::station {
+
+SessionModelSource::SessionModelSource(training::SessionRunner* runner,
+                                       const haptics::SeqLock<ModelControls>* controls,
+                                       double coupling_stiffness_N_per_m)
+    : runner_(runner),
+      controls_(controls),
+      coupling_stiffness_N_per_m_(coupling_stiffness_N_per_m) {
+  if (runner_ == nullptr || controls_ == nullptr) {
+    throw std::invalid_argument("SessionModelSource needs a runner and a controls hand-over");
+  }
+  if (!(coupling_stiffness_N_per_m_ > 0.0)) {
+    throw std::invalid_argument("SessionModelSource coupling stiffness must be > 0 N/m, got " +
+                                std::to_string(coupling_stiffness_N_per_m_));
+  }
+}
+
+void SessionModelSource::Start(std::int64_t start_unix_ms, double device_insertion_m,
+                               double device_roll_rad) {
+  insertion_offset_m_ = runner_->state().inserted_m - device_insertion_m;
+  roll_offset_rad_ = runner_->state().roll_rad - device_roll_rad;
+  have_previous_ = false;
+  runner_->Start(start_unix_ms);
+}
+
+haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll_rad,
+                                                 double /*dt_s*/) {
+  if (before_update_) before_update_(insertion_m, roll_rad);
+  haptics::BaseResponse response;
+  response.update_count = ++updates_;
+  stepped_ = false;
+  if (runner_->session().state() != training::SessionState::kRunning) return response;
+  if (!std::isfinite(insertion_m) || !std::isfinite(roll_rad)) {
+    response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();
+    return response;
+  }
+  if (have_previous_) {
+    encoder_travel_m_ += std::abs(insertion_m - previous_insertion_m_);
+    roll_travel_rad_ += std::abs(roll_rad - previous_roll_rad_);
+  }
+  have_previous_ = true;
+  previous_insertion_m_ = insertion_m;
+  previous_roll_rad_ = roll_rad;
+
+  ModelControls controls;
+  controls_->Load(&controls);
+  training::InputSample sample;
+  sample.thrust_mode = training::ThrustMode::kForce;
+  sample.insertion_m = insertion_m + insertion_offset_m_;
+  // Virtual coupling: F_c = k_c·(x_device + offset − x_model) pushes the model's base.
+  sample.push_force_N =
+      coupling_stiffness_N_per_m_ * (sample.insertion_m - runner_->state().inserted_m);
+  sample.roll_rad = roll_rad + roll_offset_rad_;
+  sample.knob_up_down_rad = controls.knob_up_down_rad;
+  sample.knob_left_right_rad = controls.knob_left_right_rad;
+  sample.view_mode = controls.view_mode;
+  sample.fluoroscopy_on = controls.fluoroscopy_on;
+  runner_->Step(sample);  // quantizes to the log's resolution first; cannot throw on finite input
+  if (runner_->diverged()) {
+    response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();
+    return response;
+  }
+  stepped_ = true;
+  ++model_steps_;
+  // What the model got (quantized): the coupling pulls the device back by F_c;
+  // the model's roll reaction is + when it resists +roll.
+  const training::InputSample& logged = runner_->session().inputs().back();
+  response.thrust_force_N = -logged.push_force_N;
+  response.roll_torque_Nm = -runner_->output().roll_torque_N_m;
+  if (after_step_) after_step_(*runner_);
+  return response;
+}
+
+std::string DeviceReportLine(const std::string& device, const std::string& bus,
+                             const haptics::DeviceCounters& counters,
+                             const SessionModelSource& source, std::uint64_t safe_state_trips,
+                             haptics::SafetyFault fault) {
+  char line[512];
+  std::snprintf(line, sizeof(line),
+                "device=%s bus=%s frames_sent=%llu frames_received=%llu lost_frames=%llu "
+                "malformed_frames=%llu bus_errors=%llu model_steps=%llu encoder_travel_m=%.4f "
+                "roll_travel_rad=%.4f safe_state_trips=%llu fault=%s",
+                device.c_str(), bus.c_str(),
+                static_cast<unsigned long long>(counters.frames_sent),
+                static_cast<unsigned long long>(counters.frames_received),
+                static_cast<unsigned long long>(counters.lost_frames),
+                static_cast<unsigned long long>(counters.malformed_frames),
+                static_cast<unsigned long long>(counters.bus_errors),
+                static_cast<unsigned long long>(source.model_steps()), source.encoder_travel_m(),
+                source.roll_encoder_travel_rad(), static_cast<unsigned long long>(safe_state_trips),
+                haptics::ToString(fault));
+  return line;
+}
+
+haptics::HandProfile HandForSample(const training::InputSample& sample, double model_offset_m) {
+  haptics::HandProfile hand;
+  if (sample.thrust_mode == training::ThrustMode::kForce) {
+    hand.thrust.drive = haptics::HandDrive::kForce;
+    hand.thrust.offset = sample.push_force_N;
+  } else {
+    hand.thrust.drive = haptics::HandDrive::kPosition;
+    hand.thrust.offset = sample.insertion_m - model_offset_m;
+  }
+  hand.roll.drive = haptics::HandDrive::kPosition;
+  hand.roll.offset = sample.roll_rad;
+  return hand;
+}
+
+haptics::HandProfile HandAtTargets(double insertion_m, double roll_rad) {
+  haptics::HandProfile hand;
+  hand.thrust.drive = haptics::HandDrive::kPosition;
+  hand.thrust.offset = insertion_m;
+  hand.roll.drive = haptics::HandDrive::kPosition;
+  hand.roll.offset = roll_rad;
+  return hand;
+}
+
+}  // namespace ves::station

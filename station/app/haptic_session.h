@@ -1,0 +1,115 @@
+#pragma once
+
+// The training session behind the haptic device (DESIGN.md §3, coupled mode):
+// the 1 kHz HapticCycle asks SessionModelSource for the model's base response
+// once per period with the device's encoder readings; the source steps the
+// session's model (SessionRunner, so the session logs exactly what the model
+// was given) and returns the force and torque the motors render to the hand.
+//
+// Thrust goes through the virtual coupling of haptics::ModelBaseResponse:
+// F_c = k_c·(x_device + offset − x_model) pushes the model's base
+// (ThrustMode::kForce) and the hand feels −F_c. A model position-driven by
+// the encoder renders the closed end of the tube as a wall of tens of kN/m,
+// which a 1 kHz loop with one period of delay cannot render stably; the
+// coupling caps the rendered stiffness at k_c. Roll is prescribed by the roll
+// encoder. The logged InputSample holds F_c as push_force_N (what the model
+// used), the encoder insertion mapped into the model (insertion_m, for the
+// record) and the encoder roll, plus the knobs, view mode and fluoroscopy that
+// pass straight from the operator to the model: replay is the model alone.
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "station/haptics/base_response.h"
+#include "station/haptics/device.h"
+#include "station/haptics/hand_profile.h"
+#include "station/haptics/model_base_response.h"
+#include "station/haptics/safety_monitor.h"
+#include "station/haptics/seqlock.h"
+#include "station/training/input_log.h"
+#include "station/training/session_runner.h"
+
+namespace ves::station {
+
+// Operator -> model, handed to the loop thread through a SeqLock (trivially
+// copyable): what the hands do at the scope's control section, not at the
+// device.
+struct ModelControls {
+  double knob_up_down_rad{0.0};
+  double knob_left_right_rad{0.0};
+  training::ViewMode view_mode{training::ViewMode::kTextured};
+  bool fluoroscopy_on{false};
+};
+
+class SessionModelSource final : public haptics::BaseResponseSource {
+ public:
+  static constexpr double kCouplingStiffness_N_per_m =
+      haptics::ModelBaseResponse::kDefaultCouplingStiffness_N_per_m;
+
+  // Neither pointer may be null; both must outlive the source.
+  SessionModelSource(training::SessionRunner* runner,
+                     const haptics::SeqLock<ModelControls>* controls,
+                     double coupling_stiffness_N_per_m = kCouplingStiffness_N_per_m);
+
+  // Starts the runner's session (it must be ready) with the model's insertion
+  // and roll mapped onto the device's present readings.
+  void Start(std::int64_t start_unix_ms, double device_insertion_m, double device_roll_rad);
+
+  // Loop thread. While the session runs: one model step. Otherwise an idle
+  // response (no force) whose update count still advances: the model thread
+  // is alive, there is just no session to render. Never throws; a non-finite
+  // reading or a diverged model gives NaN, which the safety monitor trips on.
+  haptics::BaseResponse Update(double insertion_m, double roll_rad, double dt_s) override;
+
+  // Called on the loop thread before each Update with the encoder readings
+  // (repeat handling) and after each model step (hand-over to other threads).
+  // Set before the loop starts; may be empty.
+  void set_before_update(std::function<void(double insertion_m, double roll_rad)> hook) {
+    before_update_ = std::move(hook);
+  }
+  void set_after_step(std::function<void(const training::SessionRunner&)> hook) {
+    after_step_ = std::move(hook);
+  }
+
+  double insertion_offset_m() const { return insertion_offset_m_; }  // model − device
+  bool stepped() const { return stepped_; }  // whether the last Update stepped the model
+  std::uint64_t model_steps() const { return model_steps_; }
+  // Distance the insertion encoder moved while a session ran (sum of |Δx|).
+  double encoder_travel_m() const { return encoder_travel_m_; }
+  double roll_encoder_travel_rad() const { return roll_travel_rad_; }
+
+ private:
+  training::SessionRunner* runner_;
+  const haptics::SeqLock<ModelControls>* controls_;
+  double coupling_stiffness_N_per_m_;
+  double insertion_offset_m_{0.0};
+  double roll_offset_rad_{0.0};
+  std::function<void(double, double)> before_update_;
+  std::function<void(const training::SessionRunner&)> after_step_;
+  std::uint64_t updates_{0};
+  std::uint64_t model_steps_{0};
+  bool stepped_{false};
+  bool have_previous_{false};
+  double previous_insertion_m_{0.0};
+  double previous_roll_rad_{0.0};
+  double encoder_travel_m_{0.0};
+  double roll_travel_rad_{0.0};
+};
+
+// One line of key=value pairs saying what went over the bus, e.g.
+// `device=sim bus=socketpair frames_sent=... encoder_travel_m=... safe_state_trips=0 fault=none`.
+std::string DeviceReportLine(const std::string& device, const std::string& bus,
+                             const haptics::DeviceCounters& counters,
+                             const SessionModelSource& source, std::uint64_t safe_state_trips,
+                             haptics::SafetyFault fault);
+
+// The simulated hand for a scripted operator's sample (headless): in the
+// force mode the hand pushes the scope with push_force_N; in the position
+// mode it grips and pulls toward insertion_m − model_offset_m (device
+// coordinates). Roll is always the hand turning the scope toward roll_rad.
+haptics::HandProfile HandForSample(const training::InputSample& sample, double model_offset_m);
+
+// A position-driven hand (keyboard): grips and pulls toward the targets.
+haptics::HandProfile HandAtTargets(double insertion_m, double roll_rad);
+
+}  // namespace ves::station

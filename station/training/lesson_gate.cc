@@ -1,0 +1,169 @@
+#include "station/training/lesson_gate.h"
+
+#include <google/protobuf/util/message_differencer.h>
+
+#include <cstdio>
+#include <exception>
+
+#include "station/training/case_run.h"
+#include "station/training/session.h"
+
+namespace ves::training {
+namespace {
+
+std::string Num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+class Checks {
+ public:
+  explicit Checks(GateResult* out) : out_(out) {}
+  void Rule(bool ok, const std::string& text) {
+    out_->checks.push_back(text + (ok ? ": ok" : ": FAILED"));
+    if (!ok) failed_ = true;
+  }
+  bool failed() const { return failed_; }
+
+ private:
+  GateResult* out_;
+  bool failed_{false};
+};
+
+// Rounds away the representation noise of accumulated time (59.99999 s).
+constexpr double kTolerance = 1e-6;
+// A session that used its whole time limit ends on the last step before it:
+// up to one model step (1 ms) short.
+constexpr double kFullTimeTolerance_s = 1.5e-3;
+
+}  // namespace
+
+std::vector<std::string> DescribePassCriteria(const v1::Lesson& lesson) {
+  const v1::PassCriteria& p = lesson.pass();
+  std::vector<std::string> out;
+  out.push_back("use the whole " + Num(lesson.time_limit_s()) +
+                " s unless the cecum is reached (stopping early fails)");
+  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s()) out.push_back("reach the cecum");
+  if (p.has_max_time_to_cecum_s()) {
+    out.push_back("time_to_cecum_s <= " + Num(p.max_time_to_cecum_s()) + " s");
+  }
+  if (p.has_max_pain_s()) out.push_back("pain_s <= " + Num(p.max_pain_s()) + " s");
+  if (p.has_max_xray_s()) out.push_back("xray_s <= " + Num(p.max_xray_s()) + " s");
+  if (p.has_min_score()) out.push_back("score >= " + Num(p.min_score()));
+  if (p.has_max_loop_s()) out.push_back("loop_s <= " + Num(p.max_loop_s()) + " s");
+  if (p.has_max_excessive_force_s()) {
+    out.push_back("excessive_force_s <= " + Num(p.max_excessive_force_s()) + " s");
+  }
+  if (p.has_max_damage_events()) {
+    out.push_back("damage_events <= " + std::to_string(p.max_damage_events()));
+  }
+  if (p.has_min_max_tip_arc_m()) {
+    out.push_back("max_tip_arc_m >= " + Num(p.min_max_tip_arc_m()) + " m");
+  }
+  if (p.has_min_mucosa_seen_fraction()) {
+    out.push_back("mucosa_seen_fraction >= " + Num(p.min_mucosa_seen_fraction()));
+  }
+  if (p.has_max_peak_insertion_force_n()) {
+    out.push_back("peak_insertion_force_N <= " + Num(p.max_peak_insertion_force_n()) + " N");
+  }
+  if (!lesson.aids().fluoroscopy_allowed()) out.push_back("no fluoroscopy (xray_s = 0)");
+  if (!lesson.aids().wireframe_allowed()) out.push_back("no wireframe view");
+  return out;
+}
+
+GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m, double score,
+                           bool wireframe_used) {
+  GateResult out;
+  out.score = score;
+  Checks c(&out);
+  const v1::PassCriteria& p = lesson.pass();
+  // A lesson is its whole time limit: cutting it short (an abort, a practice
+  // cut) cannot pass a gate that only limits bad events.
+  c.Rule(m.completed() || m.duration_s() + kFullTimeTolerance_s >= lesson.time_limit_s(),
+         "duration_s " + Num(m.duration_s()) + " >= " + Num(lesson.time_limit_s()) +
+             " or cecum reached");
+  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s()) {
+    c.Rule(m.completed(), std::string("cecum ") + (m.completed() ? "reached" : "not reached"));
+  }
+  if (p.has_max_time_to_cecum_s()) {
+    c.Rule(m.completed() && m.time_to_cecum_s() <= p.max_time_to_cecum_s() + kTolerance,
+           "time_to_cecum_s " + Num(m.time_to_cecum_s()) + " <= " + Num(p.max_time_to_cecum_s()));
+  }
+  auto at_most = [&](bool has, double value, double limit, const char* name) {
+    if (has) c.Rule(value <= limit + kTolerance, std::string(name) + " " + Num(value) + " <= " +
+                                                     Num(limit));
+  };
+  auto at_least = [&](bool has, double value, double limit, const char* name) {
+    if (has) c.Rule(value + kTolerance >= limit, std::string(name) + " " + Num(value) + " >= " +
+                                                     Num(limit));
+  };
+  at_most(p.has_max_pain_s(), m.pain_s(), p.max_pain_s(), "pain_s");
+  at_most(p.has_max_xray_s(), m.xray_s(), p.max_xray_s(), "xray_s");
+  at_least(p.has_min_score(), score, p.min_score(), "score");
+  at_most(p.has_max_loop_s(), m.loop_s(), p.max_loop_s(), "loop_s");
+  at_most(p.has_max_excessive_force_s(), m.excessive_force_s(), p.max_excessive_force_s(),
+          "excessive_force_s");
+  at_most(p.has_max_damage_events(), m.damage_events(), p.max_damage_events(), "damage_events");
+  at_least(p.has_min_max_tip_arc_m(), m.max_tip_arc_m(), p.min_max_tip_arc_m(), "max_tip_arc_m");
+  at_least(p.has_min_mucosa_seen_fraction(), m.mucosa_seen_fraction(),
+           p.min_mucosa_seen_fraction(), "mucosa_seen_fraction");
+  at_most(p.has_max_peak_insertion_force_n(), m.peak_insertion_force_n(),
+          p.max_peak_insertion_force_n(), "peak_insertion_force_N");
+  if (!lesson.aids().fluoroscopy_allowed()) {
+    c.Rule(m.xray_s() == 0.0, "fluoroscopy not allowed: xray_s " + Num(m.xray_s()) + " = 0");
+  }
+  if (!lesson.aids().wireframe_allowed()) {
+    c.Rule(!wireframe_used, std::string("wireframe not allowed: ") +
+                                (wireframe_used ? "used" : "not used"));
+  }
+  out.passed = !c.failed();
+  return out;
+}
+
+GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& lesson_case,
+                              const v1::SessionRecord& record, const std::atomic<bool>* cancel) {
+  GateResult refused;
+  Checks c(&refused);
+  c.Rule(record.lesson_id() == lesson.lesson_id(),
+         "lesson_id '" + record.lesson_id() + "' = '" + lesson.lesson_id() + "'");
+  c.Rule(record.case_sha256_hex() == lesson.case_ref().payload_sha256_hex(),
+         "case sha256 " + record.case_sha256_hex().substr(0, 12) + " = lesson's " +
+             lesson.case_ref().payload_sha256_hex().substr(0, 12));
+  c.Rule(google::protobuf::util::MessageDifferencer::Equals(record.scope(), lesson.scope()),
+         "scope '" + record.scope().id() + "' = lesson's '" + lesson.scope().id() + "'");
+  const double limit_s = record.replay_setup().time_limit_s();
+  c.Rule(limit_s > 0.0 && limit_s <= lesson.time_limit_s() + kTolerance,
+         "time limit " + Num(limit_s) + " s <= " + Num(lesson.time_limit_s()) + " s");
+  if (c.failed()) return refused;
+
+  // The authoritative run: the lesson's case, scope and time limit, the
+  // record's inputs. Nothing the record claims about its results is read.
+  v1::SessionRecord rerun = record;
+  *rerun.mutable_replay_setup() = MakeReplaySetup(lesson_case, {}, lesson.time_limit_s());
+  *rerun.mutable_scope() = lesson.scope();
+  bool wireframe_used = false;
+  RunResult result;
+  try {
+    result = ReplayRecord(rerun, [&](const InputSample& input, const SessionRunner&) {
+      if (input.view_mode == ViewMode::kWireframe) wireframe_used = true;
+      if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) {
+        throw JudgeCancelled("lesson judge: replay cancelled");
+      }
+    });
+  } catch (const JudgeCancelled&) {
+    throw;
+  } catch (const std::exception& error) {
+    c.Rule(false, std::string("replay: ") + error.what());
+    return refused;
+  }
+  GateResult out = CheckLessonGate(lesson, ToProto(result.metrics), result.score, wireframe_used);
+  out.checks.insert(out.checks.begin(), refused.checks.begin(), refused.checks.end());
+  if (result.diverged) {
+    out.checks.push_back("replay diverged: FAILED");
+    out.passed = false;
+  }
+  return out;
+}
+
+}  // namespace ves::training

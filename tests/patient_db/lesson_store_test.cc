@@ -1,0 +1,194 @@
+// The lesson part of the storage contract (docs/lessons.md), on SQLite and,
+// when deploy/with-postgres.sh provides a cluster, on PostgreSQL.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "patient_db/store.h"
+#include "tests/patient_db/pg_test_util.h"
+
+namespace ves::patient_db {
+namespace {
+
+struct LessonBackend {
+  std::string name;
+  std::function<std::unique_ptr<Store>(const std::filesystem::path& dir)> open;
+};
+
+void PrintTo(const LessonBackend& backend, std::ostream* os) { *os << backend.name; }
+
+class LessonStore : public ::testing::TestWithParam<LessonBackend> {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("ves_lesson_store_" + GetParam().name + "_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    store_ = GetParam().open(dir_);
+    ASSERT_TRUE(store_->AddInstitution("north", 1).ok());
+    ASSERT_TRUE(store_->AddInstitution("south", 1).ok());
+    ASSERT_TRUE(store_->AddTrainee({"t1", "north", "One", 10}).ok());
+    ASSERT_TRUE(store_->AddTrainee({"t2", "north", "Two", 10}).ok());
+    ASSERT_TRUE(store_->AddTrainee({"s1", "south", "South", 10}).ok());
+  }
+  void TearDown() override {
+    store_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  void Reopen() {
+    store_.reset();
+    store_ = GetParam().open(dir_);
+  }
+
+  static CurriculumRow Curriculum(const std::string& id, const std::string& body,
+                                  std::vector<std::string> lessons) {
+    CurriculumRow c;
+    c.curriculum_id = id;
+    c.institution = "north";
+    c.title = "Title of " + id;
+    c.lesson_ids = std::move(lessons);
+    c.created_by = "tok";
+    c.created_unix_ms = 100;
+    c.body = body;
+    c.body_sha256_hex = "sha-" + body;
+    return c;
+  }
+
+  // A stored session of t1; lesson_id non-empty queues it for judging.
+  void StoreSession(const std::string& uuid, const std::string& lesson_id, int64_t start) {
+    SessionRow r;
+    r.uuid = uuid;
+    r.trainee_id = "t1";
+    r.institution = "north";
+    r.case_id = "c";
+    r.case_version = 1;
+    r.station_id = "st";
+    r.start_unix_ms = start;
+    r.end_unix_ms = start + 1;
+    r.body = "body-" + uuid;
+    r.body_sha256_hex = "h-" + uuid;
+    r.stored_unix_ms = start;
+    r.lesson_id = lesson_id;
+    WriteBatch batch;
+    batch.sessions.push_back(r);
+    auto result = store_->CommitBatch(batch);
+    ASSERT_TRUE(result.ok()) << result.status.message;
+  }
+
+  std::filesystem::path dir_;
+  std::unique_ptr<Store> store_;
+};
+
+TEST_P(LessonStore, CurriculumRoundTripsAndIsImmutable) {
+  const CurriculumRow c = Curriculum("basics", "B1", {"l1", "l2"});
+  auto put = store_->PutCurriculum(c);
+  ASSERT_TRUE(put.ok()) << put.status.message;
+  EXPECT_FALSE(put.value);  // newly stored
+  auto again = store_->PutCurriculum(c);
+  ASSERT_TRUE(again.ok());
+  EXPECT_TRUE(again.value);  // the same content: already stored
+  auto other = store_->PutCurriculum(Curriculum("basics", "B2", {"l1", "l2"}));
+  EXPECT_EQ(other.status.code, StoreCode::kAlreadyExists);
+  Reopen();
+  auto got = store_->GetCurriculum("basics");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, c);
+  EXPECT_EQ(store_->GetCurriculum("nope").status.code, StoreCode::kNotFound);
+  auto found = store_->FindLessonCurriculum("l2");
+  ASSERT_TRUE(found.ok());
+  EXPECT_EQ(found.value, "basics");
+}
+
+TEST_P(LessonStore, ALessonIdBelongsToOneCurriculumOnly) {
+  ASSERT_TRUE(store_->PutCurriculum(Curriculum("a", "A", {"l1"})).ok());
+  auto clash = store_->PutCurriculum(Curriculum("b", "B", {"l9", "l1"}));
+  EXPECT_EQ(clash.status.code, StoreCode::kAlreadyExists);
+  EXPECT_NE(clash.status.message.find("l1"), std::string::npos) << clash.status.message;
+  // Nothing of the refused curriculum was kept.
+  EXPECT_EQ(store_->GetCurriculum("b").status.code, StoreCode::kNotFound);
+  EXPECT_EQ(store_->FindLessonCurriculum("l9").status.code, StoreCode::kNotFound);
+  auto list = store_->ListCurricula("north");
+  ASSERT_TRUE(list.ok());
+  ASSERT_EQ(list.value.size(), 1u);
+  EXPECT_TRUE(store_->ListCurricula("south").value.empty());
+}
+
+TEST_P(LessonStore, AssignmentsReachTraineesDirectlyAndThroughTheirGroup) {
+  ASSERT_TRUE(store_->PutCurriculum(Curriculum("a", "A", {"l1"})).ok());
+  ASSERT_TRUE(store_->PutCurriculum(Curriculum("b", "B", {"l2"})).ok());
+  ASSERT_TRUE(store_->SetTraineeGroup("t1", "residents").ok());
+  ASSERT_TRUE(store_->SetTraineeGroup("t2", "residents").ok());
+  ASSERT_TRUE(store_->AddAssignment({"a", true, "residents", "north", "tok", 200}).ok());
+  ASSERT_TRUE(store_->AddAssignment({"b", false, "t1", "north", "tok", 300}).ok());
+  ASSERT_TRUE(store_->AddAssignment({"b", false, "t1", "north", "tok", 400}).ok());  // again
+  // A group of the same name in another institution is another group.
+  ASSERT_TRUE(store_->SetTraineeGroup("s1", "residents").ok());
+
+  auto t1 = store_->ListAssignments("t1");
+  ASSERT_TRUE(t1.ok()) << t1.status.message;
+  ASSERT_EQ(t1.value.size(), 2u);
+  EXPECT_EQ(t1.value[0].curriculum_id, "a");
+  EXPECT_TRUE(t1.value[0].to_group);
+  EXPECT_EQ(t1.value[1].curriculum_id, "b");
+  EXPECT_EQ(t1.value[1].assigned_unix_ms, 300);  // the first assignment is kept
+  EXPECT_EQ(store_->ListAssignments("t2").value.size(), 1u);
+  EXPECT_TRUE(store_->ListAssignments("s1").value.empty());
+
+  auto members = store_->ListGroupTrainees("north", "residents");
+  ASSERT_TRUE(members.ok());
+  EXPECT_EQ(members.value, (std::vector<std::string>{"t1", "t2"}));
+  ASSERT_TRUE(store_->SetTraineeGroup("t2", "").ok());
+  EXPECT_EQ(store_->GetTraineeGroup("t2").value, "");
+  EXPECT_EQ(store_->GetTraineeGroup("t1").value, "residents");
+  EXPECT_EQ(store_->ListGroupTrainees("north", "residents").value.size(), 1u);
+  EXPECT_FALSE(store_->SetTraineeGroup("ghost", "x").ok());
+  EXPECT_FALSE(store_->AddAssignment({"ghost", false, "t1", "north", "tok", 1}).ok());
+}
+
+TEST_P(LessonStore, LessonSessionsWaitForOneVerdictEach) {
+  StoreSession("u1", "l1", 1000);
+  StoreSession("u2", "", 2000);  // not a lesson: never queued
+  StoreSession("u3", "l1", 3000);
+  auto unjudged = store_->ListUnjudgedLessonSessions("", 100);
+  ASSERT_TRUE(unjudged.ok()) << unjudged.status.message;
+  EXPECT_EQ(unjudged.value, (std::vector<std::string>{"u1", "u3"}));
+
+  LessonVerdictRow v{"u3", "t1", "a", "l1", true, 55.5, 3000, 4000, "pain_s ok"};
+  auto put = store_->PutLessonVerdict(v);
+  ASSERT_TRUE(put.ok()) << put.status.message;
+  EXPECT_TRUE(put.value);
+  LessonVerdictRow later = v;
+  later.passed = false;
+  EXPECT_FALSE(store_->PutLessonVerdict(later).value);  // the first verdict stays
+  Reopen();
+  auto got = store_->GetLessonVerdict("u3");
+  ASSERT_TRUE(got.ok());
+  EXPECT_EQ(got.value, v);
+  EXPECT_EQ(store_->ListUnjudgedLessonSessions("t1", 100).value,
+            (std::vector<std::string>{"u1"}));
+  EXPECT_TRUE(store_->ListUnjudgedLessonSessions("t2", 100).value.empty());
+  ASSERT_TRUE(store_->PutLessonVerdict({"u1", "t1", "a", "l1", false, 5, 1000, 5000, "x"}).ok());
+  auto all = store_->ListLessonVerdicts("t1");
+  ASSERT_TRUE(all.ok());
+  ASSERT_EQ(all.value.size(), 2u);
+  EXPECT_EQ(all.value[0].session_uuid, "u1");  // oldest session first
+  EXPECT_EQ(store_->GetLessonVerdict("u2").status.code, StoreCode::kNotFound);
+  EXPECT_FALSE(store_->PutLessonVerdict({"ghost", "t1", "a", "l1", true, 1, 1, 1, ""}).ok());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Backends, LessonStore,
+    ::testing::Values(LessonBackend{"sqlite",
+                                    [](const std::filesystem::path& dir) -> std::unique_ptr<Store> {
+                                      return OpenStore("sqlite:" + (dir / "ves.db").string());
+                                    }},
+                      LessonBackend{"postgres", &pg_testing::OpenPostgresTestStore}),
+    [](const ::testing::TestParamInfo<LessonBackend>& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace ves::patient_db

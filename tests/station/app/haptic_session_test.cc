@@ -1,0 +1,130 @@
+// SessionModelSource: the training session as the coupled mode's model
+// (station/app/haptic_session.h), without a device: the encoder readings are
+// handed in directly, as HapticCycle::Run does each period.
+#include "station/app/haptic_session.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "station/training/replay.h"
+
+namespace ves::station {
+namespace {
+
+constexpr double kLogForceTolerance_N = training::kLogForceResolution_N;
+constexpr double kLogLengthTolerance_m = training::kLogLengthResolution_m;
+constexpr double kLogAngleTolerance_rad = training::kLogAngleResolution_rad;
+
+// A straight 0.4 m tube: small enough that a few hundred steps take milliseconds.
+model::ModelParams TubeParams() {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 40; ++i) points.emplace_back(0.0, 0.0, 0.01 * i);
+  model::ModelParams params;
+  params.colon = model::MakeColonFromPoints(points, 0.02, model::TissueParams{});
+  return params;
+}
+
+training::SessionConfig Config(const model::ModelParams& params) {
+  training::SessionConfig config;
+  config.case_id = "tube";
+  config.dt_s = params.dt_s;
+  config.time_limit_s = 10.0;
+  config.thresholds = training::ThresholdsFor(params);
+  return config;
+}
+
+class SessionModelSourceTest : public ::testing::Test {
+ protected:
+  SessionModelSourceTest() : params_(TubeParams()), runner_(params_, Config(params_)) {}
+
+  model::ModelParams params_;
+  training::SessionRunner runner_;
+  haptics::SeqLock<ModelControls> controls_;
+  SessionModelSource source_{&runner_, &controls_};
+};
+
+TEST_F(SessionModelSourceTest, WithoutARunningSessionItRendersNothingButStaysAlive) {
+  const haptics::BaseResponse first = source_.Update(0.05, 0.2, params_.dt_s);
+  const haptics::BaseResponse second = source_.Update(0.05, 0.2, params_.dt_s);
+  EXPECT_EQ(first.thrust_force_N, 0.0);
+  EXPECT_EQ(first.roll_torque_Nm, 0.0);
+  // The count advances, so the safety monitor does not call the model stalled.
+  EXPECT_EQ(second.update_count, first.update_count + 1);
+  EXPECT_FALSE(source_.stepped());
+  EXPECT_EQ(runner_.session().steps(), 0u);
+}
+
+TEST_F(SessionModelSourceTest, LogsTheCouplingForceItPushedTheModelWithAndRendersItsNegative) {
+  const double model_start_m = runner_.state().inserted_m;
+  const double model_roll_rad = runner_.state().roll_rad;
+  controls_.Store(ModelControls{0.3, -0.2, training::ViewMode::kWireframe, true});
+  source_.Start(0, /*device_insertion_m=*/0.01, /*device_roll_rad=*/0.0);
+  // The device moved 10 mm past where the session started: the coupling,
+  // k_c·(x_device + offset − x_model) = 300 N/m × 0.010 m = 3.0 N, pushes the
+  // model in; the hand is pulled back by the same 3.0 N.
+  const haptics::BaseResponse response = source_.Update(0.02, 0.1, params_.dt_s);
+  ASSERT_TRUE(source_.stepped());
+  ASSERT_EQ(runner_.session().steps(), 1u);
+  const training::InputSample& logged = runner_.session().inputs().back();
+  EXPECT_EQ(logged.thrust_mode, training::ThrustMode::kForce);
+  EXPECT_NEAR(logged.push_force_N, 3.0, kLogForceTolerance_N);
+  EXPECT_NEAR(logged.insertion_m, model_start_m + 0.01, kLogLengthTolerance_m);
+  EXPECT_NEAR(logged.roll_rad, model_roll_rad + 0.1, kLogAngleTolerance_rad);
+  EXPECT_NEAR(logged.knob_up_down_rad, 0.3, kLogAngleTolerance_rad);
+  EXPECT_NEAR(logged.knob_left_right_rad, -0.2, kLogAngleTolerance_rad);
+  EXPECT_EQ(logged.view_mode, training::ViewMode::kWireframe);
+  EXPECT_TRUE(logged.fluoroscopy_on);
+  EXPECT_EQ(response.thrust_force_N, -logged.push_force_N);
+  EXPECT_EQ(response.roll_torque_Nm, -runner_.output().roll_torque_N_m);
+  EXPECT_NEAR(source_.encoder_travel_m(), 0.0, 1e-12);  // one reading: no travel yet
+}
+
+TEST_F(SessionModelSourceTest, ANonFiniteReadingGivesNaNAndIsNotLogged) {
+  source_.Start(0, 0.0, 0.0);
+  const haptics::BaseResponse response = source_.Update(std::nan(""), 0.0, params_.dt_s);
+  EXPECT_TRUE(std::isnan(response.thrust_force_N));
+  EXPECT_FALSE(source_.stepped());
+  EXPECT_EQ(runner_.session().steps(), 0u);
+}
+
+TEST_F(SessionModelSourceTest, TheLogAloneReplaysTheModelExactly) {
+  source_.Start(0, 0.0, 0.0);
+  // A hand moving the device 20 mm in and out while turning it.
+  for (int i = 0; i < 400; ++i) {
+    const double t_s = i * params_.dt_s;
+    source_.Update(0.02 * std::sin(10.0 * t_s), 0.3 * t_s, params_.dt_s);
+  }
+  // Travel: 0.02·sin(10 t) over 0.4 s goes up to 0.02 m (t = 0.157 s), then
+  // down to 0.02·sin(4) = −0.0151 m: 0.02 + 0.0351 = 0.0551 m.
+  EXPECT_NEAR(source_.encoder_travel_m(), 0.0551, 1e-3);
+  training::SessionRunner replay(params_, Config(params_));
+  replay.Start(0);
+  for (const training::InputSample& sample : runner_.session().inputs()) replay.Step(sample);
+  EXPECT_EQ(replay.state().inserted_m, runner_.state().inserted_m);
+  EXPECT_EQ(replay.state().roll_rad, runner_.state().roll_rad);
+  EXPECT_EQ(replay.session().metrics(), runner_.session().metrics());
+}
+
+TEST(HandForSample, ForceSamplesPushAndPositionSamplesGripTheScope) {
+  training::InputSample push;
+  push.thrust_mode = training::ThrustMode::kForce;
+  push.push_force_N = 4.5;
+  push.roll_rad = 0.25;
+  const haptics::HandProfile pushing = HandForSample(push, 0.1);
+  EXPECT_EQ(pushing.thrust.drive, haptics::HandDrive::kForce);
+  EXPECT_EQ(pushing.thrust.offset, 4.5);
+  EXPECT_EQ(pushing.roll.drive, haptics::HandDrive::kPosition);
+  EXPECT_EQ(pushing.roll.offset, 0.25);
+
+  training::InputSample hold;
+  hold.thrust_mode = training::ThrustMode::kPosition;
+  hold.insertion_m = 0.3;
+  const haptics::HandProfile holding = HandForSample(hold, 0.1);
+  EXPECT_EQ(holding.thrust.drive, haptics::HandDrive::kPosition);
+  EXPECT_NEAR(holding.thrust.offset, 0.2, 1e-12);  // model 0.3 m is device 0.2 m
+}
+
+}  // namespace
+}  // namespace ves::station

@@ -1,0 +1,172 @@
+// A lesson's gate (station/training/lesson_gate.h): criteria on metrics, and
+// the server's judge, which trusts the replay of the input log and never the
+// metrics a record claims.
+#include "station/training/lesson_gate.h"
+
+#include <gtest/gtest.h>
+
+#include "patient_db/case_format.h"
+#include "station/training/case_model.h"
+#include "station/training/case_run.h"
+
+namespace ves::training {
+namespace {
+
+bool HasCheck(const GateResult& g, const std::string& text) {
+  for (const auto& c : g.checks) {
+    if (c.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+v1::Lesson Lenient() {
+  v1::Lesson l;
+  l.set_lesson_id("l1");
+  l.set_time_limit_s(5);
+  l.mutable_aids()->set_fluoroscopy_allowed(true);
+  l.mutable_aids()->set_wireframe_allowed(true);
+  return l;
+}
+
+TEST(CheckLessonGate, ThresholdsAreInclusive) {
+  v1::Lesson l = Lenient();
+  l.mutable_pass()->set_max_pain_s(10);
+  l.mutable_pass()->set_min_max_tip_arc_m(0.15);
+  v1::SessionMetrics m;
+  m.set_duration_s(5);        // the whole time limit
+  m.set_pain_s(10);           // exactly at the limit: passes
+  m.set_max_tip_arc_m(0.15);  // exactly at the limit: passes
+  EXPECT_TRUE(CheckLessonGate(l, m, 0, false).passed);
+  m.set_pain_s(10.5);
+  const GateResult g = CheckLessonGate(l, m, 0, false);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "pain_s 10.5 <= 10: FAILED"));
+  EXPECT_TRUE(HasCheck(g, "max_tip_arc_m 0.15 >= 0.15: ok"));
+}
+
+TEST(CheckLessonGate, StoppingBeforeTheTimeLimitFailsUnlessTheCecumWasReached) {
+  const v1::Lesson l = Lenient();  // 5 s, no other rule
+  v1::SessionMetrics m;
+  m.set_duration_s(4.999);  // the last step of a full 5 s run at dt = 1 ms
+  EXPECT_TRUE(CheckLessonGate(l, m, 0, false).passed);
+  m.set_duration_s(4.9);
+  EXPECT_FALSE(CheckLessonGate(l, m, 0, false).passed);
+  m.set_completed(true);  // the cecum ends a session early, legitimately
+  EXPECT_TRUE(CheckLessonGate(l, m, 0, false).passed);
+}
+
+TEST(CheckLessonGate, CecumScoreAndAidsRules) {
+  v1::Lesson l = Lenient();
+  l.mutable_pass()->set_max_time_to_cecum_s(300);
+  l.mutable_pass()->set_min_score(50);
+  l.mutable_aids()->set_fluoroscopy_allowed(false);
+  l.mutable_aids()->set_wireframe_allowed(false);
+  v1::SessionMetrics m;
+  m.set_completed(true);
+  m.set_time_to_cecum_s(200);
+  EXPECT_TRUE(CheckLessonGate(l, m, 60, false).passed);
+  EXPECT_FALSE(CheckLessonGate(l, m, 49, false).passed);       // score
+  EXPECT_FALSE(CheckLessonGate(l, m, 60, true).passed);        // wireframe used
+  m.set_xray_s(0.001);
+  EXPECT_FALSE(CheckLessonGate(l, m, 60, false).passed);       // any X-ray
+  m.set_xray_s(0);
+  m.set_time_to_cecum_s(301);
+  EXPECT_FALSE(CheckLessonGate(l, m, 60, false).passed);       // too slow
+  m.set_completed(false);
+  m.set_time_to_cecum_s(0);  // not reached: 0 must not count as fast
+  EXPECT_FALSE(CheckLessonGate(l, m, 60, false).passed);
+}
+
+class LessonJudge : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    colon_case_ = new v1::ColonCase(
+        patient_db::LoadCaseFile(VES_SOURCE_DIR "/patient_db/cases/paper-sigmoid.textproto"));
+    record_ = new v1::SessionRecord;
+    // 5 s of the scripted novice, who switches fluoroscopy on at once.
+    RunScriptedCase(*colon_case_, DefaultEndoscopeSpec(), {}, "novice", 5.0, 1000, record_);
+  }
+  static void TearDownTestSuite() {
+    delete colon_case_;
+    delete record_;
+  }
+  v1::Lesson LessonFor(const v1::SessionRecord& r) const {
+    v1::Lesson l = Lenient();
+    l.mutable_case_ref()->set_case_id("paper-sigmoid");
+    l.mutable_case_ref()->set_payload_sha256_hex(patient_db::CasePayloadSha256Hex(*colon_case_));
+    *l.mutable_scope() = DefaultEndoscopeSpec();
+    (void)r;
+    return l;
+  }
+  v1::SessionRecord Record() const {
+    v1::SessionRecord r = *record_;
+    r.set_lesson_id("l1");
+    r.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(*colon_case_));
+    return r;
+  }
+  static v1::ColonCase* colon_case_;
+  static v1::SessionRecord* record_;
+};
+v1::ColonCase* LessonJudge::colon_case_ = nullptr;
+v1::SessionRecord* LessonJudge::record_ = nullptr;
+
+TEST_F(LessonJudge, AnHonestRecordIsJudgedOnItsExactReplay) {
+  const v1::SessionRecord r = Record();
+  ASSERT_GT(r.metrics().xray_s(), 4.0);  // the novice had the X-ray on
+  const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_TRUE(g.passed) << ::testing::PrintToString(g.checks);
+  EXPECT_DOUBLE_EQ(g.score, r.score());  // replay is bit-exact on the same build
+}
+
+TEST_F(LessonJudge, AForgedRecordIsJudgedByItsReplayNotItsClaims) {
+  v1::SessionRecord forged = Record();
+  v1::Lesson lesson = LessonFor(forged);
+  lesson.mutable_pass()->set_max_xray_s(1.0);
+  // Altered after the run: no X-ray, a perfect score.
+  forged.mutable_metrics()->set_xray_s(0.0);
+  forged.set_score(100.0);
+  EXPECT_TRUE(CheckLessonGate(lesson, forged.metrics(), forged.score(), false).passed);
+  const GateResult g = JudgeLessonSession(lesson, *colon_case_, forged);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "xray_s 5 <= 1: FAILED")) << ::testing::PrintToString(g.checks);
+  EXPECT_DOUBLE_EQ(g.score, record_->score());
+}
+
+TEST_F(LessonJudge, AFluoroscopyFreeLessonFailsASessionThatUsedIt) {
+  v1::SessionRecord r = Record();
+  v1::Lesson lesson = LessonFor(r);
+  lesson.mutable_aids()->set_fluoroscopy_allowed(false);
+  r.mutable_metrics()->set_xray_s(0.0);  // claimed away; the inputs still had it on
+  const GateResult g = JudgeLessonSession(lesson, *colon_case_, r);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "fluoroscopy not allowed")) << ::testing::PrintToString(g.checks);
+}
+
+TEST_F(LessonJudge, TheLessonsCaseAndLimitsAreNotTheRecordsToChoose) {
+  v1::SessionRecord r = Record();
+  const v1::Lesson lesson = LessonFor(r);
+  r.set_case_sha256_hex(std::string(64, '0'));
+  GateResult g = JudgeLessonSession(lesson, *colon_case_, r);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "case sha256 000000000000")) << ::testing::PrintToString(g.checks);
+  r = Record();
+  r.mutable_replay_setup()->set_time_limit_s(6.0);  // longer than the lesson's 5 s
+  EXPECT_FALSE(JudgeLessonSession(lesson, *colon_case_, r).passed);
+  r = Record();
+  r.mutable_scope()->set_working_length_m(2.0);
+  EXPECT_FALSE(JudgeLessonSession(lesson, *colon_case_, r).passed);
+  r = Record();
+  r.set_lesson_id("other");
+  EXPECT_FALSE(JudgeLessonSession(lesson, *colon_case_, r).passed);
+}
+
+TEST_F(LessonJudge, ALogThatCannotBeReplayedFails) {
+  v1::SessionRecord r = Record();
+  r.mutable_input_log()->set_encoded("garbage");
+  const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "replay:")) << ::testing::PrintToString(g.checks);
+}
+
+}  // namespace
+}  // namespace ves::training
