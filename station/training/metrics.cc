@@ -28,7 +28,17 @@ void MetricsAccumulator::Add(const StepObservation& o) {
   running_s_ += dt;
 
   const double force_N = std::abs(o.base_force_N);
-  peak_force_N_ = std::max(peak_force_N_, force_N);
+  const int window_steps =
+      std::clamp(static_cast<int>(std::lround(kForceWindow_s / dt)), 1, kForceWindowMaxSteps);
+  if (force_window_count_ == window_steps) {
+    force_window_sum_N_ -= force_window_N_[force_window_next_];
+  } else {
+    ++force_window_count_;
+  }
+  force_window_N_[force_window_next_] = force_N;
+  force_window_sum_N_ += force_N;
+  force_window_next_ = (force_window_next_ + 1) % window_steps;
+  peak_force_N_ = std::max(peak_force_N_, force_window_sum_N_ / force_window_count_);
   force_integral_N_s_ += force_N * dt;
 
   const bool force_over = o.max_wall_force_N > th.excessive_wall_force_N;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -105,6 +106,15 @@ class MetricsAccumulator {
   std::optional<double> cecum_time_s_;
   double peak_force_N_{0.0};
   double force_integral_N_s_{0.0};
+  // The peak is taken of the force averaged over kForceWindow_s (what a hand
+  // and a force sensor resolve), so a single 1 ms contact transient of the
+  // model does not become the session's peak (docs/scoring.md).
+  static constexpr double kForceWindow_s = 0.01;
+  static constexpr int kForceWindowMaxSteps = 64;
+  std::array<double, kForceWindowMaxSteps> force_window_N_{};
+  int force_window_next_{0};
+  int force_window_count_{0};
+  double force_window_sum_N_{0.0};
   EpisodeTracker force_;
   EpisodeTracker pain_;
   EpisodeTracker loop_;

@@ -79,6 +79,28 @@ TEST(Metrics, PeakAndMeanInsertionForceUseTheMagnitude) {
   EXPECT_EQ(m.mean_insertion_force_N, 2.0);
 }
 
+TEST(Metrics, PeakInsertionForceIsTakenOverTenMillisecondsAtTheModelRate) {
+  // At 1 ms steps: a 1-step transient of 101 N on a 1 N background averages
+  // to (9 * 1 + 101) / 10 = 11 N over the 10 ms window; a force held for
+  // 10 steps is its own 10 ms mean (6 N). The mean keeps every step.
+  constexpr double kModelDt_s = 0.001;
+  constexpr int kSteps = 60;
+  std::vector<StepObservation> steps(kSteps);
+  for (int i = 0; i < kSteps; ++i) {
+    steps[i].t_s = (i + 1) * kModelDt_s;
+    steps[i].dt_s = kModelDt_s;
+    steps[i].base_force_N = 1.0;
+  }
+  steps[20].base_force_N = 101.0;
+  const Metrics spike = Accumulate(steps).Result();
+  EXPECT_NEAR(spike.peak_insertion_force_N, 11.0, 1e-9);
+  EXPECT_NEAR(spike.mean_insertion_force_N, (59.0 + 101.0) / 60.0, 1e-9);
+
+  steps[20].base_force_N = 1.0;
+  for (int i = 40; i < 50; ++i) steps[i].base_force_N = -6.0;
+  EXPECT_NEAR(Accumulate(steps).Result().peak_insertion_force_N, 6.0, 1e-9);
+}
+
 TEST(Metrics, ExcessiveForceEpisodesCountRunsOverTheThreshold) {
   // Over 4 N at steps 0-1 and 5-7: two episodes, 5 steps = 1.25 s.
   auto steps = Steps(9);
