@@ -2,9 +2,12 @@
 // steered toward the lumen (the simple rule of issue #3), printed once per
 // simulated second, so a model change can be judged by where the tip stalls.
 //   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
+// PROBE_* environment variables add loop reduction, parameter scaling, a
+// scripted operator, shape drawings and contact dumps (docs/model.md).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +18,7 @@
 #include "station/training/case_model.h"
 #include "station/training/observer.h"
 #include "station/training/scripted_operator.h"
+#include "station/training/session_runner.h"
 
 namespace {
 
@@ -51,6 +55,29 @@ void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelSta
   cv::imwrite(path, image);
 }
 
+// One step whose base reaction passed 20 N: the contacts that make it up.
+void PrintSpike(const ves::model::ModelState& state, const StepInput& in,
+                const ves::model::StepOutput& out) {
+  std::printf("spike t=%.3f base %.1f N, knobs %.2f %.2f, push %.2f N\n", state.time_s,
+              out.base_force_N, in.knob_up_rad, in.knob_right_rad, in.push_force_N);
+  const Eigen::Vector3d e = state.X_WLink[0].linear().col(2);
+  double normal_sum_N = 0.0;
+  double friction_sum_N = 0.0;
+  for (int j = 0; j < out.contact_count; ++j) {
+    const auto& c = out.contacts[j];
+    const double along_N = -c.force_on_scope_W_N.dot(e);
+    const double normal_along_N = c.normal_force_N * c.normal_W.dot(e);
+    normal_sum_N += normal_along_N;
+    friction_sum_N += along_N - normal_along_N;
+    if (std::abs(along_N) <= 5.0) continue;
+    std::printf("   from_tip %.3f arc %.3f N %.1f pen %.4f along_e %.1f (normal %.1f) alpha %.2f\n",
+                c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.penetration_m, along_N,
+                normal_along_N, c.alpha);
+  }
+  std::printf("   along e: normal %.1f N, friction %.1f N, %d contacts\n", normal_sum_N,
+              friction_sum_N, out.contact_count);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,7 +104,9 @@ int main(int argc, char** argv) {
       point.tissue.suspension_stiffness_N_per_m2 = std::atof(k);
     }
   }
-  if (const char* ei = std::getenv("PROBE_EI")) params.scope.flexural_rigidity_N_m2 *= std::atof(ei);
+  if (const char* ei = std::getenv("PROBE_EI")) {
+    params.scope.flexural_rigidity_N_m2 *= std::atof(ei);
+  }
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -88,6 +117,11 @@ int main(int argc, char** argv) {
       std::getenv("PROBE_SLACK") ? std::atof(std::getenv("PROBE_SLACK")) : 0.10;
   bool withdrawing = false;
   double command_m = 0.0;
+  // PROBE_OPERATOR=novice|expert: the scripted operator drives instead of the rule.
+  std::unique_ptr<ves::training::ScriptedOperator> scripted;
+  if (const char* kind = std::getenv("PROBE_OPERATOR")) {
+    scripted = ves::training::MakeScriptedOperator(kind, params.dt_s);
+  }
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = 8.0;
@@ -111,7 +145,11 @@ int main(int argc, char** argv) {
     command_m += (withdrawing ? -1.0 : 1.0) * speed_m_per_s * params.dt_s;
     command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
     in.insertion_m = command_m;
+    if (scripted) in = ves::training::ToStepInput(scripted->Act(p));
     ves::model::Step(params, in, &state, &scratch, &out);
+    if (std::getenv("PROBE_SPIKES") && std::abs(out.base_force_N) > 20.0) {
+      PrintSpike(state, in, out);
+    }
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);
       return 1;
@@ -134,8 +172,8 @@ int main(int argc, char** argv) {
       if (std::getenv("PROBE_TIP")) {
         const auto& c = state.contact.back();
         const Eigen::Vector3d tip = state.X_WTip.translation();
-        std::printf("    tip (%.3f %.3f %.3f) seg %d t %.2f pen %.4f offset %.4f\n", tip.x(), tip.y(),
-                    tip.z(), c.segment, c.segment_t, c.penetration_m,
+        std::printf("    tip (%.3f %.3f %.3f) seg %d t %.2f pen %.4f offset %.4f\n", tip.x(),
+                    tip.y(), tip.z(), c.segment, c.segment_t, c.penetration_m,
                     state.colon_offset_m[c.segment].norm());
       }
       if (std::getenv("PROBE_CONTACTS")) {
