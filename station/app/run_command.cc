@@ -413,17 +413,62 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   return result.outcome == training::Outcome::kCecumReached ? kExitOk : kExitNotReached;
 }
 
+// The device of an interactive run: SocketCAN when --device can:IFACE (throws
+// when the interface cannot be opened), else the simulated one.
+InteractiveDevice OpenInteractiveDevice(const RunOptions& o) {
+  InteractiveDevice device;
+  device.can_log = o.can_log;
+  if (!o.can_interface.empty()) device.can_bus = haptics::CanBus::OpenSocketCan(o.can_interface);
+  return device;
+}
+
+struct ScopeChoice {
+  std::string name;
+  ves::v1::EndoscopeSpec spec;
+};
+
+// The scopes the panel offers: --scope FILE first when given, then the adult
+// colonoscope in its long (1.68 m) and intermediate (1.33 m) lengths.
+std::vector<ScopeChoice> ScopeChoices(const RunOptions& o) {
+  std::vector<ScopeChoice> scopes;
+  if (!o.scope_path.empty()) {
+    scopes.push_back({std::filesystem::path(o.scope_path).filename().string(),
+                      ReadScopeFile(o.scope_path)});
+  }
+  scopes.push_back({"adult 1.68 m", training::DefaultEndoscopeSpec()});
+  ves::v1::EndoscopeSpec intermediate = training::DefaultEndoscopeSpec();
+  intermediate.set_working_length_m(1.33);
+  scopes.push_back({"adult 1.33 m", intermediate});
+  return scopes;
+}
+
+// The panel's case list: every case in the offline cache, the running one included.
+InteractiveChoices CaseAndScopeChoices(const sync::CaseCache& cache, const std::string& case_id,
+                                       const std::vector<ScopeChoice>& scopes) {
+  InteractiveChoices choices;
+  for (const sync::CachedCase& entry : cache.List()) {
+    if (std::find(choices.case_names.begin(), choices.case_names.end(), entry.id) ==
+        choices.case_names.end()) {
+      choices.case_names.push_back(entry.id);
+    }
+  }
+  const auto it = std::find(choices.case_names.begin(), choices.case_names.end(), case_id);
+  if (it == choices.case_names.end()) choices.case_names.push_back(case_id);
+  choices.current_case = static_cast<int>(
+      std::find(choices.case_names.begin(), choices.case_names.end(), case_id) -
+      choices.case_names.begin());
+  for (const ScopeChoice& scope : scopes) choices.scope_names.push_back(scope.name);
+  return choices;
+}
+
 int Run(RunOptions o) {
   // The real device first: a missing interface is bad input, said before anything else.
   InteractiveDevice device;
-  device.can_log = o.can_log;
-  if (!o.can_interface.empty()) {
-    try {
-      device.can_bus = haptics::CanBus::OpenSocketCan(o.can_interface);
-    } catch (const std::exception& error) {
-      std::cerr << kName << ": --device can:" << o.can_interface << ": " << error.what() << "\n";
-      return kExitUsage;
-    }
+  try {
+    device = OpenInteractiveDevice(o);
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": --device can:" << o.can_interface << ": " << error.what() << "\n";
+    return kExitUsage;
   }
   const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
   std::optional<ObtainedCase> obtained;
@@ -468,15 +513,56 @@ int Run(RunOptions o) {
                  "haptic cycle)\n";
     return RunHeadless(o, paths, *obtained, std::move(run));
   }
-  InteractiveResult interactive;
-  try {
-    interactive = RunInteractive(run, obtained->colon_case, o.seconds, std::move(device),
-                                 o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr);
-  } catch (const std::exception& error) {  // no display, the device did not come up
-    std::cerr << kName << ": " << error.what() << "\n";
-    return kExitFailed;
+  // Without a lesson the panel offers the cached cases and the scopes; a
+  // switch ends the run and starts the chosen one (the device comes up again).
+  std::vector<ScopeChoice> scopes;
+  InteractiveChoices choices;
+  if (!o.lesson_plan) {
+    try {
+      scopes = ScopeChoices(o);
+      choices = CaseAndScopeChoices(sync::CaseCache(paths.cases()), obtained->entry.id, scopes);
+    } catch (const std::exception& error) {
+      std::cerr << kName << ": " << error.what() << "\n";
+      return kExitUsage;
+    }
   }
-  std::cout << interactive.device_report << "\n";
+  InteractiveResult interactive;
+  std::vector<ves::v1::SessionRecord> records;
+  for (;;) {
+    try {
+      interactive = RunInteractive(run, obtained->colon_case, o.seconds, std::move(device),
+                                   o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
+                                   o.lesson_plan ? nullptr : &choices);
+    } catch (const std::exception& error) {  // no display, the device did not come up
+      std::cerr << kName << ": " << error.what() << "\n";
+      if (records.empty()) return kExitFailed;
+      break;  // what the earlier runs recorded is still committed below
+    }
+    std::cout << interactive.device_report << "\n";
+    for (auto& record : interactive.records) records.push_back(std::move(record));
+    if (!interactive.next_case || !interactive.next_scope) break;
+    try {
+      choices.current_case = *interactive.next_case;
+      choices.current_scope = *interactive.next_scope;
+      sync::CaseCache cache(paths.cases());
+      const std::string& next_id = choices.case_names.at(choices.current_case);
+      const std::optional<sync::CachedCase> entry = cache.FindLatest(next_id);
+      if (!entry) throw std::runtime_error("case '" + next_id + "' left the offline cache");
+      obtained = ObtainedCase{*entry, cache.Load(entry->sha256_hex), false};
+      const ScopeChoice& next_scope = scopes.at(choices.current_scope);
+      run = training::PrepareCaseRun(obtained->colon_case, next_scope.spec, {}, o.seconds);
+      run.config.trainee_id = o.trainee_id;
+      run.config.station_id = o.station_id;
+      run.config.case_sha256_hex = obtained->entry.sha256_hex;
+      device = OpenInteractiveDevice(o);
+      std::cout << "switched to case " << entry->id << " v" << entry->version << " sha256="
+                << entry->sha256_hex.substr(0, 16) << "…, scope " << next_scope.name << "\n";
+    } catch (const std::exception& error) {
+      std::cerr << kName << ": cannot switch: " << error.what() << "\n";
+      break;
+    }
+  }
+  interactive.records = std::move(records);
   if (interactive.records.empty()) {
     std::cout << "quit before the session started: nothing to record\n";
     return kExitNotReached;

@@ -235,7 +235,8 @@ class LoopSession {
 
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
-                                 InteractiveDevice device, const ves::v1::LessonAids* lesson_aids) {
+                                 InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
+                                 const InteractiveChoices* choices) {
   ui::StationWindows windows;  // throws first when there is no display
   // Tiled rather than stacked at the screen's corner: the two views one above
   // the other, the panel to their right (Qt's toolbar makes windows wide).
@@ -320,6 +321,14 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   ui::PanelModel panel;
   panel.case_names = {colon_case.id()};
   panel.scope_names = {"default"};
+  if (choices != nullptr && !choices->case_names.empty() && !choices->scope_names.empty()) {
+    panel.case_names = choices->case_names;
+    panel.scope_names = choices->scope_names;
+    controls.case_choice = choices->current_case;
+    controls.scope_choice = choices->current_scope;
+  }
+  std::optional<int> next_case;
+  std::optional<int> next_scope;
   PanelNumbers numbers;
   std::uint64_t shown_sequence = 0;
   try {
@@ -365,6 +374,14 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
       }
       windows.Poll(kPollMs, panel, &controls);
       enforce_aids(&controls);
+      if (controls.repeat_requested && choices != nullptr &&
+          (controls.case_choice != choices->current_case ||
+           controls.scope_choice != choices->current_scope)) {
+        // Another case or scope: this run ends, the caller starts that one.
+        next_case = controls.case_choice;
+        next_scope = controls.scope_choice;
+        break;
+      }
       if (controls.repeat_requested) {
         // The hand stays where it is; the new session maps the model onto it.
         controls.repeat_requested = false;
@@ -382,6 +399,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   }
   stop_all();
   InteractiveResult result = session.Finish();
+  result.next_case = next_case;
+  result.next_scope = next_scope;
   result.device_report =
       DeviceReportLine(simulated ? "sim" : "can:" + bus_name, bus_name, driver.counters(),
                        *session.source(), cycle.safety().trips(), cycle.safety().fault());

@@ -22,6 +22,19 @@ struct InteractiveResult {
   std::vector<ves::v1::SessionRecord> records;
   training::RunResult result;  // of the last one
   std::string device_report;   // DeviceReportLine of the run
+  // Set when the trainee chose another case or scope on the panel and pressed
+  // "repeat": indices into InteractiveChoices; the caller starts that run.
+  std::optional<int> next_case;
+  std::optional<int> next_scope;
+};
+
+// What the panel offers (paper §4.4, "choose case and scope"); a lesson run
+// offers none (the lesson fixes both).
+struct InteractiveChoices {
+  std::vector<std::string> case_names;   // the cached cases
+  std::vector<std::string> scope_names;
+  int current_case{0};                   // what this run uses
+  int current_scope{0};
 };
 
 struct InteractiveDevice {
@@ -38,9 +51,12 @@ struct InteractiveDevice {
 // `lesson_aids` (a lesson run, docs/lessons.md): an aid that is off stays off
 // whatever the keys and panel ask — the fluoroscopy window is not rendered and
 // the wireframe view falls back to flat polygons.
+// `choices`: the panel's case and scope lists; choosing another entry and
+// pressing "repeat" ends this run with next_case/next_scope set.
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
-                                 const ves::v1::LessonAids* lesson_aids = nullptr);
+                                 const ves::v1::LessonAids* lesson_aids = nullptr,
+                                 const InteractiveChoices* choices = nullptr);
 
 }  // namespace ves::station

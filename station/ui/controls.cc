@@ -73,7 +73,8 @@ std::string KeyHelpText() {
          "c           knobs to neutral     v, 1 2 3    view mode: wire, polygon, texture\n"
          "f           fluoroscopy on/off   g           damage display on/off\n"
          "+ / -       fluoroscopy zoom     drag        rotate fluoroscopy (wheel: zoom)\n"
-         "r           repeat training      q / Esc     finish (abort) the session\n";
+         "n / m       next case / scope    r           repeat (with the chosen case, scope)\n"
+         "q / Esc     finish (abort) the session\n";
 }
 
 void ApplyFluoroDrag(int x, int y, bool button_down, DragTracker* drag, ControlState* state) {

@@ -48,7 +48,13 @@ int StationWindows::Poll(int wait_ms, const PanelModel& model, ControlState* sta
   polling_model_ = &model;
   applied_ = 0;
   const int key = cv::waitKeyEx(std::max(wait_ms, 1));
-  if (key >= 0 && ApplyKey(key, hand_, state)) ++applied_;
+  // n / m step the panel's case / scope choice (they need the panel's lists).
+  if (key == 'n' || key == 'm') {
+    ApplyPanelAction(key == 'n' ? PanelAction::kNextCase : PanelAction::kNextScope, model, state);
+    ++applied_;
+  } else if (key >= 0 && ApplyKey(key, hand_, state)) {
+    ++applied_;
+  }
   polling_state_ = nullptr;
   polling_model_ = nullptr;
   return applied_;

@@ -201,3 +201,58 @@ TEST_F(StationUi, KeysAndAMouseDragChangeTheWindowsAndQuitCommitsTheSession) {
 
 }  // namespace
 }  // namespace ves::station::testing
+
+namespace ves::station::testing {
+namespace {
+
+TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
+  const fs::path data = dir_ / "station";
+  const ProcessResult cached = Station(RunArgs("novice", data, dir_ / "out"));
+  ASSERT_TRUE(cached.exit_code == 0 || cached.exit_code == 3) << cached.err;
+  // A second case in the offline cache (the paper's CD-ROM path).
+  const fs::path bundle = dir_ / "paper-sigmoid.vescase";
+  const ProcessResult converted =
+      Admin({"case", "convert",
+             (fs::path(VES_SOURCE_DIR) / "patient_db/cases/paper-sigmoid.textproto").string(),
+             bundle.string()});
+  ASSERT_EQ(converted.exit_code, 0) << converted.err;
+  const ProcessResult imported =
+      Station({"import-case", bundle.string(), "--data-dir", data.string()});
+  ASSERT_EQ(imported.exit_code, 0) << imported.err;
+
+  station_ = std::make_unique<ChildProcess>(
+      std::vector<std::string>{kStationBin, "run", "--trainee", kTrainee, "--case",
+                               "standard-adult", "--data-dir", data.string(), "--seconds", "120"},
+      dir_ / "interactive", std::vector<std::string>{"DISPLAY=" + display_});
+  const std::string endoscope = WindowId("VES endoscope");
+  const std::string panel = WindowId("VES control");
+  ASSERT_FALSE(endoscope.empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(panel.empty());
+  std::this_thread::sleep_for(kSettle);
+
+  // n: the panel's next case (the only other one); r: repeat with it.
+  const std::string before = Shot(panel);
+  Keys(endoscope, {"n"});
+  EXPECT_GT(ChangedShare(before, Shot(panel)), 0.0);  // the case name changed
+  Keys(endoscope, {"r"});
+  // The new run brings up its windows again; give it time, then quit it.
+  std::this_thread::sleep_for(kSettle);
+  std::this_thread::sleep_for(kSettle);
+  const std::string endoscope_again = WindowId("VES endoscope");
+  ASSERT_FALSE(endoscope_again.empty()) << ReadFile(dir_ / "interactive.err");
+  Keys(endoscope_again, {"q"});
+  const ProcessResult quit = station_->Wait(seconds(60));
+  EXPECT_NE(quit.out.find("switched to case paper-sigmoid"), std::string::npos)
+      << quit.out << quit.err;
+  // Both runs' sessions were committed: the first (standard-adult, aborted by
+  // the switch) and the second (paper-sigmoid).
+  size_t committed = 0;
+  for (size_t at = quit.out.find("committed to the outbox"); at != std::string::npos;
+       at = quit.out.find("committed to the outbox", at + 1)) {
+    ++committed;
+  }
+  EXPECT_EQ(committed, 2u) << quit.out;
+}
+
+}  // namespace
+}  // namespace ves::station::testing

@@ -100,7 +100,7 @@ TEST(FluoroWheel, ZoomsGeometricallyWithinLimits) {
 TEST(KeyHelpText, NamesEveryBoundKey) {
   const std::string help = KeyHelpText();
   for (const char* word : {"insert", "withdraw", "roll", "knob", "view mode", "fluoroscopy",
-                           "damage", "repeat"}) {
+                           "damage", "repeat", "next case", "scope"}) {
     EXPECT_NE(help.find(word), std::string::npos) << word;
   }
 }
