@@ -4,6 +4,7 @@
 //   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
 // PROBE_* environment variables add loop reduction, parameter scaling, a
 // scripted operator, shape drawings and contact dumps (docs/model.md).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "patient_db/case_format.h"
+#include "station/model/internal.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
 #include "station/training/observer.h"
@@ -78,6 +80,67 @@ void PrintSpike(const ves::model::ModelState& state, const StepInput& in,
               friction_sum_N, out.contact_count);
 }
 
+// What moved in the step before a spike: the largest sample and colon point
+// displacements, and where they were.
+void PrintMotion(const ves::model::ModelParams& params, const ves::model::ModelState& before,
+                 const ves::model::ModelState& after, double previous_base_N) {
+  double sample_move_m = 0.0, colon_move_m = 0.0;
+  size_t sample_at = 0, colon_at = 0;
+  for (size_t k = 0; k < after.p_WSample.size(); ++k) {
+    const double d = (after.p_WSample[k] - before.p_WSample[k]).norm();
+    if (d > sample_move_m) sample_move_m = d, sample_at = k;
+  }
+  for (size_t i = 0; i < after.p_WColon.size(); ++i) {
+    const double d = (after.p_WColon[i] - before.p_WColon[i]).norm();
+    if (d > colon_move_m) colon_move_m = d, colon_at = i;
+  }
+  double turn_rad = 0.0;
+  size_t turn_at = 0;
+  int clamped = 0;
+  for (size_t k = 0; k < after.bend_rad.size(); ++k) {
+    const double d = (after.bend_rad[k] - before.bend_rad[k]).norm();
+    if (d > 0.0199) ++clamped;
+    if (d > turn_rad) turn_rad = d, turn_at = k;
+  }
+  std::printf("   largest joint turn %.4f rad at link %zu, %d joints at the per-step limit\n",
+              turn_rad, turn_at, clamped);
+  if (std::getenv("PROBE_SPIKE_DETAIL")) {
+    const Eigen::Vector3d dc = after.p_WColon[colon_at] - before.p_WColon[colon_at];
+    std::printf("   colon point %zu moved (%.4f %.4f %.4f)\n", colon_at, dc.x(), dc.y(), dc.z());
+    const int last_point = static_cast<int>(after.p_WColon.size()) - 1;
+    for (int i = std::max(0, static_cast<int>(colon_at) - 2);
+         i <= std::min(last_point, static_cast<int>(colon_at) + 2); ++i) {
+      const auto& pt = params.colon.points[i];
+      const Eigen::Vector3d& c = before.p_WColon[i];
+      std::printf("    point %d at (%.4f %.4f %.4f) offset %.4f rest tangent (%.2f %.2f %.2f) "
+                  "radius %.4f\n", i, c.x(), c.y(), c.z(), before.colon_offset_m[i].norm(),
+                  pt.rest_tangent.x(), pt.rest_tangent.y(), pt.rest_tangent.z(), pt.radius_m);
+    }
+    for (size_t k = 0; k < after.p_WSample.size(); ++k) {
+      const auto& cb = before.contact[k];
+      const auto& ca = after.contact[k];
+      if (std::abs(ca.segment - static_cast<int>(colon_at)) > 1 &&
+          std::abs(cb.segment - static_cast<int>(colon_at)) > 1) continue;
+      const Eigen::Vector3d ds = after.p_WSample[k] - before.p_WSample[k];
+      const Eigen::Vector3d& q = before.p_WSample[k];
+      std::printf("    sample %zu was at (%.4f %.4f %.4f) t %.2f\n", k, q.x(), q.y(), q.z(),
+                  cb.segment_t);
+      const auto mid = ves::model::internal::CalcSegmentHit(params, before, cb.segment,
+                                                           after.p_WSample[k]);
+      std::printf("    sample %zu seg %d->%d touching %d->%d pen %.4f->(new scope, old colon "
+                  "%.4f n %.2f %.2f %.2f)->%.4f sliding %d moved (%.4f %.4f %.4f)\n", k,
+                  cb.segment, ca.segment, cb.touching, ca.touching, cb.penetration_m,
+                  mid.penetration_m, mid.normal.x(), mid.normal.y(), mid.normal.z(),
+                  ca.penetration_m, ca.sliding, ds.x(), ds.y(), ds.z());
+    }
+  }
+  std::printf("   previous base %.1f N; step moved sample %zu by %.4f m, colon point %zu "
+              "(arc %.3f) by %.4f m; inserted %.4f -> %.4f\n",
+              previous_base_N, sample_at, sample_move_m, colon_at,
+              params.colon.points[colon_at].arc_m, colon_move_m, before.inserted_m,
+              after.inserted_m);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -107,6 +170,8 @@ int main(int argc, char** argv) {
   if (const char* ei = std::getenv("PROBE_EI")) {
     params.scope.flexural_rigidity_N_m2 *= std::atof(ei);
   }
+  // PROBE_DT_MS: another step (the rule and the operators keep their rates).
+  if (const char* dt = std::getenv("PROBE_DT_MS")) params.dt_s = std::atof(dt) / 1000.0;
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -128,6 +193,8 @@ int main(int argc, char** argv) {
   std::printf("t_s inserted_m tip_arc_m base_N stretch_m@arc wall_N@arc knob_up knob_right "
               "lumen_off_deg contacts\n");
   int next_print = 0;
+  ves::model::ModelState previous = state;
+  ves::model::ModelState earlier = state;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
@@ -146,9 +213,15 @@ int main(int argc, char** argv) {
     command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
     in.insertion_m = command_m;
     if (scripted) in = ves::training::ToStepInput(scripted->Act(p));
+    const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
+    // A spike's contacts are those at the start of its step: what made them
+    // is the step before, from `earlier` to `previous`.
+    if (spikes) earlier = previous, previous = state;
+    const double previous_base_N = out.base_force_N;
     ves::model::Step(params, in, &state, &scratch, &out);
-    if (std::getenv("PROBE_SPIKES") && std::abs(out.base_force_N) > 20.0) {
+    if (spikes && std::abs(out.base_force_N) > 20.0) {
       PrintSpike(state, in, out);
+      PrintMotion(params, earlier, previous, previous_base_N);
     }
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);

@@ -43,9 +43,14 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   hit.t = da - db > 1e-12 ? std::clamp(da / (da - db), 0.0, 1.0) : 0.5;
   const Eigen::Vector3d wa = pa - da * A.rest_tangent;
   const Eigen::Vector3d wb = pb - db * B.rest_tangent;
+  // The sample's offset from the lumen centre interpolated at t. Its norm, not
+  // the blend of the two in-plane distances: when neighbouring points are
+  // displaced differently (a stretched sigmoid) the blend of distances counts
+  // a sample on the axis as half their offset difference off it, so sliding
+  // along a tilted segment read as centimetres of penetration in one step.
   const Eigen::Vector3d w = (1.0 - hit.t) * wa + hit.t * wb;
-  const double rho = (1.0 - hit.t) * wa.norm() + hit.t * wb.norm();
   const double w_norm = w.norm();
+  const double rho = w_norm;
   hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w / w_norm) : A.plane_u;
   hit.radius_m = A.radius_m + hit.t * (B.radius_m - A.radius_m);
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;

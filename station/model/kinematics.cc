@@ -1,4 +1,5 @@
 // Forward kinematics of the endoscope chain (paper §3.2, Fig. 7).
+#include <algorithm>
 #include <cmath>
 
 #include "station/model/internal.h"
@@ -35,6 +36,15 @@ Eigen::Matrix3d JointRotation(const Eigen::Vector2d& q) {
   return rx * ry;
 }
 
+// The joint angles (a, b) whose rotation Rx(a) Ry(b) turns +z into `axis`
+// (a unit vector): Rx(a) Ry(b) e_z = (sin b, -sin a cos b, cos a cos b). The
+// twist about the axis that a product of two joints carries is dropped.
+Eigen::Vector2d JointAnglesOfAxis(const Eigen::Vector3d& axis) {
+  const double b = std::asin(std::clamp(axis.x(), -1.0, 1.0));
+  const double a = std::atan2(-axis.y(), axis.z());
+  return Eigen::Vector2d(a, b);
+}
+
 }  // namespace
 
 void UpdateScopeKinematics(const ModelParams& params, ModelState* s) {
@@ -51,8 +61,19 @@ void UpdateScopeKinematics(const ModelParams& params, ModelState* s) {
     arc_to_tip_m += s->link_length_m[k];
     if (arc_to_tip_m <= s->inserted_m + 1e-12) first_inside = k;
   }
+  const int previous_root = RootLink(*s);
   s->first_inside_link = first_inside;
   const int root = RootLink(*s);
+  if (root > previous_root && root + 1 < n) {
+    // Withdrawn past a joint: the joints now outside are straightened by the
+    // guide. Their turn goes to the first joint still inside, so the inserted
+    // part keeps its direction (the exiting joint sits at the anus, so its
+    // position is kept too); zeroing it instead swung a looped scope's far
+    // end by centimetres in one step and drove it into the wall.
+    Eigen::Matrix3d R_carried = Eigen::Matrix3d::Identity();
+    for (int k = previous_root + 1; k <= root + 1; ++k) R_carried *= JointRotation(s->bend_rad[k]);
+    s->bend_rad[root + 1] = JointAnglesOfAxis(R_carried.col(2));
+  }
 
   // Links up to the root lie straight on the entry axis (the anus guides them).
   double arc_m = 0.0;

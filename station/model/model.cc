@@ -117,6 +117,7 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.u_matrix.resize(n);
   sc.d_inverse.resize(n);
   sc.u_vector.resize(n);
+  sc.joint_increment.resize(n);
   sc.body_displacement.resize(n);
   const size_t samples = CountSamples(params);
   sc.sample_force_W_N.assign(samples, Eigen::Vector3d::Zero());

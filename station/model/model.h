@@ -149,6 +149,7 @@ struct Scratch {
   std::vector<Eigen::Matrix2d> d_inverse;
   std::vector<Eigen::Vector2d> u_vector;
   std::vector<Eigen::Matrix<double, 6, 1>> body_displacement;
+  std::vector<Eigen::Vector2d> joint_increment;
   std::vector<Eigen::Vector3d> sample_force_W_N;
   // Linearised contact stiffness k_n n n^T + k_t (I - n n^T) of each touching
   // sample, kept as k_n (k_t = friction_stiffness_N_per_m, n = sample_normal_W).

@@ -121,34 +121,53 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   S_thrust << Eigen::Vector3d::Zero(), e;
   S_roll << e, anus.cross(e);
   const double d_roll = input.roll_rad - s->roll_rad;
-  double d_insert = 0.0;
   const double max_insert = params.scope.working_length_m;
-  if (input.thrust_mode == ThrustMode::kPosition) {
-    d_insert = std::clamp(target_insertion_m, 0.0, max_insert) - s->inserted_m;
-  } else {
-    const double D0 = params.thrust_damping_N_s_per_m + S_thrust.dot(IA[root] * S_thrust);
-    const double u0 = dt * input.push_force_N + S_thrust.dot(bA[root]) -
-                      S_thrust.dot(IA[root] * (S_roll * d_roll));
-    d_insert = std::clamp(s->inserted_m + u0 / D0, 0.0, max_insert) - s->inserted_m;
-  }
-  auto& delta = sc->body_displacement;
-  delta[root] = S_thrust * d_insert + S_roll * d_roll;
   // Reaction at the base, quasi-static: every inserted point moves with the
   // thrust and turns with the roll, so the hand holds e . sum F and the moment
   // about the entry axis (forces at the start of the step).
   out->base_force_N = -e.dot(force_sum_N);
   out->roll_torque_N_m = -e.dot(moment_sum_N_m);
-  // Base to tip: joint increments and body displacements.
+  // Base to tip: joint increments and body displacements for the linearised
+  // step with its force terms (u, bA and the hand's push) scaled by `scale`;
+  // the prescribed roll (and thrust in kPosition) is never scaled. Returns
+  // the largest joint turn.
+  auto& delta = sc->body_displacement;
+  auto& dq = sc->joint_increment;
+  double d_insert = 0.0;
+  auto solve_down = [&](double scale) {
+    if (input.thrust_mode == ThrustMode::kPosition) {
+      d_insert = std::clamp(target_insertion_m, 0.0, max_insert) - s->inserted_m;
+    } else {
+      const double D0 = params.thrust_damping_N_s_per_m + S_thrust.dot(IA[root] * S_thrust);
+      const double u0 = scale * (dt * input.push_force_N + S_thrust.dot(bA[root])) -
+                        S_thrust.dot(IA[root] * (S_roll * d_roll));
+      d_insert = std::clamp(s->inserted_m + u0 / D0, 0.0, max_insert) - s->inserted_m;
+    }
+    delta[root] = S_thrust * d_insert + S_roll * d_roll;
+    double largest_turn = 0.0;
+    for (int k = root + 1; k < n; ++k) {
+      dq[k].noalias() =
+          sc->d_inverse[k] * (scale * sc->u_vector[k] - sc->u_matrix[k].transpose() * delta[k - 1]);
+      largest_turn = std::max(largest_turn, dq[k].norm());
+      delta[k] = delta[k - 1] + S[k] * dq[k];
+    }
+    return largest_turn;
+  };
+  // The linearisation holds for small turns only. A step that would turn a
+  // joint further (a loop snapping, a jammed chain buckling) is shortened as a
+  // whole, so the chain keeps the shape of the linearised solution rather than
+  // a distorted one with a few joints cut short: cutting joints one by one
+  // swept samples centimetres into the wall in a single step.
+  const double largest_turn = solve_down(1.0);
+  if (largest_turn > kMaxJointTurnPerStep_rad) {
+    solve_down(kMaxJointTurnPerStep_rad / largest_turn);
+  }
   for (int k = root + 1; k < n; ++k) {
-    Eigen::Vector2d dq =
-        sc->d_inverse[k] * (sc->u_vector[k] - sc->u_matrix[k].transpose() * delta[k - 1]);
-    // The linearisation holds for small turns only; a larger one (a jammed,
-    // buckling chain) is cut to keep the step well inside it.
-    const double turn = dq.norm();
-    if (turn > kMaxJointTurnPerStep_rad) dq *= kMaxJointTurnPerStep_rad / turn;
-    delta[k] = delta[k - 1] + S[k] * dq;
-    s->bend_rad[k] += dq;
-    s->bend_rate_rad_per_s[k] = dq / dt;
+    // The prescribed base motion alone can still ask for more; cut that joint.
+    const double turn = dq[k].norm();
+    if (turn > kMaxJointTurnPerStep_rad) dq[k] *= kMaxJointTurnPerStep_rad / turn;
+    s->bend_rad[k] += dq[k];
+    s->bend_rate_rad_per_s[k] = dq[k] / dt;
   }
   s->inserted_m += d_insert;
   s->insertion_rate_m_per_s = d_insert / dt;
