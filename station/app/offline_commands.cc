@@ -1,5 +1,5 @@
 // ves-station import-case / export-case / status: the station's offline case
-// library (the paper's CD-ROM) and its pending uploads.
+// library (the paper's CD-ROM), its pending uploads and lesson verdicts.
 #include <boost/program_options.hpp>
 
 #include <iostream>
@@ -7,6 +7,7 @@
 #include "patient_db/case_problem.h"
 #include "station/app/commands.h"
 #include "station/sync/case_cache.h"
+#include "station/sync/lesson_cache.h"
 #include "station/sync/outbox.h"
 #include "station/sync/station_paths.h"
 
@@ -130,6 +131,24 @@ int RunStatusCommand(const CommandArgs& args) {
                 << (upload.last_error.empty() ? "" : "  last error: " + upload.last_error)
                 << "\n";
     }
+    // Lesson sessions: the server judges them from their replay; until the
+    // station has fetched that verdict (ves-station sync) it is awaited.
+    sync::LessonCache lessons(paths.lessons());
+    const auto awaited = lessons.Awaited();
+    std::cout << "lesson verdicts awaited: " << awaited.size() << "\n";
+    for (const auto& session : awaited) {
+      std::cout << "  " << session.session_uuid << "  lesson=" << session.lesson_id << "\n";
+    }
+    std::vector<std::string> damaged_verdicts;
+    const auto verdicts = lessons.Verdicts(&damaged_verdicts);
+    std::cout << "lesson verdicts received: " << verdicts.size() << "\n";
+    for (const auto& verdict : verdicts) {
+      std::cout << "  " << verdict.session_uuid() << "  trainee=" << verdict.trainee_id()
+                << "  lesson=" << verdict.lesson_id() << "  "
+                << (verdict.passed() ? "PASSED" : "FAILED") << "  score=" << verdict.score()
+                << "\n";
+    }
+    for (const auto& problem : damaged_verdicts) std::cout << "  DAMAGED " << problem << "\n";
     return 0;
   } catch (const std::exception& error) {
     std::cerr << "ves-station: " << error.what() << "\n";

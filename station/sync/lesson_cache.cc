@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace ves::sync {
 namespace {
@@ -109,6 +110,26 @@ std::optional<ves::v1::LessonVerdict> LessonCache::FindVerdict(
   ves::v1::LessonVerdict verdict;
   if (!bytes || !verdict.ParseFromString(*bytes)) return std::nullopt;
   return verdict;
+}
+
+std::vector<ves::v1::LessonVerdict> LessonCache::Verdicts(std::vector<std::string>* damaged) const {
+  std::vector<ves::v1::LessonVerdict> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir_ / "verdicts", ec)) {
+    if (entry.path().extension() != ".pb") continue;  // *.tmp of an interrupted write
+    auto bytes = ReadBytes(entry.path());
+    ves::v1::LessonVerdict verdict;
+    if (!bytes || !verdict.ParseFromString(*bytes) || verdict.session_uuid().empty()) {
+      if (damaged) damaged->push_back(entry.path().string() + ": not a lesson verdict");
+      continue;
+    }
+    out.push_back(std::move(verdict));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::make_pair(a.judged_unix_ms(), a.session_uuid()) <
+           std::make_pair(b.judged_unix_ms(), b.session_uuid());
+  });
+  return out;
 }
 
 }  // namespace ves::sync

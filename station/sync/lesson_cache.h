@@ -36,6 +36,9 @@ class LessonCache {
   // Stores the verdict and stops awaiting it.
   void PutVerdict(const ves::v1::LessonVerdict& verdict);
   std::optional<ves::v1::LessonVerdict> FindVerdict(const std::string& session_uuid) const;
+  // Every stored verdict, oldest judgement first; unreadable files are named
+  // in `damaged` (when given) and skipped.
+  std::vector<ves::v1::LessonVerdict> Verdicts(std::vector<std::string>* damaged = nullptr) const;
 
   const std::filesystem::path& dir() const { return dir_; }
 

@@ -149,6 +149,11 @@ TEST_F(StationLesson, AnOfflineLessonRunsFromTheCacheAndItsVerdictArrivesOnRecon
       << offline.out;
   const std::string uuid = CommittedUuid(offline.out);
   ASSERT_FALSE(uuid.empty()) << offline.out;
+  const ProcessResult waiting = Station({"status", "--data-dir", data.string()});
+  EXPECT_NE(waiting.out.find("lesson verdicts awaited: 1\n  " + uuid +
+                             "  lesson=x-ray-free-1-gentle-minute"),
+            std::string::npos)
+      << waiting.out;
 
   StartServer(port);
   const ProcessResult sync = Station(
@@ -158,6 +163,12 @@ TEST_F(StationLesson, AnOfflineLessonRunsFromTheCacheAndItsVerdictArrivesOnRecon
                           uuid + ": FAILED"),
             std::string::npos)
       << sync.out;
+  const ProcessResult synced = Station({"status", "--data-dir", data.string()});
+  EXPECT_NE(synced.out.find("lesson verdicts awaited: 0\n"), std::string::npos) << synced.out;
+  EXPECT_NE(synced.out.find("  " + uuid + "  trainee=" + kTrainee +
+                            "  lesson=x-ray-free-1-gentle-minute  FAILED  score="),
+            std::string::npos)
+      << synced.out;
   const ProcessResult progress = AsSupervisor({"progress", "--trainee", kTrainee});
   EXPECT_TRUE(std::regex_search(FirstLessonRow(progress.out), std::regex(" 2 +0/1 ")))
       << progress.out;  // both attempts judged, neither passed
