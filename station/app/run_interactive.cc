@@ -238,6 +238,7 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
                                  const InteractiveChoices* choices) {
   ui::StationWindows windows;  // throws first when there is no display
+  if (lesson_aids != nullptr) windows.SetFluoroscopyAllowed(lesson_aids->fluoroscopy_allowed());
   // Tiled rather than stacked at the screen's corner: the two views one above
   // the other, the panel to their right (Qt's toolbar makes windows wide).
   cv::moveWindow(ui::StationWindows::kEndoscopeWindow, 0, 0);

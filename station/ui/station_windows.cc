@@ -34,7 +34,8 @@ void StationWindows::Show(const cv::Mat& endoscope_bgr, const cv::Mat& fluorosco
   if (fluoroscopy_bgr.empty()) {
     cv::Mat off(endoscope_bgr.size().empty() ? cv::Size(480, 480) : endoscope_bgr.size(), CV_8UC3,
                 cv::Scalar(20, 20, 20));
-    cv::putText(off, "X-ray off (f)", {20, 40}, cv::FONT_HERSHEY_SIMPLEX, 0.8,
+    cv::putText(off, fluoroscopy_allowed_ ? "X-ray off (f)" : "X-ray not allowed in this lesson",
+                {20, 40}, cv::FONT_HERSHEY_SIMPLEX, 0.8,
                 cv::Scalar(200, 200, 200), 1, cv::LINE_AA);
     cv::imshow(kFluoroscopyWindow, off);
   } else {

@@ -23,7 +23,12 @@ class StationWindows {
   StationWindows(const StationWindows&) = delete;
   StationWindows& operator=(const StationWindows&) = delete;
 
-  // Shows the latest frames; an empty fluoroscopy image shows "X-ray off".
+  // A lesson without fluoroscopy: the X-ray window says so instead of
+  // offering the key that turns it on.
+  void SetFluoroscopyAllowed(bool allowed) { fluoroscopy_allowed_ = allowed; }
+
+  // Shows the latest frames; an empty fluoroscopy image shows "X-ray off"
+  // (or "not allowed in this lesson").
   void Show(const cv::Mat& endoscope_bgr, const cv::Mat& fluoroscopy_bgr, const cv::Mat& panel_bgr);
 
   // Handles keys and mouse events for up to `wait_ms`, updating `state`.
@@ -39,6 +44,7 @@ class StationWindows {
   ControlState* polling_state_{nullptr};
   const PanelModel* polling_model_{nullptr};
   int applied_{0};
+  bool fluoroscopy_allowed_{true};
 };
 
 }  // namespace ves::ui

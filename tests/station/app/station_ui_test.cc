@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 
@@ -252,6 +253,67 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
     ++committed;
   }
   EXPECT_EQ(committed, 2u) << quit.out;
+}
+
+}  // namespace
+}  // namespace ves::station::testing
+
+namespace ves::station::testing {
+namespace {
+
+// An interactive lesson with neither aid: the X-ray window never shows an
+// X-ray (it says the aid is not allowed), the keys for X-ray and wire-frame
+// change nothing the model gets, and the server's replay of the attempt
+// agrees (docs/lessons.md, "Interactive lesson runs").
+TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) {
+  const fs::path lesson_file = dir_ / "no-aids.textproto";
+  {
+    std::ofstream out(lesson_file);
+    out << "curriculum_id: \"no-aids-ui\" lessons { lesson_id: \"no-aids-ui-1\" "
+           "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 "
+           "aids { fluoroscopy_allowed: false wireframe_allowed: false } }\n";
+  }
+  const auto as = [&](const std::string& token, std::vector<std::string> args) {
+    args.insert(args.end(), {"--server", address_, "--token", token});
+    return Admin(args);
+  };
+  ASSERT_EQ(as(admin_token_, {"trainee", "add", "--id", "trainee-ui"}).exit_code, 0);
+  const ProcessResult created = as(supervisor_token_, {"curriculum", "create", lesson_file.string()});
+  ASSERT_EQ(created.exit_code, 0) << created.err;
+  ASSERT_EQ(as(supervisor_token_,
+               {"assign", "--curriculum", "no-aids-ui", "--trainee", "trainee-ui"})
+                .exit_code,
+            0);
+
+  const fs::path data = dir_ / "station";
+  station_ = std::make_unique<ChildProcess>(
+      std::vector<std::string>{kStationBin, "run", "--trainee", "trainee-ui", "--lesson", "next",
+                               "--server", address_, "--token", station_token_, "--data-dir",
+                               data.string(), "--seconds", "120"},
+      dir_ / "interactive", std::vector<std::string>{"DISPLAY=" + display_});
+  const std::string endoscope = WindowId("VES endoscope");
+  ASSERT_FALSE(endoscope.empty()) << ReadFile(dir_ / "interactive.err");
+  const std::string fluoroscopy = WindowId("VES fluoroscopy");
+  ASSERT_FALSE(fluoroscopy.empty());
+  ASSERT_FALSE(WindowId("VES control").empty());
+  std::this_thread::sleep_for(kSettle);
+
+  // f: X-ray on (in a free run this changes the window, test above); 1:
+  // wire-frame view; w: push. The X-ray window must not change.
+  const std::string before = Shot(fluoroscopy);
+  Keys(endoscope, {"f", "1", "w", "w"});
+  EXPECT_LT(ChangedShare(before, Shot(fluoroscopy)), kChangedShare);
+
+  Keys(endoscope, {"q"});
+  const ProcessResult quit = station_->Wait(seconds(90));
+  EXPECT_EQ(quit.exit_code, 3) << quit.out << quit.err;
+  EXPECT_NE(quit.out.find("aids: fluoroscopy OFF, wireframe view OFF"), std::string::npos)
+      << quit.out;
+  EXPECT_NE(quit.out.find("xray_s=0.000"), std::string::npos) << quit.out;
+  // The server replays the input log: no X-ray, no wire-frame reached the model.
+  EXPECT_NE(quit.out.find("fluoroscopy not allowed: xray_s 0 = 0: ok"), std::string::npos)
+      << quit.out;
+  EXPECT_NE(quit.out.find("wireframe not allowed: not used"), std::string::npos) << quit.out;
 }
 
 }  // namespace
