@@ -20,34 +20,6 @@ using patient_db::StoreRole;
 
 namespace {
 
-// Authenticates; on failure finishes the call and returns false.
-bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, Principal* who) {
-  AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
-  if (a.ok()) return true;
-  reactor->Finish(ToGrpcStatus(a));
-  return false;
-}
-
-bool IsName(const std::string& s) {
-  if (s.empty() || s.size() > 128) return false;
-  for (char c : s) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return true;
-}
-
-std::string DeterministicBytes(const google::protobuf::Message& m) {
-  std::string out;
-  {
-    google::protobuf::io::StringOutputStream stream(&out);
-    google::protobuf::io::CodedOutputStream coded(&stream);
-    coded.SetSerializationDeterministic(true);
-    m.SerializeToCodedStream(&coded);
-  }
-  return out;
-}
-
 // Pins the lesson's case to a stored version the institution may use (by
 // payload hash when the file gives one, else the latest version), fills the
 // default scope and passes, and checks that case, scope and time limit build

@@ -86,9 +86,6 @@ void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
   reactor->Finish(status);
 }
 
-namespace {
-
-// Authenticates; on failure finishes the call and returns false.
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
            const ServiceDeps& deps, Principal* who) {
   AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
@@ -107,6 +104,16 @@ std::string DeterministicBytes(const google::protobuf::Message& m) {
   }
   return out;
 }
+
+bool IsName(const std::string& s) {
+  if (s.empty() || s.size() > 128) return false;
+  for (char c : s) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
+  }
+  return true;
+}
+
+namespace {
 
 ves::v1::SessionSummary ToSummary(const patient_db::SessionRow& r) {
   ves::v1::SessionSummary s;
@@ -130,14 +137,6 @@ void ToTrainee(const patient_db::TraineeRow& r, ves::v1::Trainee* t) {
   t->set_institution(r.institution);
   t->set_display_name(r.display_name);
   t->set_created_unix_ms(r.created_unix_ms);
-}
-
-bool IsName(const std::string& s) {
-  if (s.empty() || s.size() > 128) return false;
-  for (char c : s) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return true;
 }
 
 // Looks the trainee up and checks that `who` may read their records.

@@ -8,6 +8,8 @@
 #include <mutex>
 #include <string>
 
+#include <google/protobuf/message.h>
+
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/lesson_judge.h"
@@ -158,5 +160,13 @@ ves::v1::Role ToProtoRole(StoreRole role);
 void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
                    const Principal& who, const std::string& action, const std::string& target,
                    const grpc::Status& status);
+// Authenticates the call; on failure finishes it (UNAUTHENTICATED) and
+// returns false.
+bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
+           const ServiceDeps& deps, Principal* who);
+// A message's bytes with deterministic map order: stored bodies hash the same.
+std::string DeterministicBytes(const google::protobuf::Message& m);
+// An id or display name: 1-128 bytes, no control characters.
+bool IsName(const std::string& s);
 
 }  // namespace ves::server
