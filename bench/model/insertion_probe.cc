@@ -172,6 +172,11 @@ int main(int argc, char** argv) {
   }
   // PROBE_DT_MS: another step (the rule and the operators keep their rates).
   if (const char* dt = std::getenv("PROBE_DT_MS")) params.dt_s = std::atof(dt) / 1000.0;
+  // PROBE_EA (0 turns the axial give off), PROBE_PLEAT, PROBE_PLEAT_LIMIT: the
+  // colon's axial give (docs/model.md).
+  if (const char* ea = std::getenv("PROBE_EA")) params.colon_longitudinal_stiffness_N = std::atof(ea);
+  if (const char* r = std::getenv("PROBE_PLEAT")) params.colon_pleat_stiffness_ratio = std::atof(r);
+  if (const char* l = std::getenv("PROBE_PLEAT_LIMIT")) params.colon_pleat_limit = std::atof(l);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -180,6 +185,10 @@ int main(int argc, char** argv) {
       std::getenv("PROBE_REDUCE_FROM") ? std::atof(std::getenv("PROBE_REDUCE_FROM")) : 1e9;
   const double slack_start_m =
       std::getenv("PROBE_SLACK") ? std::atof(std::getenv("PROBE_SLACK")) : 0.10;
+  // PROBE_SLACK_END: the slack at which a reduction stops (default 0.03 m;
+  // below 0 the scope is withdrawn until it is shorter than the centerline).
+  const double slack_end_m =
+      std::getenv("PROBE_SLACK_END") ? std::atof(std::getenv("PROBE_SLACK_END")) : 0.03;
   bool withdrawing = false;
   double command_m = 0.0;
   // PROBE_OPERATOR=novice|expert: the scripted operator drives instead of the rule.
@@ -203,12 +212,20 @@ int main(int argc, char** argv) {
                                 -p.angulation_up_rad, p.angulation_up_rad);
     in.knob_right_rad = std::clamp(in.knob_right_rad + gain_per_s * right_err * params.dt_s,
                                    -p.angulation_right_rad, p.angulation_right_rad);
+    // PROBE_RELAX=RATE: with the lumen ahead (within 30 degrees), the knobs
+    // ease toward neutral at RATE per second (the tip straightened).
+    if (const char* relax = std::getenv("PROBE_RELAX");
+        relax && std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) < 0.52) {
+      const double keep = std::max(0.0, 1.0 - std::atof(relax) * params.dt_s);
+      in.knob_up_rad *= keep;
+      in.knob_right_rad *= keep;
+    }
     // Loop reduction: when the scope goes in but the tip does not follow,
     // withdraw (knobs held, tip hooked) until the slack is gone.
     const double slack_m = state.inserted_m - state.tip_arc_m;
     if (!withdrawing && state.tip_arc_m > reduce_from_m &&
         (slack_m > slack_start_m || out.base_force_N > 8.0)) withdrawing = true;
-    if (withdrawing && slack_m < 0.03) withdrawing = false;
+    if (withdrawing && slack_m < slack_end_m) withdrawing = false;
     command_m += (withdrawing ? -1.0 : 1.0) * speed_m_per_s * params.dt_s;
     command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
     in.insertion_m = command_m;
@@ -248,6 +265,18 @@ int main(int argc, char** argv) {
         std::printf("    tip (%.3f %.3f %.3f) seg %d t %.2f pen %.4f offset %.4f\n", tip.x(),
                     tip.y(), tip.z(), c.segment, c.segment_t, c.penetration_m,
                     state.colon_offset_m[c.segment].norm());
+      }
+      if (std::getenv("PROBE_AXIAL")) {
+        // Axial give every 0.1 m of colon (mm, + toward the cecum).
+        std::printf("    axial_mm");
+        const auto& pts = params.colon.points;
+        double next_arc_m = 0.1;
+        for (size_t i = 0; i < pts.size(); ++i) {
+          if (pts[i].arc_m < next_arc_m) continue;
+          std::printf(" %.0f", 1e3 * state.colon_axial_m[i]);
+          next_arc_m += 0.1;
+        }
+        std::printf("\n");
       }
       if (std::getenv("PROBE_CONTACTS")) {
         for (int j = 0; j < out.contact_count; ++j) {

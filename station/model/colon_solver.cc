@@ -5,7 +5,11 @@
 // the contact springs all taken at the end of the step. That is one
 // symmetric, diagonally dominant block-tridiagonal system (2x2 blocks), solved
 // in O(N) by block Thomas elimination. Point 0 (the anus) is fixed.
+// With the axial give on (colon_longitudinal_stiffness_N > 0, experimental),
+// each point also slides along its rest tangent: a scalar tridiagonal system
+// solved after the in-plane one (docs/model.md, "Axial give").
 #include <algorithm>
+#include <cmath>
 
 #include "station/model/internal.h"
 
@@ -37,12 +41,53 @@ int LastActivePoint(const ModelState& s, int N) {
   }
   for (int i = N - 1; i > last; --i) {
     if (s.colon_offset_m[i].cwiseAbs().maxCoeff() > kRestOffset_m ||
-        s.colon_rate_m_per_s[i].cwiseAbs().maxCoeff() * kOneStep_s > kRestOffset_m) {
+        s.colon_rate_m_per_s[i].cwiseAbs().maxCoeff() * kOneStep_s > kRestOffset_m ||
+        std::abs(s.colon_axial_m[i]) > kRestOffset_m ||
+        std::abs(s.colon_axial_rate_m_per_s[i]) * kOneStep_s > kRestOffset_m) {
       last = i;
       break;
     }
   }
   return std::min(N - 1, last + kActiveMargin);
+}
+
+// Axial force between neighbours (+ pulls them together) for the strain e of
+// their gap and its slope per unit strain: the wall's longitudinal stiffness
+// EA when stretched; when shortened the wall folds onto the scope ("pleats",
+// the accordion of real colonoscopy) at pleat_ratio * EA until the shortening
+// reaches pleat_limit, then the packed folds resist at hardening * EA.
+struct PairAxial {
+  double force_N;
+  double slope_N;
+};
+PairAxial CalcPairAxial(const ModelParams& params, double strain) {
+  const double EA = params.colon_longitudinal_stiffness_N;
+  if (strain >= 0.0) return {EA * strain, EA};
+  const double soft = params.colon_pleat_stiffness_ratio * EA;
+  const double limit = params.colon_pleat_limit;
+  if (strain >= -limit) return {soft * strain, soft};
+  const double hard = params.colon_pleat_hardening_ratio * EA;
+  return {-soft * limit + hard * (strain + limit), hard};
+}
+
+// Tridiagonal (Thomas) solve of the axial increments over points 1..last.
+void SolveAxial(int last, Scratch* sc) {
+  auto& diag = sc->axial_diag;
+  const auto& upper = sc->axial_upper;
+  auto& rhs = sc->axial_rhs;
+  auto& gain = sc->axial_work;
+  for (int i = 1; i <= last; ++i) {
+    double m = diag[i];
+    double y = rhs[i];
+    if (i > 1) {
+      m -= upper[i - 1] * gain[i - 1];
+      y -= upper[i - 1] * rhs[i - 1];
+    }
+    const double m_inv = 1.0 / m;
+    gain[i] = upper[i] * m_inv;
+    rhs[i] = y * m_inv;
+  }
+  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
 }
 
 }  // namespace
@@ -55,6 +100,10 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   sc->colon_pair_transfer.assign(N, Eigen::Matrix2d::Zero());
   sc->colon_suspension_N_per_m.assign(N, 0.0);
   sc->colon_base_diag.assign(N, 0.0);
+  sc->axial_pair_gap_m.assign(N, 1.0);
+  for (int i = 0; i + 1 < N; ++i) {
+    sc->axial_pair_gap_m[i] = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
+  }
   for (int i = 0; i < N; ++i) {
     const TissueParams& t = pts[i].tissue;
     const double h = pts[i].length_m;
@@ -99,6 +148,33 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     rhs[i] = r;
   }
   upper[end].setZero();
+  // Axial give (docs/model.md): the same suspension anchors the point along
+  // its tangent; neighbours resist a change of their gap (CalcPairAxial).
+  // Implicit like the in-plane part; the anus point is fixed.
+  const bool axial = params.colon_longitudinal_stiffness_N > 0.0;
+  auto& a_diag = sc->axial_diag;
+  auto& a_upper = sc->axial_upper;
+  auto& a_rhs = sc->axial_rhs;
+  if (axial) {
+    const auto& a = s->colon_axial_m;
+    for (int i = 0; i <= end; ++i) {
+      const double h = pts[i].length_m;
+      a_diag[i] = pts[i].tissue.suspension_damping_N_s_per_m2 * h +
+                  dt * sc->colon_suspension_N_per_m[i];
+      a_rhs[i] = -dt * sc->colon_suspension_N_per_m[i] * a[i];
+      a_upper[i] = 0.0;
+    }
+    for (int i = 0; i < end; ++i) {
+      const double gap = sc->axial_pair_gap_m[i];
+      const PairAxial f = CalcPairAxial(params, (a[i + 1] - a[i]) / gap);
+      const double k = f.slope_N / gap;
+      a_rhs[i] += dt * f.force_N;
+      a_rhs[i + 1] -= dt * f.force_N;
+      a_diag[i] += dt * k;
+      a_diag[i + 1] += dt * k;
+      a_upper[i] = -dt * k;
+    }
+  }
   // Contacts: the scope (at its new shape) presses the wall outward along n;
   // the wall's friction reaction is the opposite of the scope's friction.
   const int samples = static_cast<int>(s->samples.size());
@@ -137,6 +213,18 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     diag[k + 1].diagonal().array() += w[1] * w[1] * b;
     upper[k].noalias() +=
         w[0] * w[1] * (b * sc->colon_pair_transfer[k] + (a - b) * v[0] * v[1].transpose());
+    if (axial) {
+      // Along the tangents: friction drags the wall along the scope (the
+      // stick spring b), and the normal has an axial part only at the pole.
+      const Eigen::Vector3d& t0 = pts[k].rest_tangent;
+      const Eigen::Vector3d& t1 = pts[k + 1].rest_tangent;
+      const double tn[2] = {t0.dot(hit.normal), t1.dot(hit.normal)};
+      a_rhs[k] += dt * w[0] * t0.dot(f_wall);
+      a_rhs[k + 1] += dt * w[1] * t1.dot(f_wall);
+      a_diag[k] += w[0] * w[0] * (b + (a - b) * tn[0] * tn[0]);
+      a_diag[k + 1] += w[1] * w[1] * (b + (a - b) * tn[1] * tn[1]);
+      a_upper[k] += w[0] * w[1] * (b * t0.dot(t1) + (a - b) * tn[0] * tn[1]);
+    }
   }
   // Block tridiagonal solve over points 1..last, point 0 (the anus) and the
   // points past `last` held where they are. Twisted ("burn at both ends")
@@ -187,15 +275,24 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     if (p + 1 + j <= last) rhs[p + 1 + j].noalias() -= gain[p + 1 + j] * rhs[p + j];
   }
   const double inv_dt = 1.0 / dt;
+  if (axial) SolveAxial(last, sc);
   for (int i = 1; i <= last; ++i) {
     s->colon_offset_m[i] += rhs[i];
     s->colon_rate_m_per_s[i] = rhs[i] * inv_dt;
     s->p_WColon[i] = pts[i].rest_position_m + PlaneBasis(pts[i]) * s->colon_offset_m[i];
+    if (axial) {
+      s->colon_axial_m[i] += a_rhs[i];
+      s->colon_axial_rate_m_per_s[i] = a_rhs[i] * inv_dt;
+      s->p_WColon[i] += pts[i].rest_tangent * s->colon_axial_m[i];
+    }
   }
   rhs[0].setZero();
+  a_rhs[0] = 0.0;
   for (int i = last + 1; i < N; ++i) {
     rhs[i].setZero();
+    a_rhs[i] = 0.0;
     s->colon_rate_m_per_s[i].setZero();
+    s->colon_axial_rate_m_per_s[i] = 0.0;
   }
 }
 

@@ -51,6 +51,14 @@ void ValidateParams(const ModelParams& p) {
           p.friction_stiffness_N_per_m, "must be in [1, 1e7]");
   Require(InRange(p.outer_cone_ratio, 1.01, 100.0), "outer_cone_ratio", p.outer_cone_ratio,
           "must be in [1.01, 100]");
+  Require(InRange(p.colon_longitudinal_stiffness_N, 0.0, 1e5), "colon_longitudinal_stiffness_N",
+          p.colon_longitudinal_stiffness_N, "must be in [0, 1e5] N");
+  Require(InRange(p.colon_pleat_stiffness_ratio, 1e-3, 1.0), "colon_pleat_stiffness_ratio",
+          p.colon_pleat_stiffness_ratio, "must be in [0.001, 1]");
+  Require(InRange(p.colon_pleat_limit, 0.05, 0.9), "colon_pleat_limit", p.colon_pleat_limit,
+          "must be in [0.05, 0.9]");
+  Require(InRange(p.colon_pleat_hardening_ratio, 1.0, 1e4), "colon_pleat_hardening_ratio",
+          p.colon_pleat_hardening_ratio, "must be in [1, 1e4]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
           p.contact_search_window, "must be in [1, 64]");
 }
@@ -101,6 +109,8 @@ ModelState MakeInitialState(const ModelParams& params) {
   const int N = static_cast<int>(params.colon.points.size());
   s.colon_offset_m.assign(N, Eigen::Vector2d::Zero());
   s.colon_rate_m_per_s.assign(N, Eigen::Vector2d::Zero());
+  s.colon_axial_m.assign(N, 0.0);
+  s.colon_axial_rate_m_per_s.assign(N, 0.0);
   s.p_WColon.resize(N);
   for (int i = 0; i < N; ++i) s.p_WColon[i] = params.colon.points[i].rest_position_m;
   s.wall_deformation_m.assign(N, 0.0);
@@ -132,6 +142,10 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.colon_upper.resize(N);
   sc.colon_rhs.resize(N);
   sc.colon_work.resize(N);
+  sc.axial_diag.assign(N, 0.0);
+  sc.axial_upper.assign(N, 0.0);
+  sc.axial_rhs.assign(N, 0.0);
+  sc.axial_work.assign(N, 0.0);
   internal::PrepareColonSystem(params, &sc);
   return sc;
 }

@@ -37,6 +37,17 @@ struct ModelParams {
   double friction_stiffness_N_per_m{500.0};  // tangential stick spring of one contact
   double outer_cone_ratio{1.5};             // r0 = ratio * F_s * |f_n|, eq. (16)
   int contact_search_window{4};             // segments searched each way per step
+  // Axial give of the colon (experimental, off by default: docs/model.md,
+  // "Known limits", says why): each point may also
+  // slide along its rest tangent, anchored by its own suspension (K_c, D_c),
+  // and neighbours resist a change of their gap: stretching with the wall's
+  // longitudinal stiffness EA, shortening (the wall folding, "pleating" onto
+  // the scope) with pleat_stiffness_ratio * EA until the gap has shortened by
+  // pleat_limit, beyond which the folds are packed (pleat_hardening_ratio * EA).
+  double colon_longitudinal_stiffness_N{0.0};  // EA (N per unit strain); 0: no axial give
+  double colon_pleat_stiffness_ratio{0.05};
+  double colon_pleat_limit{0.6};                 // largest shortening strain before packing
+  double colon_pleat_hardening_ratio{50.0};
   bool operator==(const ModelParams&) const = default;
 };
 
@@ -103,6 +114,10 @@ struct ModelState {
   // Colon: each point moves only in its plane P_i.
   std::vector<Eigen::Vector2d> colon_offset_m;  // d_ri in (plane_u, plane_v)
   std::vector<Eigen::Vector2d> colon_rate_m_per_s;
+  // Axial give: offset of point i along its rest tangent (its plane P_i moves
+  // with it, the plane's normal stays the rest tangent).
+  std::vector<double> colon_axial_m;
+  std::vector<double> colon_axial_rate_m_per_s;
   std::vector<Eigen::Vector3d> p_WColon;     // current r_i
   std::vector<double> wall_deformation_m;    // largest radial l at each point
 
@@ -169,6 +184,12 @@ struct Scratch {
   std::vector<Eigen::Matrix2d> colon_pair_transfer;  // [i]: B_i^T B_(i+1), plane i+1 -> i
   std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i
   std::vector<double> colon_base_diag;             // [i]: D_c h + dt (K_c h + couplings)
+  // Axial give: tridiagonal system of the tangential offsets (scalar per point).
+  std::vector<double> axial_diag;
+  std::vector<double> axial_upper;                 // (i, i+1)
+  std::vector<double> axial_rhs;                   // after the solve: the increments
+  std::vector<double> axial_work;
+  std::vector<double> axial_pair_gap_m;            // [i]: rest distance of points i, i+1
 };
 
 ModelState MakeInitialState(const ModelParams& params);  // validates params; may throw

@@ -28,7 +28,7 @@ void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelS
   }
 }
 
-bool AllFinite(const ModelState& s, const StepOutput& out) {
+bool AllFinite(const ModelState& s, const StepOutput& out, bool axial) {
   if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
       !std::isfinite(out.roll_torque_N_m) || !s.X_WTip.matrix().allFinite()) {
     return false;
@@ -39,6 +39,11 @@ bool AllFinite(const ModelState& s, const StepOutput& out) {
   for (const Eigen::Vector2d& d : s.colon_offset_m) {
     if (!d.allFinite()) return false;
   }
+  if (axial) {
+    for (const double a : s.colon_axial_m) {
+      if (!std::isfinite(a)) return false;
+    }
+  }
   return true;
 }
 
@@ -47,6 +52,7 @@ bool AllFinite(const ModelState& s, const StepOutput& out) {
 void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc,
           StepOutput* out) {
   const double dt = params.dt_s;
+  const bool axial = params.colon_longitudinal_stiffness_N > 0.0;  // axial give on
   SetKnobRestAngles(params, input, s);
 
   // 1. Contacts at the current shapes (eqs. 9-17).
@@ -73,11 +79,15 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     speed2 += dp.squaredNorm();
     if (!c.touching) continue;
     const int k = c.segment;
-    const Eigen::Vector3d dc =
+    Eigen::Vector3d dc =
         (1.0 - c.segment_t) * (pts[k].plane_u * sc->colon_rhs[k].x() +
                                pts[k].plane_v * sc->colon_rhs[k].y()) +
         c.segment_t * (pts[k + 1].plane_u * sc->colon_rhs[k + 1].x() +
                        pts[k + 1].plane_v * sc->colon_rhs[k + 1].y());
+    if (axial) {  // the wall also slid along its tangents
+      dc += (1.0 - c.segment_t) * sc->axial_rhs[k] * pts[k].rest_tangent +
+            c.segment_t * sc->axial_rhs[k + 1] * pts[k + 1].rest_tangent;
+    }
     const Eigen::Vector3d& n = sc->sample_normal_W[i];
     Eigen::Vector3d rel = dp - dc;
     rel -= rel.dot(n) * n;
@@ -116,6 +126,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     const double stretch = s->colon_offset_m[i].norm();
     out->stretch_m[i] = stretch;
     speed2 += s->colon_rate_m_per_s[i].squaredNorm();
+    if (axial) speed2 += s->colon_axial_rate_m_per_s[i] * s->colon_axial_rate_m_per_s[i];
     if (stretch > out->peak_stretch_m) {
       out->peak_stretch_m = stretch;
       out->peak_stretch_arc_m = pts[i].arc_m;
@@ -142,7 +153,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->tip_arc_m = s->tip_arc_m;
   out->inserted_m = s->inserted_m;
   out->velocity_norm_m_per_s = std::sqrt(speed2);
-  out->finite = AllFinite(*s, *out);
+  out->finite = AllFinite(*s, *out, axial);
 }
 
 }  // namespace ves::model

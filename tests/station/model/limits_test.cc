@@ -1,6 +1,8 @@
 // No NaN at the parameter limits the validators allow, validation names the
 // bad value, and Step never allocates.
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <new>
 #include <stdexcept>
@@ -132,6 +134,26 @@ TEST(ModelAllocation, StepNeverAllocates) {
   // The counter does count: a vector allocates.
   std::vector<double> probe(10);
   EXPECT_GT(g_allocations.load() - before, 0);
+}
+
+// The axial give (off by default, docs/model.md) keeps Step allocation-free
+// and finite, and the wall does slide along the scope when it is on.
+TEST(ModelAllocation, AxialGiveNeverAllocatesAndStaysFinite) {
+  ModelParams params = BendParams(TissueParams{});
+  params.colon_longitudinal_stiffness_N = 20.0;
+  Sim sim(params);
+  ASSERT_TRUE(sim.RunUntil(0.5, Inserting));
+  ASSERT_GT(sim.out.contact_count, 0);
+  const long before = g_allocations.load();
+  for (int i = 0; i < 500; ++i) sim.StepOnce(Inserting(sim));
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_TRUE(sim.out.finite);
+  double largest_axial_m = 0.0;
+  for (double a : sim.state.colon_axial_m) largest_axial_m = std::max(largest_axial_m, std::abs(a));
+  EXPECT_GT(largest_axial_m, 1e-5);
+  EXPECT_LT(largest_axial_m, 0.05);
+  params.colon_pleat_limit = 0.95;
+  EXPECT_THROW(MakeInitialState(params), std::invalid_argument);
 }
 
 }  // namespace
