@@ -127,10 +127,10 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   // about the entry axis (forces at the start of the step).
   out->base_force_N = -e.dot(force_sum_N);
   out->roll_torque_N_m = -e.dot(moment_sum_N_m);
-  // Base to tip: joint increments and body displacements for the linearised
+  // Base to tip: joint increments and body displacements of the linearised
   // step with its force terms (u, bA and the hand's push) scaled by `scale`;
-  // the prescribed roll (and thrust in kPosition) is never scaled. Returns
-  // the largest joint turn.
+  // the prescribed roll (and thrust in kPosition) is never scaled. The lambda
+  // returns the largest joint turn.
   auto& delta = sc->body_displacement;
   auto& dq = sc->joint_increment;
   double d_insert = 0.0;
@@ -155,9 +155,8 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   };
   // The linearisation holds for small turns only. A step that would turn a
   // joint further (a loop snapping, a jammed chain buckling) is shortened as a
-  // whole, so the chain keeps the shape of the linearised solution rather than
-  // a distorted one with a few joints cut short: cutting joints one by one
-  // swept samples centimetres into the wall in a single step.
+  // whole (a line search along the linearised solution), so the chain keeps
+  // that solution's shape rather than one with a few joints cut short.
   const double largest_turn = solve_down(1.0);
   if (largest_turn > kMaxJointTurnPerStep_rad) {
     solve_down(kMaxJointTurnPerStep_rad / largest_turn);
