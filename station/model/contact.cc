@@ -93,6 +93,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
   const int samples = static_cast<int>(s->samples.size());
   const double dt = params.dt_s;
   const double k_t = params.friction_stiffness_N_per_m;
+  const int segments = static_cast<int>(params.colon.points.size()) - 1;
   out->contact_count = 0;
   for (int i = 0; i < samples; ++i) {
     SampleContact& c = s->contact[i];
@@ -111,7 +112,21 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
       c.inside = true;  // enters at the anus: segment 0
     }
     const Eigen::Vector3d& p = s->p_WSample[i];
+    const int tracked_before = c.segment;
     TrackSegment(*s, params.colon, params.contact_search_window, p, &c);
+    if (i > 0 && s->contact[i - 1].inside && params.tracking_arc_ratio > 0.0) {
+      // Continuity along the scope (ModelParams::tracking_arc_ratio): the
+      // proximal neighbour was tracked first, this step.
+      const int neighbour = s->contact[i - 1].segment;
+      const double scope_gap_m = s->samples[i - 1].arc_from_tip_m - s->samples[i].arc_from_tip_m;
+      const int lowest = neighbour - 2;
+      const int highest = neighbour + 2 + static_cast<int>(std::ceil(
+          params.tracking_arc_ratio * scope_gap_m / params.colon.points[neighbour].length_m));
+      if (c.segment < lowest || c.segment > highest) {
+        c.segment =
+            std::clamp(tracked_before, std::max(lowest, 0), std::min(highest, segments - 1));
+      }
+    }
     const SegmentHit hit = CalcSegmentHit(params, *s, c.segment, p);
     c.segment_t = hit.t;
     c.penetration_m = hit.penetration_m;

@@ -59,6 +59,8 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0.05, 0.9]");
   Require(InRange(p.colon_pleat_hardening_ratio, 1.0, 1e4), "colon_pleat_hardening_ratio",
           p.colon_pleat_hardening_ratio, "must be in [1, 1e4]");
+  Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 10.0),
+          "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 10]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
           p.contact_search_window, "must be in [1, 64]");
 }

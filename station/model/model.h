@@ -37,6 +37,11 @@ struct ModelParams {
   double friction_stiffness_N_per_m{500.0};  // tangential stick spring of one contact
   double outer_cone_ratio{1.5};             // r0 = ratio * F_s * |f_n|, eq. (16)
   int contact_search_window{4};             // segments searched each way per step
+  // How far ahead of its proximal neighbour's a sample's tracked colon arc may
+  // run, per metre of scope between them (+2 segments; at most 2 behind):
+  // the colon has no contact with itself, so at a loop's pinched neck two
+  // lumens overlap and the local search alone would walk across. 0: no limit.
+  double tracking_arc_ratio{1.5};
   // Axial give of the colon (experimental, off by default: docs/model.md,
   // "Known limits", says why): each point may also
   // slide along its rest tangent, anchored by its own suspension (K_c, D_c),

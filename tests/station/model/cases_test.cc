@@ -1,6 +1,7 @@
 // The model on the shipped cases (patient_db/cases): stability with the input
 // held still, and the paper's Fig. 10 on paper-sigmoid.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -8,6 +9,7 @@
 
 #include "patient_db/case_format.h"
 #include "station/training/case_model.h"
+#include "station/training/scripted_operator.h"
 #include "tests/station/model/model_test_util.h"
 
 namespace ves::model {
@@ -117,6 +119,67 @@ TEST(Fig10, ConstantPushStretchesSigmoidAndStallsWhileStiffColonGoesDeeper) {
               soft.force_N[2], soft.force_N.back(), stiff.tip_arc_m, stiff.peak_stretch_m);
   EXPECT_GT(stiff.tip_arc_m, soft.tip_arc_m);
   EXPECT_LT(stiff.peak_stretch_m, 0.5 * soft.peak_stretch_m);
+}
+
+// Withdrawing a looped scope with its tip hooked past the sigmoid, until the
+// scope is 15 cm shorter than the colon arc its tip has reached (the probe's
+// PROBE_SLACK_END=-0.15 PROBE_REDUCE_FROM=0.55, docs/model.md "Known
+// limits"), pulls the sigmoid loop's neck together. Without the tracking
+// continuity limit (tracking_arc_ratio 0) the samples walked across the neck
+// and the scope lay straight across the loop: 0.199 m shorter than its tip's
+// arc, 75 N into the rectosigmoid, jammed with the tip at 0.734 m. With it
+// the sigmoid is pulled along the scope (its points move in their planes,
+// so the path shortens by the 0.15 m the rule asks for, no more), the wall
+// force stays under 17 N and the tip goes on to the splenic flexure (0.851 m).
+TEST(Tracking, AWithdrawnLoopDoesNotLetTheScopeCutAcrossTheSigmoid) {
+  constexpr double kSpeed_m_per_s = 0.02;
+  constexpr double kSteerGain_per_s = 8.0;
+  constexpr double kReduceFrom_m = 0.55;
+  constexpr double kSlackStart_m = 0.10;
+  constexpr double kSlackEnd_m = -0.15;
+  constexpr double kMostTipAheadOfScope_m = 0.175;  // the rule's 0.15 m and a step's overshoot
+  constexpr double kMostWallForce_N = 30.0;
+  constexpr double kPastTheDescendingColon_m = 0.8;
+  Sim sim(LoadParams("standard-adult"));
+  StepInput in;
+  in.thrust_mode = ThrustMode::kPosition;
+  bool withdrawing = false;
+  double command_m = 0.0;
+  double tip_ahead_m = 0.0;
+  double wall_force_N = 0.0;
+  double deepest_tip_m = 0.0;
+  while (sim.state.time_s < 100.0) {
+    const auto p = training::Perceive(sim.params, sim.state, sim.out);
+    in.knob_up_rad = std::clamp(
+        in.knob_up_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) *
+                             sim.params.dt_s,
+        -p.angulation_up_rad, p.angulation_up_rad);
+    in.knob_right_rad = std::clamp(
+        in.knob_right_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) *
+                                sim.params.dt_s,
+        -p.angulation_right_rad, p.angulation_right_rad);
+    const double slack_m = sim.state.inserted_m - sim.state.tip_arc_m;
+    if (!withdrawing && sim.state.tip_arc_m > kReduceFrom_m &&
+        (slack_m > kSlackStart_m || sim.out.base_force_N > 8.0)) {
+      withdrawing = true;
+    }
+    if (withdrawing && slack_m < kSlackEnd_m) withdrawing = false;
+    command_m = std::clamp(
+        command_m + (withdrawing ? -1.0 : 1.0) * kSpeed_m_per_s * sim.params.dt_s, 0.0,
+        sim.params.scope.working_length_m - 0.05);
+    in.insertion_m = command_m;
+    sim.StepOnce(in);
+    ASSERT_TRUE(sim.out.finite) << "t=" << sim.state.time_s;
+    tip_ahead_m = std::max(tip_ahead_m, sim.state.tip_arc_m - sim.state.inserted_m);
+    wall_force_N = std::max(wall_force_N, sim.out.peak_wall_force_N);
+    deepest_tip_m = std::max(deepest_tip_m, sim.state.tip_arc_m);
+  }
+  std::printf("Tracking: tip ahead of the scope by at most %.3f m, wall force at most %.1f N, "
+              "deepest tip %.3f m\n", tip_ahead_m, wall_force_N, deepest_tip_m);
+  ASSERT_GT(deepest_tip_m, kReduceFrom_m);  // the withdrawal did happen past the sigmoid
+  EXPECT_LT(tip_ahead_m, kMostTipAheadOfScope_m);
+  EXPECT_LT(wall_force_N, kMostWallForce_N);
+  EXPECT_GT(deepest_tip_m, kPastTheDescendingColon_m);
 }
 
 }  // namespace
