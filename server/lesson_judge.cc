@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "patient_db/case_bundle.h"
+#include "server/services.h"
 #include "station/training/lesson_gate.h"
 #include "ves/v1/session.pb.h"
 
@@ -13,12 +14,6 @@ namespace {
 
 using patient_db::StoreCode;
 using patient_db::StoreStatus;
-
-int64_t WallUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string JoinLines(const std::vector<std::string>& lines) {
   std::string out;
@@ -172,7 +167,7 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
     checks = gate.checks;
   }
   v.detail = JoinLines(checks);
-  v.judged_unix_ms = WallUnixMs();
+  v.judged_unix_ms = NowUnixMs();
   auto put = store_->PutLessonVerdict(v);
   if (!put.ok()) return put.status;
   if (!put.value) return store_->GetLessonVerdict(session_uuid);  // judged before: that one stands

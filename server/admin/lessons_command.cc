@@ -4,7 +4,6 @@
 #include <google/protobuf/text_format.h>
 
 #include <cstdio>
-#include <ctime>
 #include <algorithm>
 #include <fstream>
 #include <iostream>
@@ -20,15 +19,8 @@ namespace {
 namespace po = boost::program_options;
 using ves::server::ClientOptions;
 
-std::string FormatDate(int64_t unix_ms) {
-  if (unix_ms == 0) return "-";
-  const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M", &tm);
-  return buf;
-}
+// A lesson never attempted has no date.
+std::string FormatDate(int64_t unix_ms) { return unix_ms == 0 ? "-" : FormatUtcMinute(unix_ms); }
 
 std::unique_ptr<ves::v1::Lessons::Stub> LessonsStub(const ClientOptions& client) {
   return ves::v1::Lessons::NewStub(ves::server::MakeClientChannel(client));

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <boost/program_options.hpp>
+#include <cstdint>
 #include <string>
 
 #include "server/admin/commands.h"
@@ -24,6 +25,8 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
                 const boost::program_options::positional_options_description* positional,
                 boost::program_options::variables_map* vm, ves::server::ClientOptions* client,
                 int deadline_s);
+// "YYYY-MM-DD HH:MM" in UTC: the date column of the tables ves-admin prints.
+std::string FormatUtcMinute(int64_t unix_ms);
 // Prints "ves-admin NAME: CODE: message" and returns kExitFailed.
 int ReportRpcError(const std::string& name, int code, const std::string& message);
 

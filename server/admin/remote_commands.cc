@@ -69,9 +69,7 @@ int ReportRpcError(const std::string& name, int code, const std::string& message
   return kExitFailed;
 }
 
-namespace {
-
-std::string FormatDate(int64_t unix_ms) {
+std::string FormatUtcMinute(int64_t unix_ms) {
   const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
   std::tm tm{};
   gmtime_r(&t, &tm);
@@ -79,6 +77,8 @@ std::string FormatDate(int64_t unix_ms) {
   std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M", &tm);
   return buf;
 }
+
+namespace {
 
 const char* OutcomeName(ves::v1::Outcome o) {
   switch (o) {
@@ -215,7 +215,7 @@ int RunScoresCommand(const CommandArgs& args) {
     const std::string to_cecum =
         s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
     std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
-                FormatDate(s.start_unix_ms()).c_str(), s.case_id().c_str(),
+                FormatUtcMinute(s.start_unix_ms()).c_str(), s.case_id().c_str(),
                 OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
   }
   return kExitOk;
@@ -276,7 +276,7 @@ int RunAuditCommand(const CommandArgs& args) {
   auto status = Stub<ves::v1::Admin>(client)->ListAudit(&ctx, q, &r);
   if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
   for (const auto& e : r.entries()) {
-    std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatDate(e.at_unix_ms()).c_str(),
+    std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatUtcMinute(e.at_unix_ms()).c_str(),
                 e.actor().c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
                 e.institution().c_str(), e.action().c_str(), e.target().c_str(),
                 e.result().c_str());
