@@ -204,6 +204,10 @@ int main(int argc, char** argv) {
   int next_print = 0;
   ves::model::ModelState previous = state;
   ves::model::ModelState earlier = state;
+  // Read once: the switches below are consulted every step.
+  const char* relax = std::getenv("PROBE_RELAX");
+  const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
+  const char* dump = std::getenv("PROBE_DUMP_AT");
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
@@ -214,8 +218,7 @@ int main(int argc, char** argv) {
                                    -p.angulation_right_rad, p.angulation_right_rad);
     // PROBE_RELAX=RATE: with the lumen ahead (within 30 degrees), the knobs
     // ease toward neutral at RATE per second (the tip straightened).
-    if (const char* relax = std::getenv("PROBE_RELAX");
-        relax && std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) < 0.52) {
+    if (relax && std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) < 0.52) {
       const double keep = std::max(0.0, 1.0 - std::atof(relax) * params.dt_s);
       in.knob_up_rad *= keep;
       in.knob_right_rad *= keep;
@@ -230,7 +233,6 @@ int main(int argc, char** argv) {
     command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
     in.insertion_m = command_m;
     if (scripted) in = ves::training::ToStepInput(scripted->Act(p));
-    const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
     // A spike's contacts are those at the start of its step: what made them
     // is the step before, from `earlier` to `previous`.
     if (spikes) earlier = previous, previous = state;
@@ -244,8 +246,7 @@ int main(int argc, char** argv) {
       std::printf("diverged at t=%.3f\n", state.time_s);
       return 1;
     }
-    if (const char* dump = std::getenv("PROBE_DUMP_AT"); dump && next_print == std::atoi(dump) &&
-                                                         state.time_s >= next_print) {
+    if (dump && next_print == std::atoi(dump) && state.time_s >= next_print) {
       DumpShape(params, state, "/tmp/probe_" + std::to_string(next_print) + ".png");
     }
     if (state.time_s >= next_print) {
