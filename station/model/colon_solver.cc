@@ -287,12 +287,16 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     }
   }
   rhs[0].setZero();
-  a_rhs[0] = 0.0;
   for (int i = last + 1; i < N; ++i) {
     rhs[i].setZero();
-    a_rhs[i] = 0.0;
     s->colon_rate_m_per_s[i].setZero();
-    s->colon_axial_rate_m_per_s[i] = 0.0;
+  }
+  if (axial) {  // off, the axial arrays are never written and stay zero
+    a_rhs[0] = 0.0;
+    for (int i = last + 1; i < N; ++i) {
+      a_rhs[i] = 0.0;
+      s->colon_axial_rate_m_per_s[i] = 0.0;
+    }
   }
 }
 
