@@ -36,8 +36,8 @@ constexpr int kActiveMargin = 4;  // points solved past the last disturbed one
 int LastActivePoint(const ModelState& s, int N) {
   int last = 0;
   const int samples = static_cast<int>(s.samples.size());
-  for (int i = samples - 1; i >= 0; --i) {
-    if (s.contact[i].inside) last = std::max(last, s.contact[i].segment + 1);
+  for (int i = s.first_inside_sample; i < samples; ++i) {
+    last = std::max(last, s.contact[i].segment + 1);
   }
   for (int i = N - 1; i > last; --i) {
     if (s.colon_offset_m[i].cwiseAbs().maxCoeff() > kRestOffset_m ||
@@ -111,14 +111,20 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     sc->colon_base_diag[i] +=
         t.suspension_damping_N_s_per_m2 * h + dt * sc->colon_suspension_N_per_m[i];
   }
+  sc->colon_stiffness_diag.assign(N, 0.0);
+  sc->colon_pair_upper.assign(N, Eigen::Matrix2d::Zero());
+  for (int i = 0; i < N; ++i) sc->colon_stiffness_diag[i] = dt * sc->colon_suspension_N_per_m[i];
   for (int i = 0; i + 1 < N; ++i) {
     const double T =
         0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
     const double k = T / (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
     sc->colon_pair_k_N_per_m[i] = k;
     sc->colon_pair_transfer[i] = PlaneBasis(pts[i]).transpose() * PlaneBasis(pts[i + 1]);
+    sc->colon_pair_upper[i] = -dt * k * sc->colon_pair_transfer[i];
     sc->colon_base_diag[i] += dt * k;
     sc->colon_base_diag[i + 1] += dt * k;
+    sc->colon_stiffness_diag[i] += dt * k;
+    sc->colon_stiffness_diag[i + 1] += dt * k;
   }
 }
 
@@ -134,20 +140,31 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   // Suspension (K_c ||d_ri|| pulls the point home) and the neighbour coupling,
   // a force T/h (D_j - D_i) on the 3-D offsets D = B d; in plane i that is
   // T/h (C_i d_j - d_i) with the constant C_i = B_i^T B_j (orthonormal B).
-  const int end = std::min(last + 1, N - 1);  // rhs of `last` needs pair (last, end)
-  const auto& pair_k = sc->colon_pair_k_N_per_m;
-  const auto& C = sc->colon_pair_transfer;
+  // With the constant blocks U_i = -dt T/h C_i, the explicit part of the
+  // right-hand side is -dt K d: -S_i d_i - U_(i-1)^T d_(i-1) - U_i d_(i+1).
+  const int end = std::min(last + 1, N - 1);  // first point past the solved ones (or the last)
+  const auto& U = sc->colon_pair_upper;
+  const auto& S = sc->colon_stiffness_diag;
+  const auto& base = sc->colon_base_diag;
   for (int i = 0; i <= end; ++i) {
-    diag[i] = Eigen::Matrix2d::Identity() * sc->colon_base_diag[i];
-    Eigen::Vector2d r = -dt * sc->colon_suspension_N_per_m[i] * d[i];
-    if (i > 0) r.noalias() += dt * pair_k[i - 1] * (C[i - 1].transpose() * d[i - 1] - d[i]);
-    if (i < end) {
-      r.noalias() += dt * pair_k[i] * (C[i] * d[i + 1] - d[i]);
-      upper[i] = -dt * pair_k[i] * C[i];
+    diag[i] = Eigen::Matrix2d::Identity() * base[i];
+    upper[i] = i < end ? U[i] : Eigen::Matrix2d::Zero();
+  }
+  rhs[0].setZero();
+  rhs[end].setZero();  // unless end == last, only contacts add to these; never solved
+  for (int i = 1; i <= last; ++i) {
+    const Eigen::Vector2d& dp = d[i - 1];
+    const Eigen::Matrix2d& Up = U[i - 1];
+    Eigen::Vector2d r(-S[i] * d[i].x() - (Up(0, 0) * dp.x() + Up(1, 0) * dp.y()),
+                      -S[i] * d[i].y() - (Up(0, 1) * dp.x() + Up(1, 1) * dp.y()));
+    if (i + 1 < N) {  // U[N-1] is zero: the deepest point has no next neighbour
+      const Eigen::Vector2d& dn = d[i + 1];
+      const Eigen::Matrix2d& Un = U[i];
+      r.x() -= Un(0, 0) * dn.x() + Un(0, 1) * dn.y();
+      r.y() -= Un(1, 0) * dn.x() + Un(1, 1) * dn.y();
     }
     rhs[i] = r;
   }
-  upper[end].setZero();
   // Axial give (docs/model.md): the same suspension anchors the point along
   // its tangent; neighbours resist a change of their gap (CalcPairAxial).
   // Implicit like the in-plane part; the anus point is fixed.
@@ -178,27 +195,33 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   // Contacts: the scope (at its new shape) presses the wall outward along n;
   // the wall's friction reaction is the opposite of the scope's friction.
   const int samples = static_cast<int>(s->samples.size());
-  for (int i = 0; i < samples; ++i) {
+  for (int i = s->first_inside_sample; i < samples; ++i) {
     const SampleContact& c = s->contact[i];
-    if (!c.inside || !c.touching) continue;
+    if (!c.touching) continue;
     const int k = c.segment;
-    const SegmentHit hit = CalcSegmentHit(params, *s, k, s->p_WSample[i]);
-    const TissueParams& tissue = pts[hit.t < 0.5 ? k : k + 1].tissue;
-    WallResponse r = CalcWallResponse(tissue, params.wall_hardening_ratio, hit.penetration_m);
-    if (!(hit.penetration_m > 0.0)) {
+    // The penetration at the scope's new shape, to first order in the
+    // sample's move during the scope solve (micrometres per step): it changes
+    // by n . dp; the normal and the position along the segment are kept.
+    const Eigen::Vector3d& normal = sc->sample_normal_W[i];
+    const double penetration_m =
+        c.penetration_m + normal.dot(s->p_WSample[i] - sc->sample_delta_m[i]);
+    const double t = c.segment_t;
+    const TissueParams& tissue = pts[t < 0.5 ? k : k + 1].tissue;
+    WallResponse r = CalcWallResponse(tissue, params.wall_hardening_ratio, penetration_m);
+    if (!(penetration_m > 0.0)) {
       // The scope has just moved off this wall: keep the contact's linear
       // spring for the rest of the step, so the point follows the scope back
       // instead of springing into it (an on/off cycle between the two solves).
       r.slope_N_per_m = sc->sample_normal_slope_N_per_m[i];
-      r.force_N = r.slope_N_per_m * hit.penetration_m;
+      r.force_N = r.slope_N_per_m * penetration_m;
     }
-    const Eigen::Vector3d f_wall = r.force_N * hit.normal - sc->sample_friction_W_N[i];
-    const double w[2] = {1.0 - hit.t, hit.t};
+    const Eigen::Vector3d f_wall = r.force_N * normal - sc->sample_friction_W_N[i];
+    const double w[2] = {1.0 - t, t};
     Eigen::Vector2d v[2];  // the normal in the two planes, B_j^T n
     for (int j = 0; j < 2; ++j) {
-      const Eigen::Matrix<double, 3, 2> B = PlaneBasis(pts[k + j]);
-      rhs[k + j].noalias() += dt * w[j] * (B.transpose() * f_wall);
-      v[j].noalias() = B.transpose() * hit.normal;
+      const ColonPoint& q = pts[k + j];
+      rhs[k + j] += dt * w[j] * Eigen::Vector2d(q.plane_u.dot(f_wall), q.plane_v.dot(f_wall));
+      v[j] = Eigen::Vector2d(q.plane_u.dot(normal), q.plane_v.dot(normal));
     }
     // The wall force falls as the points follow the scope (d f / d r = -slope
     // n n^T), the wall damping D_d (eq. 9) and the friction stick spring act on
@@ -218,7 +241,7 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       // stick spring b), and the normal has an axial part only at the pole.
       const Eigen::Vector3d& t0 = pts[k].rest_tangent;
       const Eigen::Vector3d& t1 = pts[k + 1].rest_tangent;
-      const double tn[2] = {t0.dot(hit.normal), t1.dot(hit.normal)};
+      const double tn[2] = {t0.dot(normal), t1.dot(normal)};
       a_rhs[k] += dt * w[0] * t0.dot(f_wall);
       a_rhs[k + 1] += dt * w[1] * t1.dot(f_wall);
       a_diag[k] += w[0] * w[0] * (b + (a - b) * tn[0] * tn[0]);
@@ -236,27 +259,56 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   // inverse is a long dependency); they meet at p, p+1.
   auto& gain = sc->colon_work;  // G_i for i <= p, H_i for i > p
   const int p = (last + 1) / 2;
+  // Written out in scalars: M and N are symmetric (so are D_i and U^T G),
+  // and Eigen's generic 2x2 products and inverse cost about twice the
+  // instructions of this on the solve's critical path.
   auto eliminate_top = [&](int i) {
-    Eigen::Matrix2d M = diag[i];
-    Eigen::Vector2d y = rhs[i];
+    const Eigen::Matrix2d& D = diag[i];
+    double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
+    double y0 = rhs[i].x(), y1 = rhs[i].y();
     if (i > 1) {
-      M.noalias() -= upper[i - 1].transpose() * gain[i - 1];
-      y.noalias() -= upper[i - 1].transpose() * rhs[i - 1];
+      const Eigen::Matrix2d& Up = upper[i - 1];
+      const Eigen::Matrix2d& G = gain[i - 1];
+      const Eigen::Vector2d& yp = rhs[i - 1];
+      m00 -= Up(0, 0) * G(0, 0) + Up(1, 0) * G(1, 0);
+      m01 -= Up(0, 0) * G(0, 1) + Up(1, 0) * G(1, 1);
+      m11 -= Up(0, 1) * G(0, 1) + Up(1, 1) * G(1, 1);
+      y0 -= Up(0, 0) * yp.x() + Up(1, 0) * yp.y();
+      y1 -= Up(0, 1) * yp.x() + Up(1, 1) * yp.y();
     }
-    const Eigen::Matrix2d M_inv = M.inverse();
-    gain[i].noalias() = M_inv * upper[i];
-    rhs[i].noalias() = M_inv * y;
+    const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
+    const double i00 = m11 * inv_det, i01 = -m01 * inv_det, i11 = m00 * inv_det;
+    const Eigen::Matrix2d& Un = upper[i];
+    Eigen::Matrix2d& G = gain[i];
+    G(0, 0) = i00 * Un(0, 0) + i01 * Un(1, 0);
+    G(0, 1) = i00 * Un(0, 1) + i01 * Un(1, 1);
+    G(1, 0) = i01 * Un(0, 0) + i11 * Un(1, 0);
+    G(1, 1) = i01 * Un(0, 1) + i11 * Un(1, 1);
+    rhs[i] = Eigen::Vector2d(i00 * y0 + i01 * y1, i01 * y0 + i11 * y1);
   };
   auto eliminate_bottom = [&](int i) {
-    Eigen::Matrix2d M = diag[i];
-    Eigen::Vector2d z = rhs[i];
+    const Eigen::Matrix2d& D = diag[i];
+    double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
+    double z0 = rhs[i].x(), z1 = rhs[i].y();
     if (i < last) {
-      M.noalias() -= upper[i] * gain[i + 1];
-      z.noalias() -= upper[i] * rhs[i + 1];
+      const Eigen::Matrix2d& Un = upper[i];
+      const Eigen::Matrix2d& H = gain[i + 1];
+      const Eigen::Vector2d& wn = rhs[i + 1];
+      m00 -= Un(0, 0) * H(0, 0) + Un(0, 1) * H(1, 0);
+      m01 -= Un(0, 0) * H(0, 1) + Un(0, 1) * H(1, 1);
+      m11 -= Un(1, 0) * H(0, 1) + Un(1, 1) * H(1, 1);
+      z0 -= Un(0, 0) * wn.x() + Un(0, 1) * wn.y();
+      z1 -= Un(1, 0) * wn.x() + Un(1, 1) * wn.y();
     }
-    const Eigen::Matrix2d M_inv = M.inverse();
-    gain[i].noalias() = M_inv * upper[i - 1].transpose();
-    rhs[i].noalias() = M_inv * z;
+    const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
+    const double i00 = m11 * inv_det, i01 = -m01 * inv_det, i11 = m00 * inv_det;
+    const Eigen::Matrix2d& Up = upper[i - 1];  // H_i = N_i^-1 U_(i-1)^T
+    Eigen::Matrix2d& H = gain[i];
+    H(0, 0) = i00 * Up(0, 0) + i01 * Up(0, 1);
+    H(0, 1) = i00 * Up(1, 0) + i01 * Up(1, 1);
+    H(1, 0) = i01 * Up(0, 0) + i11 * Up(0, 1);
+    H(1, 1) = i01 * Up(1, 0) + i11 * Up(1, 1);
+    rhs[i] = Eigen::Vector2d(i00 * z0 + i01 * z1, i01 * z0 + i11 * z1);
   };
   for (int j = 0; j < last - p || j < p; ++j) {
     if (1 + j <= p) eliminate_top(1 + j);
@@ -279,7 +331,8 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   for (int i = 1; i <= last; ++i) {
     s->colon_offset_m[i] += rhs[i];
     s->colon_rate_m_per_s[i] = rhs[i] * inv_dt;
-    s->p_WColon[i] = pts[i].rest_position_m + PlaneBasis(pts[i]) * s->colon_offset_m[i];
+    const Eigen::Vector2d& di = s->colon_offset_m[i];
+    s->p_WColon[i] = pts[i].rest_position_m + di.x() * pts[i].plane_u + di.y() * pts[i].plane_v;
     if (axial) {
       s->colon_axial_m[i] += a_rhs[i];
       s->colon_axial_rate_m_per_s[i] = a_rhs[i] * inv_dt;

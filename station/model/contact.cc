@@ -51,7 +51,7 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   const Eigen::Vector3d w = (1.0 - hit.t) * wa + hit.t * wb;
   const double w_norm = w.norm();
   const double rho = w_norm;
-  hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w / w_norm) : A.plane_u;
+  hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w * (1.0 / w_norm)) : A.plane_u;
   hit.radius_m = A.radius_m + hit.t * (B.radius_m - A.radius_m);
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
   hit.penetration_m = rho + scope_radius_m - hit.radius_m;
@@ -95,9 +95,16 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
   const double k_t = params.friction_stiffness_N_per_m;
   const int segments = static_cast<int>(params.colon.points.size()) - 1;
   out->contact_count = 0;
-  for (int i = 0; i < samples; ++i) {
+  // The inside samples are a suffix; samples before both the old and the new
+  // first inside one were outside and stay so (nothing to do for them).
+  int first = std::clamp(s->first_inside_sample, 0, samples);
+  while (first > 0 && s->samples[first - 1].arc_from_tip_m < s->inserted_m) --first;
+  while (first < samples && !(s->samples[first].arc_from_tip_m < s->inserted_m)) ++first;
+  const int from = std::min(first, s->first_inside_sample);
+  s->first_inside_sample = first;
+  for (int i = from; i < samples; ++i) {
     SampleContact& c = s->contact[i];
-    const bool inside = s->samples[i].arc_from_tip_m < s->inserted_m;
+    const bool inside = i >= first;
     // Still outside the anus: everything below was zeroed when it came out.
     if (!inside && !c.inside) continue;
     sc->sample_force_W_N[i].setZero();
@@ -118,13 +125,16 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
       // Continuity along the scope (ModelParams::tracking_arc_ratio): the
       // proximal neighbour was tracked first, this step.
       const int neighbour = s->contact[i - 1].segment;
-      const double scope_gap_m = s->samples[i - 1].arc_from_tip_m - s->samples[i].arc_from_tip_m;
       const int lowest = neighbour - 2;
-      const int highest = neighbour + 2 + static_cast<int>(std::ceil(
-          params.tracking_arc_ratio * scope_gap_m / params.colon.points[neighbour].length_m));
-      if (c.segment < lowest || c.segment > highest) {
-        c.segment =
-            std::clamp(tracked_before, std::max(lowest, 0), std::min(highest, segments - 1));
+      if (c.segment < lowest || c.segment > neighbour + 2) {  // else within any reach
+        const double scope_gap_m =
+            s->samples[i - 1].arc_from_tip_m - s->samples[i].arc_from_tip_m;
+        const int highest = neighbour + 2 + static_cast<int>(std::ceil(
+            params.tracking_arc_ratio * scope_gap_m / params.colon.points[neighbour].length_m));
+        if (c.segment < lowest || c.segment > highest) {
+          c.segment =
+              std::clamp(tracked_before, std::max(lowest, 0), std::min(highest, segments - 1));
+        }
       }
     }
     const SegmentHit hit = CalcSegmentHit(params, *s, c.segment, p);
@@ -159,7 +169,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
       // paper eq. (16): alpha = (||f_t|| - F_s||f_n||) / (r0 - F_s||f_n||) between the cones.
       alpha = f_t_norm >= r0 ? 1.0 : (f_t_norm - inner) / (r0 - inner);
       // paper eq. (17): F = (1-alpha) f + alpha (F_d ||f_n|| f_t/||f_t|| + f_n).
-      F_t = (1.0 - alpha) * f_t + alpha * mu_d * f_n * (f_t / f_t_norm);
+      F_t = (1.0 - alpha) * f_t + (alpha * mu_d * f_n / f_t_norm) * f_t;
       // The spring rides the outer cone: further slip keeps alpha = 1 (mu_d);
       // a reversal brings it back through the blend, without a jump.
       if (f_t_norm > r0) c.slip_m *= r0 / f_t_norm;

@@ -107,6 +107,7 @@ ModelState MakeInitialState(const ModelParams& params) {
   s.samples.push_back(tip);
   s.p_WSample.assign(s.samples.size(), Eigen::Vector3d::Zero());
   s.contact.assign(s.samples.size(), SampleContact{});
+  s.first_inside_sample = static_cast<int>(s.samples.size());  // none yet
 
   const int N = static_cast<int>(params.colon.points.size());
   s.colon_offset_m.assign(N, Eigen::Vector2d::Zero());

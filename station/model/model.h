@@ -115,6 +115,9 @@ struct ModelState {
   std::vector<ScopeSample> samples;          // ordered base -> tip; the last is the tip
 
   std::vector<SampleContact> contact;        // one per sample
+  // Samples past the anus are a suffix (arc_from_tip_m < inserted_m): those
+  // from this index on, as of the last contact evaluation.
+  int first_inside_sample{0};
 
   // Colon: each point moves only in its plane P_i.
   std::vector<Eigen::Vector2d> colon_offset_m;  // d_ri in (plane_u, plane_v)
@@ -189,6 +192,8 @@ struct Scratch {
   std::vector<Eigen::Matrix2d> colon_pair_transfer;  // [i]: B_i^T B_(i+1), plane i+1 -> i
   std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i
   std::vector<double> colon_base_diag;             // [i]: D_c h + dt (K_c h + couplings)
+  std::vector<double> colon_stiffness_diag;        // [i]: dt (K_c h + couplings)
+  std::vector<Eigen::Matrix2d> colon_pair_upper;   // [i]: -dt (T/gap) B_i^T B_(i+1)
   // Axial give: tridiagonal system of the tangential offsets (scalar per point).
   std::vector<double> axial_diag;
   std::vector<double> axial_upper;                 // (i, i+1)

@@ -26,30 +26,58 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
   return m;
 }
 
-// Spatial stiffness of a point spring K at p: B^T K B with B = [-p^, I], for
-// a contact spring K = b I + c n n^T (b = k_t, c = k_n - k_t). With P = p^ and
-// m = P n: P K = b P + c m n^T, K P = b P - c n m^T and
-// P K P = b (p p^T - |p|^2 I) - c m m^T, so no 3x3 products are needed.
-void AddPointStiffness(double k_n, double k_t, const Eigen::Vector3d& n, const Eigen::Vector3d& p,
-                       double scale, Mat6* I) {
-  const double b = scale * k_t;
-  const double c = scale * (k_n - k_t);
-  const Eigen::Matrix3d P = Hat(p);
-  const Eigen::Vector3d m = p.cross(n);
-  Eigen::Matrix3d PKP = b * (p * p.transpose());
-  PKP.diagonal().array() -= b * p.squaredNorm();
-  PKP.noalias() -= c * m * m.transpose();
-  I->topLeftCorner<3, 3>() -= PKP;
-  I->topRightCorner<3, 3>().noalias() += b * P + c * m * n.transpose();
-  I->bottomLeftCorner<3, 3>().noalias() -= b * P - c * n * m.transpose();
-  I->bottomRightCorner<3, 3>().noalias() += c * n * n.transpose();
-  I->bottomRightCorner<3, 3>().diagonal().array() += b;
-}
+// Spatial stiffness and wrench of a body's contact springs and point forces,
+// summed sample by sample and turned into the 6x6 form once per body.
+// A point spring K = b I + c n n^T at p (b = k_t, c = k_n - k_t) adds
+// B^T K B with B = [-p^, I]. With P = p^ and m = P n: P K = b P + c m n^T,
+// K P = b P - c n m^T and P K P = b (p p^T - |p|^2 I) - c m m^T. All of it is
+// linear in b p, b p p^T, c m m^T, c m n^T and c n n^T, so only those sums
+// are kept per sample (no 6x6 work per sample).
+struct BodyStiffnessSum {
+  double b{0.0};
+  double b_p2{0.0};  // sum b |p|^2
+  Eigen::Vector3d b_p{Eigen::Vector3d::Zero()};
+  Eigen::Matrix3d b_ppT{Eigen::Matrix3d::Zero()};
+  Eigen::Matrix3d c_mmT{Eigen::Matrix3d::Zero()};
+  Eigen::Matrix3d c_mnT{Eigen::Matrix3d::Zero()};
+  Eigen::Matrix3d c_nnT{Eigen::Matrix3d::Zero()};
+  Eigen::Vector3d moment{Eigen::Vector3d::Zero()};  // sum p x F about W's origin
+  Eigen::Vector3d force{Eigen::Vector3d::Zero()};
+  bool stiff{false};
 
-void AddPointForce(const Eigen::Vector3d& F, const Eigen::Vector3d& p, double scale, Vec6* w) {
-  w->head<3>() += scale * p.cross(F);
-  w->tail<3>() += scale * F;
-}
+  void AddSpring(double k_n, double k_t, const Eigen::Vector3d& n, const Eigen::Vector3d& p) {
+    const double c = k_n - k_t;
+    const Eigen::Vector3d m = p.cross(n);
+    b += k_t;
+    b_p2 += k_t * p.squaredNorm();
+    b_p += k_t * p;
+    b_ppT.noalias() += (k_t * p) * p.transpose();
+    c_mmT.noalias() += (c * m) * m.transpose();
+    c_mnT.noalias() += (c * m) * n.transpose();
+    c_nnT.noalias() += (c * n) * n.transpose();
+    stiff = true;
+  }
+  void AddForce(const Eigen::Vector3d& F, const Eigen::Vector3d& p) {
+    moment += p.cross(F);
+    force += F;
+  }
+  // Adds scale times the sums to a body's articulated stiffness and bias.
+  void FlushInto(double scale, Mat6* I, Vec6* w) {
+    w->head<3>() += scale * moment;
+    w->tail<3>() += scale * force;
+    if (stiff) {
+      const Eigen::Matrix3d P = Hat(b_p);
+      Eigen::Matrix3d PKP = b_ppT - c_mmT;
+      PKP.diagonal().array() -= b_p2;
+      I->topLeftCorner<3, 3>() -= scale * PKP;
+      I->topRightCorner<3, 3>() += scale * (P + c_mnT);
+      I->bottomLeftCorner<3, 3>() += scale * (c_mnT.transpose() - P);
+      I->bottomRightCorner<3, 3>() += scale * c_nnT;
+      I->bottomRightCorner<3, 3>().diagonal().array() += scale * b;
+    }
+    *this = BodyStiffnessSum{};
+  }
+};
 
 }  // namespace
 
@@ -72,20 +100,27 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   const Eigen::Vector3d anus = params.colon.points.front().rest_position_m;
   Eigen::Vector3d force_sum_N = Eigen::Vector3d::Zero();
   Eigen::Vector3d moment_sum_N_m = Eigen::Vector3d::Zero();  // about the anus
-  for (int i = 0; i < samples; ++i) {
-    if (!s->contact[i].inside) continue;
+  // Samples are ordered base to tip, so a body's samples are consecutive.
+  BodyStiffnessSum body;
+  int body_link = -1;
+  for (int i = s->first_inside_sample; i < samples; ++i) {
     const int k = std::max(s->samples[i].link, root);
+    if (k != body_link) {
+      if (body_link >= 0) body.FlushInto(dt, &IA[body_link], &bA[body_link]);
+      body_link = k;
+    }
     const Eigen::Vector3d& p = s->p_WSample[i];
     Eigen::Vector3d F = sc->sample_force_W_N[i] + s->samples[i].mass_kg * params.gravity_W_m_per_s2;
     if (i == samples - 1) F += input.tip_force_W_N;
     force_sum_N += F;
     moment_sum_N_m += (p - anus).cross(F);
-    AddPointForce(F, p, dt, &bA[k]);
+    body.AddForce(F, p);
     if (s->contact[i].touching) {
-      AddPointStiffness(sc->sample_normal_stiffness_N_per_m[i], params.friction_stiffness_N_per_m,
-                        sc->sample_normal_W[i], p, dt, &IA[k]);
+      body.AddSpring(sc->sample_normal_stiffness_N_per_m[i], params.friction_stiffness_N_per_m,
+                     sc->sample_normal_W[i], p);
     }
   }
+  if (body_link >= 0) body.FlushInto(dt, &IA[body_link], &bA[body_link]);
   // Tip to base: articulated stiffness and bias of every 2-DOF bending joint.
   auto& S = sc->motion_subspace;
   for (int k = n - 1; k > root; --k) {

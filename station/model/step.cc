@@ -28,7 +28,9 @@ void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelS
   }
 }
 
-bool AllFinite(const ModelState& s, const StepOutput& out, bool axial) {
+// stretch_sum_m: the sum of the colon points' stretch norms, which is not
+// finite if any offset is not (the output loop computes the norms anyway).
+bool AllFinite(const ModelState& s, const StepOutput& out, double stretch_sum_m, bool axial) {
   if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
       !std::isfinite(out.roll_torque_N_m) || !s.X_WTip.matrix().allFinite()) {
     return false;
@@ -36,9 +38,7 @@ bool AllFinite(const ModelState& s, const StepOutput& out, bool axial) {
   for (const Eigen::Vector2d& q : s.bend_rad) {
     if (!q.allFinite()) return false;
   }
-  for (const Eigen::Vector2d& d : s.colon_offset_m) {
-    if (!d.allFinite()) return false;
-  }
+  if (!std::isfinite(stretch_sum_m)) return false;
   if (axial) {
     for (const double a : s.colon_axial_m) {
       if (!std::isfinite(a)) return false;
@@ -58,7 +58,9 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   // 1. Contacts at the current shapes (eqs. 9-17).
   internal::EvaluateContacts(params, s, sc, out);
   const int samples = static_cast<int>(s->samples.size());
-  for (int i = 0; i < samples; ++i) sc->sample_delta_m[i] = s->p_WSample[i];
+  const int first_inside = s->first_inside_sample;  // samples before it are outside
+  // The inside samples' positions before the scope moves (SolveColon reads them too).
+  for (int i = first_inside; i < samples; ++i) sc->sample_delta_m[i] = s->p_WSample[i];
 
   // 2. Scope: eq. (6), linearly implicit, O(n).
   internal::SolveScope(params, input, input.insertion_m, s, sc, out);
@@ -71,11 +73,10 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   //    displacement of scope and wall during the step.
   double speed2 = 0.0;
   const auto& pts = params.colon.points;
-  for (int i = 0; i < samples; ++i) {
+  for (int i = first_inside; i < samples; ++i) {
     SampleContact& c = s->contact[i];
     const Eigen::Vector3d dp = s->p_WSample[i] - sc->sample_delta_m[i];
     sc->sample_delta_m[i] = dp;
-    if (!c.inside) continue;
     speed2 += dp.squaredNorm();
     if (!c.touching) continue;
     const int k = c.segment;
@@ -122,9 +123,11 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->peak_stretch_m = 0.0;
   out->peak_stretch_arc_m = 0.0;
   out->peak_wall_force_N = 0.0;
+  double stretch_sum_m = 0.0;
   for (int i = 0; i < N; ++i) {
     const double stretch = s->colon_offset_m[i].norm();
     out->stretch_m[i] = stretch;
+    stretch_sum_m += stretch;
     speed2 += s->colon_rate_m_per_s[i].squaredNorm();
     if (axial) speed2 += s->colon_axial_rate_m_per_s[i] * s->colon_axial_rate_m_per_s[i];
     if (stretch > out->peak_stretch_m) {
@@ -153,7 +156,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->tip_arc_m = s->tip_arc_m;
   out->inserted_m = s->inserted_m;
   out->velocity_norm_m_per_s = std::sqrt(speed2);
-  out->finite = AllFinite(*s, *out, axial);
+  out->finite = AllFinite(*s, *out, stretch_sum_m, axial);
 }
 
 }  // namespace ves::model
