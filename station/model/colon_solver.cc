@@ -149,10 +149,11 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   for (int i = 0; i <= end; ++i) {
     diag[i] = Eigen::Matrix2d::Identity() * base[i];
     upper[i] = i < end ? U[i] : Eigen::Matrix2d::Zero();
+    rhs[i].setZero();  // the contacts' part; the explicit part is added in the elimination
   }
-  rhs[0].setZero();
-  rhs[end].setZero();  // unless end == last, only contacts add to these; never solved
-  for (int i = 1; i <= last; ++i) {
+  // The explicit part for point i (1 <= i <= last). It is computed inside the
+  // elimination loop, whose chains are latency-bound and leave room for it.
+  auto explicit_rhs = [&](int i) {
     const Eigen::Vector2d& dp = d[i - 1];
     const Eigen::Matrix2d& Up = U[i - 1];
     Eigen::Vector2d r(-S[i] * d[i].x() - (Up(0, 0) * dp.x() + Up(1, 0) * dp.y()),
@@ -163,8 +164,8 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       r.x() -= Un(0, 0) * dn.x() + Un(0, 1) * dn.y();
       r.y() -= Un(1, 0) * dn.x() + Un(1, 1) * dn.y();
     }
-    rhs[i] = r;
-  }
+    return r;
+  };
   // Axial give (docs/model.md): the same suspension anchors the point along
   // its tangent; neighbours resist a change of their gap (CalcPairAxial).
   // Implicit like the in-plane part; the anus point is fixed.
@@ -265,7 +266,8 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   auto eliminate_top = [&](int i) {
     const Eigen::Matrix2d& D = diag[i];
     double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
-    double y0 = rhs[i].x(), y1 = rhs[i].y();
+    const Eigen::Vector2d r = rhs[i] + explicit_rhs(i);
+    double y0 = r.x(), y1 = r.y();
     if (i > 1) {
       const Eigen::Matrix2d& Up = upper[i - 1];
       const Eigen::Matrix2d& G = gain[i - 1];
@@ -276,20 +278,21 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       y0 -= Up(0, 0) * yp.x() + Up(1, 0) * yp.y();
       y1 -= Up(0, 1) * yp.x() + Up(1, 1) * yp.y();
     }
+    // M^-1 = adj(M) / det: the products with adj(M) run beside the division.
     const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
-    const double i00 = m11 * inv_det, i01 = -m01 * inv_det, i11 = m00 * inv_det;
     const Eigen::Matrix2d& Un = upper[i];
     Eigen::Matrix2d& G = gain[i];
-    G(0, 0) = i00 * Un(0, 0) + i01 * Un(1, 0);
-    G(0, 1) = i00 * Un(0, 1) + i01 * Un(1, 1);
-    G(1, 0) = i01 * Un(0, 0) + i11 * Un(1, 0);
-    G(1, 1) = i01 * Un(0, 1) + i11 * Un(1, 1);
-    rhs[i] = Eigen::Vector2d(i00 * y0 + i01 * y1, i01 * y0 + i11 * y1);
+    G(0, 0) = (m11 * Un(0, 0) - m01 * Un(1, 0)) * inv_det;
+    G(0, 1) = (m11 * Un(0, 1) - m01 * Un(1, 1)) * inv_det;
+    G(1, 0) = (m00 * Un(1, 0) - m01 * Un(0, 0)) * inv_det;
+    G(1, 1) = (m00 * Un(1, 1) - m01 * Un(0, 1)) * inv_det;
+    rhs[i] = Eigen::Vector2d((m11 * y0 - m01 * y1) * inv_det, (m00 * y1 - m01 * y0) * inv_det);
   };
   auto eliminate_bottom = [&](int i) {
     const Eigen::Matrix2d& D = diag[i];
     double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
-    double z0 = rhs[i].x(), z1 = rhs[i].y();
+    const Eigen::Vector2d r = rhs[i] + explicit_rhs(i);
+    double z0 = r.x(), z1 = r.y();
     if (i < last) {
       const Eigen::Matrix2d& Un = upper[i];
       const Eigen::Matrix2d& H = gain[i + 1];
@@ -301,14 +304,13 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       z1 -= Un(1, 0) * wn.x() + Un(1, 1) * wn.y();
     }
     const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
-    const double i00 = m11 * inv_det, i01 = -m01 * inv_det, i11 = m00 * inv_det;
     const Eigen::Matrix2d& Up = upper[i - 1];  // H_i = N_i^-1 U_(i-1)^T
     Eigen::Matrix2d& H = gain[i];
-    H(0, 0) = i00 * Up(0, 0) + i01 * Up(0, 1);
-    H(0, 1) = i00 * Up(1, 0) + i01 * Up(1, 1);
-    H(1, 0) = i01 * Up(0, 0) + i11 * Up(0, 1);
-    H(1, 1) = i01 * Up(1, 0) + i11 * Up(1, 1);
-    rhs[i] = Eigen::Vector2d(i00 * z0 + i01 * z1, i01 * z0 + i11 * z1);
+    H(0, 0) = (m11 * Up(0, 0) - m01 * Up(0, 1)) * inv_det;
+    H(0, 1) = (m11 * Up(1, 0) - m01 * Up(1, 1)) * inv_det;
+    H(1, 0) = (m00 * Up(0, 1) - m01 * Up(0, 0)) * inv_det;
+    H(1, 1) = (m00 * Up(1, 1) - m01 * Up(1, 0)) * inv_det;
+    rhs[i] = Eigen::Vector2d((m11 * z0 - m01 * z1) * inv_det, (m00 * z1 - m01 * z0) * inv_det);
   };
   for (int j = 0; j < last - p || j < p; ++j) {
     if (1 + j <= p) eliminate_top(1 + j);
