@@ -177,6 +177,14 @@ int main(int argc, char** argv) {
   if (const char* ea = std::getenv("PROBE_EA")) params.colon_longitudinal_stiffness_N = std::atof(ea);
   if (const char* r = std::getenv("PROBE_PLEAT")) params.colon_pleat_stiffness_ratio = std::atof(r);
   if (const char* l = std::getenv("PROBE_PLEAT_LIMIT")) params.colon_pleat_limit = std::atof(l);
+  // A colon pleated by f packs 1/(1 - f) of its arc on a unit of scope: with
+  // the give on, the tracking continuity limit must allow that much
+  // (docs/model.md); PROBE_TRACKING sets the ratio itself.
+  if (params.colon_longitudinal_stiffness_N > 0.0) {
+    params.tracking_arc_ratio =
+        std::max(params.tracking_arc_ratio, 1.0 / (1.0 - params.colon_pleat_limit));
+  }
+  if (const char* r = std::getenv("PROBE_TRACKING")) params.tracking_arc_ratio = std::atof(r);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -189,6 +197,9 @@ int main(int argc, char** argv) {
   // below 0 the scope is withdrawn until it is shorter than the centerline).
   const double slack_end_m =
       std::getenv("PROBE_SLACK_END") ? std::atof(std::getenv("PROBE_SLACK_END")) : 0.03;
+  // PROBE_PUSH_LIMIT: base reaction (N) above which a reduction starts (default 8).
+  const double push_limit_N =
+      std::getenv("PROBE_PUSH_LIMIT") ? std::atof(std::getenv("PROBE_PUSH_LIMIT")) : 8.0;
   bool withdrawing = false;
   double command_m = 0.0;
   // PROBE_OPERATOR=novice|expert: the scripted operator drives instead of the rule.
@@ -208,6 +219,10 @@ int main(int argc, char** argv) {
   const char* relax = std::getenv("PROBE_RELAX");
   const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
   const char* dump = std::getenv("PROBE_DUMP_AT");
+  // Summary at the end: the deepest tip, the stretch and wall force peaks,
+  // the seconds of stretch over 3 cm (the pain level), steps over 20 N.
+  double max_tip_arc_m = 0.0, max_stretch_m = 0.0, max_wall_N = 0.0, max_base_N = 0.0;
+  int stretched_s = 0, printed_s = 0, spike_steps = 0;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
@@ -227,7 +242,7 @@ int main(int argc, char** argv) {
     // withdraw (knobs held, tip hooked) until the slack is gone.
     const double slack_m = state.inserted_m - state.tip_arc_m;
     if (!withdrawing && state.tip_arc_m > reduce_from_m &&
-        (slack_m > slack_start_m || out.base_force_N > 8.0)) withdrawing = true;
+        (slack_m > slack_start_m || out.base_force_N > push_limit_N)) withdrawing = true;
     if (withdrawing && slack_m < slack_end_m) withdrawing = false;
     command_m += (withdrawing ? -1.0 : 1.0) * speed_m_per_s * params.dt_s;
     command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
@@ -238,6 +253,11 @@ int main(int argc, char** argv) {
     if (spikes) earlier = previous, previous = state;
     const double previous_base_N = out.base_force_N;
     ves::model::Step(params, in, &state, &scratch, &out);
+    max_tip_arc_m = std::max(max_tip_arc_m, state.tip_arc_m);
+    max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
+    max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
+    max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
+    if (std::abs(out.base_force_N) > 20.0) ++spike_steps;
     if (spikes && std::abs(out.base_force_N) > 20.0) {
       PrintSpike(state, in, out);
       PrintMotion(params, earlier, previous, previous_base_N);
@@ -251,6 +271,8 @@ int main(int argc, char** argv) {
     }
     if (state.time_s >= next_print) {
       ++next_print;
+      ++printed_s;
+      if (out.peak_stretch_m > 0.03) ++stretched_s;
       int wall_i = 0;
       for (size_t i = 0; i < out.wall_force_N.size(); ++i)
         if (out.wall_force_N[i] > out.wall_force_N[wall_i]) wall_i = static_cast<int>(i);
@@ -291,5 +313,9 @@ int main(int argc, char** argv) {
       }
     }
   }
+  std::printf("summary: max tip arc %.3f m, stretch peak %.3f m, over 3 cm %d of %d s, "
+              "wall peak %.1f N, %d steps over 20 N (largest %.1f N)\n",
+              max_tip_arc_m, max_stretch_m, stretched_s, printed_s, max_wall_N, spike_steps,
+              max_base_N);
   return 0;
 }
