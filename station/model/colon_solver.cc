@@ -26,7 +26,7 @@ Eigen::Matrix<double, 3, 2> PlaneBasis(const ColonPoint& p) {
 // Beyond a few points past the deepest contact and past every point still
 // displaced or moving, the colon is at rest and stays there: no force reaches
 // it but the coupling to points that are themselves at rest. The solve covers
-// points 1..last only (docs/model.md, "Cost"); a point within kRestOffset_m of
+// points 1..last only (docs/model.md, "Time step"); a point within kRestOffset_m of
 // home that no contact touches is held (its suspension would return it by at
 // most that much).
 constexpr double kRestOffset_m = 1e-7;
