@@ -61,9 +61,12 @@ int RunCaseUpload(const CommandArgs& args) {
   if (!status.ok()) {
     return ReportRpcError("case upload", status.error_code(), status.error_message());
   }
+  // sha256= is the case's payload hash, the one `case validate`, the station
+  // and lessons show; the bundle's own hash is the blob's content address.
   std::cout << (r.already_stored() ? "already stored " : "stored ") << r.summary().case_id()
-            << " version " << r.summary().version() << " sha256 " << r.summary().sha256_hex()
-            << " (" << r.summary().size_bytes() << " bytes)\n";
+            << " v" << r.summary().version() << " sha256=" << r.summary().payload_sha256_hex()
+            << " (bundle " << r.summary().size_bytes() << " bytes, sha256 "
+            << r.summary().sha256_hex().substr(0, 16) << "…)\n";
   return kExitOk;
 }
 
@@ -89,9 +92,10 @@ int RunCaseList(const CommandArgs& args) {
       ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client))->ListCases(&ctx, q, &r);
   if (!status.ok()) return ReportRpcError("case list", status.error_code(), status.error_message());
   for (const auto& c : r.cases()) {
+    // The payload hash, as `case validate` and the station print it.
     std::printf("%-24s v%-3u %-12s %-16s %10llu  %.12s  %s\n", c.case_id().c_str(), c.version(),
                 ves::v1::Difficulty_Name(c.difficulty()).c_str() + 11, c.institution().c_str(),
-                static_cast<unsigned long long>(c.size_bytes()), c.sha256_hex().c_str(),
+                static_cast<unsigned long long>(c.size_bytes()), c.payload_sha256_hex().c_str(),
                 c.title().c_str());
   }
   return kExitOk;

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "patient_db/case_bundle.h"
 #include "patient_db/case_format.h"
 #include "tests/integration/test_server.h"
 
@@ -73,7 +74,14 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
                                 "/patient_db/cases/standard-adult.textproto";
   AdminRun up = Admin(dir, "case upload " + case_file + remote);
   ASSERT_EQ(up.exit_status, 0) << up.err;
-  EXPECT_NE(Admin(dir, "case list" + remote).out.find("standard-adult"), std::string::npos);
+  // Upload and list name the case by the hash `case validate` and the
+  // station print (the payload's), not by the bundle's content address.
+  const std::string payload_sha =
+      patient_db::CasePayloadSha256Hex(patient_db::LoadCaseFile(case_file));
+  EXPECT_NE(up.out.find("standard-adult v1 sha256=" + payload_sha), std::string::npos) << up.out;
+  AdminRun cases = Admin(dir, "case list" + remote);
+  EXPECT_NE(cases.out.find("standard-adult"), std::string::npos);
+  EXPECT_NE(cases.out.find(payload_sha.substr(0, 12)), std::string::npos) << cases.out;
   const auto out = dir / "copy.vescase";
   AdminRun down = Admin(dir, "case download standard-adult -o " + out.string() + remote);
   ASSERT_EQ(down.exit_status, 0) << down.err;
