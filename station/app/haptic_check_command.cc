@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/haptics/candump_log.h"
 #include "station/haptics/haptic_loop.h"
@@ -222,11 +223,12 @@ int RunHapticCheckCommand(const CommandArgs& args) {
   std::string mode;
   std::string profile;
   std::string clock = "wall";
-  po::options_description description(
+  constexpr char kUsage[] =
       "usage: ves-station haptic-check --device sim|can:IFACE --mode free|spring "
       "[--k-N-per-m K] --profile sine:AMP_MM:FREQ_HZ --seconds T --csv OUT [--can-log FILE]\n\n"
       "Drives the VES-IV (or its simulation) with the simulated hand in free or spring mode\n"
-      "(paper Fig. 5/6) and ends with one summary line per axis (thrust, roll). Options");
+      "(paper Fig. 5/6) and ends with one summary line per axis (thrust, roll).";
+  po::options_description description("options");
   description.add_options()("help,h", "show this help")(
       "device", po::value(&options.device)->required(), "sim, or can:IFACE for SocketCAN")(
       "mode", po::value(&mode)->required(), "free or spring")(
@@ -242,16 +244,7 @@ int RunHapticCheckCommand(const CommandArgs& args) {
       "clock", po::value(&clock)->default_value("wall"),
       "sim device only: wall (the real 1 kHz loop) or sim (simulated time, deterministic)");
   po::variables_map values;
-  try {
-    po::store(po::command_line_parser(args).options(description).run(), values);
-    if (values.count("help")) {
-      std::cout << description << "\n";
-      return 0;
-    }
-    po::notify(values);
-  } catch (const po::error& error) {
-    return BadArgument(error.what());
-  }
+  if (auto stop = ParseCommandLine(kName, kUsage, args, description, &values)) return *stop;
   options.mode_name = mode;
   if (mode == "free") {
     options.mode = hx::ControlMode::kFree;

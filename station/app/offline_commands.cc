@@ -3,8 +3,11 @@
 #include <boost/program_options.hpp>
 
 #include <iostream>
+#include <optional>
+#include <string_view>
 
 #include "patient_db/case_problem.h"
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/sync/case_cache.h"
 #include "station/sync/lesson_cache.h"
@@ -15,28 +18,15 @@ namespace ves::station {
 namespace po = boost::program_options;
 namespace {
 
-// Parses `args` against `options` (+ --help and --data-dir). Returns false
-// after printing help or a one-line error; `exit_code` then says how to exit.
-bool ParseArgs(const char* usage, const CommandArgs& args, po::options_description& options,
-               const po::positional_options_description& positional, po::variables_map& vm,
-               int& exit_code) {
+// The offline commands' line: `options` plus --help and --data-dir.
+std::optional<int> ParseOfflineArgs(std::string_view name, std::string_view usage,
+                                    const CommandArgs& args, po::options_description& options,
+                                    const po::positional_options_description& positional,
+                                    po::variables_map* vm) {
   options.add_options()("help,h", "show this help")(
       "data-dir", po::value<std::string>()->default_value(""),
       "station data folder (default $VES_STATION_DIR or ~/.ves-station)");
-  try {
-    po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
-    if (vm.count("help")) {
-      std::cout << usage << "\n" << options;
-      exit_code = 0;
-      return false;
-    }
-    po::notify(vm);
-  } catch (const po::error& error) {
-    std::cerr << "ves-station: " << error.what() << " (see --help)\n";
-    exit_code = 2;
-    return false;
-  }
-  return true;
+  return ParseCommandLine(name, usage, args, options, vm, positional);
 }
 
 sync::StationPaths Paths(const po::variables_map& vm) {
@@ -52,10 +42,11 @@ int RunImportCaseCommand(const CommandArgs& args) {
   po::positional_options_description positional;
   positional.add("file", -1);
   po::variables_map vm;
-  int exit_code = 0;
-  if (!ParseArgs("usage: ves-station import-case FILE.vescase... [--data-dir DIR]", args, options,
-                 positional, vm, exit_code)) {
-    return exit_code;
+  if (auto stop =
+          ParseOfflineArgs("ves-station import-case",
+                           "usage: ves-station import-case FILE.vescase... [--data-dir DIR]", args,
+                           options, positional, &vm)) {
+    return *stop;
   }
   try {
     sync::CaseCache cache(Paths(vm).cases());
@@ -84,10 +75,11 @@ int RunExportCaseCommand(const CommandArgs& args) {
   po::positional_options_description positional;
   positional.add("case", 1);
   po::variables_map vm;
-  int exit_code = 0;
-  if (!ParseArgs("usage: ves-station export-case ID -o FILE.vescase [--data-dir DIR]", args,
-                 options, positional, vm, exit_code)) {
-    return exit_code;
+  if (auto stop =
+          ParseOfflineArgs("ves-station export-case",
+                           "usage: ves-station export-case ID -o FILE.vescase [--data-dir DIR]",
+                           args, options, positional, &vm)) {
+    return *stop;
   }
   try {
     sync::CaseCache cache(Paths(vm).cases());
@@ -105,10 +97,10 @@ int RunExportCaseCommand(const CommandArgs& args) {
 int RunStatusCommand(const CommandArgs& args) {
   po::options_description options("options");
   po::variables_map vm;
-  int exit_code = 0;
-  if (!ParseArgs("usage: ves-station status [--data-dir DIR]", args, options, {}, vm,
-                 exit_code)) {
-    return exit_code;
+  if (auto stop =
+          ParseOfflineArgs("ves-station status", "usage: ves-station status [--data-dir DIR]", args,
+                           options, {}, &vm)) {
+    return *stop;
   }
   try {
     const auto paths = Paths(vm);

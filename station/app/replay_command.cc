@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/training/case_run.h"
 #include "station/training/input_log.h"
@@ -51,16 +52,8 @@ int RunReplayCommand(const CommandArgs& args) {
   po::positional_options_description positional;
   positional.add("session", 1);
   po::variables_map vm;
-  try {
-    po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
-    if (vm.count("help")) {
-      std::cout << kUsage << "\n\n" << options;
-      return 0;
-    }
-    po::notify(vm);
-  } catch (const po::error& error) {
-    std::cerr << "ves-station replay: " << error.what() << " (see --help)\n";
-    return 2;
+  if (auto stop = ParseCommandLine("ves-station replay", kUsage, args, options, &vm, positional)) {
+    return *stop;
   }
   if (!vm.count("session")) {
     std::cerr << "ves-station replay: missing SESSION_FILE (see --help)\n";

@@ -23,21 +23,22 @@
 #include <string>
 #include <vector>
 
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
-#include "station/app/scope_file.h"
 #include "station/app/run_interactive.h"
 #include "station/app/run_lesson.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
+#include "station/app/scope_file.h"
 #include "station/haptics/candump_log.h"
 #include "station/haptics/sim_rig.h"
 #include "station/render/model_scene.h"
-#include "station/training/replay.h"
-#include "station/training/session_file.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_run.h"
+#include "station/training/replay.h"
 #include "station/training/scripted_operator.h"
+#include "station/training/session_file.h"
 #include "station/training/session_runner.h"
 #include "station/training/uuid.h"
 
@@ -616,15 +617,10 @@ int RunRunCommand(const CommandArgs& args) {
       "upload-attempts", po::value<int>()->default_value(3),
       "upload passes (with backoff) before leaving the session pending")(
       "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format");
+  po::variables_map vm;
+  if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   RunOptions options;
   try {
-    po::variables_map vm;
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-    if (vm.count("help")) {
-      std::cout << kUsage << "\n\n" << desc;
-      return kExitOk;
-    }
     options = ParseRunOptions(vm);
   } catch (const std::exception& e) {
     std::cerr << kName << ": " << e.what() << "\n";
@@ -648,17 +644,16 @@ int RunSyncCommand(const CommandArgs& args) {
   std::string data_dir;
   int attempts = 3;
   double verdict_wait_s = 30.0;
+  po::variables_map vm;
+  if (auto stop = ParseCommandLine(
+          "ves-station sync",
+          "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] [--data-dir DIR]\n\n"
+          "Uploads the outbox's pending sessions. Exit status 0 when none is left pending, 1 "
+          "when some are (server unreachable).",
+          args, desc, &vm)) {
+    return *stop;
+  }
   try {
-    po::variables_map vm;
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-    if (vm.count("help")) {
-      std::cout << "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] "
-                   "[--data-dir DIR]\n\nUploads the outbox's pending sessions. Exit status 0 "
-                   "when none is left pending, 1 when some are (server unreachable).\n\n"
-                << desc;
-      return kExitOk;
-    }
     if (!vm.count("server") || !vm.count("token")) {
       throw UsageError("--server ADDR and --token T are required");
     }

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "patient_db/case_format.h"
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/scope_file.h"
 #include "station/model/model.h"
@@ -246,15 +247,10 @@ int RunSimCommand(const CommandArgs& args) {
       "csv", po::value<std::string>(), "output CSV path")(
       "operator", po::value<std::string>(), "scripted operator: novice or expert")(
       "session-out", po::value<std::string>(), "with --operator: write the session file here");
+  po::variables_map vm;
+  if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   SimOptions options;
   try {
-    po::variables_map vm;
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-    if (vm.count("help")) {
-      std::cout << kUsage << "\n\n" << desc;
-      return 0;
-    }
     options = ParseSimOptions(vm);
   } catch (const std::exception& e) {
     std::cerr << kName << ": " << e.what() << "\n";

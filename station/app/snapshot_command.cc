@@ -11,6 +11,7 @@
 #include <string>
 
 #include "patient_db/case_format.h"
+#include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/run_views.h"
 #include "station/model/model.h"
@@ -182,15 +183,10 @@ int RunSnapshotCommand(const CommandArgs& args) {
       "height", po::value<int>()->default_value(480), "image height, px")(
       "segments", po::value<int>()->default_value(150), "colon segment points N")(
       "out", po::value<std::string>(), "output directory (created)");
+  po::variables_map vm;
+  if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   SnapshotOptions options;
   try {
-    po::variables_map vm;
-    po::store(po::command_line_parser(args).options(desc).run(), vm);
-    po::notify(vm);
-    if (vm.count("help")) {
-      std::cout << kUsage << "\n\n" << desc;
-      return 0;
-    }
     options = ParseOptions(vm);
   } catch (const std::exception& e) {
     std::cerr << kName << ": " << e.what() << "\n";
