@@ -221,6 +221,9 @@ int main(int argc, char** argv) {
       std::getenv("PROBE_LOOKAHEAD") ? std::atof(std::getenv("PROBE_LOOKAHEAD")) : 0.0;
   const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
   const char* dump = std::getenv("PROBE_DUMP_AT");
+  const double wall_over_N =
+      std::getenv("PROBE_WALL_OVER") ? std::atof(std::getenv("PROBE_WALL_OVER")) : 0.0;
+  double last_wall_print_s = -1.0;
   // Summary at the end: the deepest tip, the stretch and wall force peaks,
   // the seconds of stretch over 3 cm (the pain level), steps over 20 N.
   double max_tip_arc_m = 0.0, max_stretch_m = 0.0, max_wall_N = 0.0, max_base_N = 0.0;
@@ -270,6 +273,23 @@ int main(int argc, char** argv) {
     if (spikes && std::abs(out.base_force_N) > 20.0) {
       PrintSpike(state, in, out);
       PrintMotion(params, earlier, previous, previous_base_N);
+    }
+    // PROBE_WALL_OVER=N: the contacts of a step whose largest wall force passes N (once per 0.2 s).
+    if (wall_over_N > 0.0 && out.peak_wall_force_N > wall_over_N &&
+        state.time_s - last_wall_print_s > 0.2) {
+      last_wall_print_s = state.time_s;
+      std::printf(
+          "wall t=%.3f peak %.1f N, base %.2f N, push %.2f N, knobs %.2f %.2f, inserted %.3f "
+          "tip %.3f\n",
+          state.time_s, out.peak_wall_force_N, out.base_force_N, in.push_force_N, in.knob_up_rad,
+          in.knob_right_rad, state.inserted_m, state.tip_arc_m);
+      for (int j = 0; j < out.contact_count; ++j) {
+        const auto& c = out.contacts[j];
+        if (c.normal_force_N < 1.0) continue;
+        std::printf("   from_tip %.3f colon_arc %.3f N %.2f pen %.4f alpha %.2f\n",
+                    c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.penetration_m,
+                    c.alpha);
+      }
     }
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);

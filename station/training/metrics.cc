@@ -2,14 +2,26 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ves::training {
 
 double LoopIndex::Update(double inserted_m, double tip_arc_m) {
   const double slack_m = inserted_m - tip_arc_m;
-  if (!started_ || slack_m < min_slack_m_) min_slack_m_ = slack_m;
-  started_ = true;
-  value_ = slack_m - min_slack_m_;
+  const double depth_m = std::isfinite(tip_arc_m) ? std::max(0.0, tip_arc_m) : 0.0;
+  const std::size_t bin = std::min(static_cast<std::size_t>(depth_m / kDepthBin_m), kMaxBins - 1);
+  if (bin >= min_slack_up_to_bin_.size()) {
+    // A new depth: its reference starts at the lowest slack of all shallower ones.
+    const double shallower = min_slack_up_to_bin_.empty() ? std::numeric_limits<double>::infinity()
+                                                          : min_slack_up_to_bin_.back();
+    min_slack_up_to_bin_.resize(bin + 1, shallower);
+  }
+  // This slack lowers the reference of this depth and of every deeper one.
+  for (std::size_t b = bin; b < min_slack_up_to_bin_.size() && slack_m < min_slack_up_to_bin_[b];
+       ++b) {
+    min_slack_up_to_bin_[b] = slack_m;
+  }
+  value_ = slack_m - min_slack_up_to_bin_[bin];
   return value_;
 }
 

@@ -66,8 +66,10 @@ struct Event {
 };
 
 // Loop index (docs/scoring.md): the scope's slack, inserted length minus the
-// tip's arc position, above its lowest value so far. It grows exactly when
-// the inserted length grows while the tip's arc does not.
+// tip's arc position, above the lowest slack seen so far with the tip no
+// deeper than now. It grows exactly when the inserted length grows while the
+// tip's arc does not; a scope pulled back out after a deep reduction (slack
+// far below zero there) does not count as a loop at the shallower depths.
 class LoopIndex {
  public:
   // Returns the index after this step (m).
@@ -75,8 +77,10 @@ class LoopIndex {
   double value() const { return value_; }
 
  private:
-  bool started_{false};
-  double min_slack_m_{0.0};
+  static constexpr double kDepthBin_m = 0.01;
+  static constexpr std::size_t kMaxBins = 1000;  // 10 m: beyond any colon
+  // [b]: the lowest slack seen with the tip in depth bins 0..b (non-increasing in b).
+  std::vector<double> min_slack_up_to_bin_;
   double value_{0.0};
 };
 

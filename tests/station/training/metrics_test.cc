@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 namespace ves::training {
@@ -166,6 +167,46 @@ TEST(Metrics, LoopIndexIsMeasuredFromTheLowestSlackSoFar) {
   const Metrics above = Accumulate(SlackSteps({0, -10, -10, -5, -5})).Result();
   EXPECT_EQ(above.loop_count, 1u);
   EXPECT_EQ(above.loop_s, 0.5);
+}
+
+// (inserted, tip arc) in 1/64 m per step.
+std::vector<StepObservation> ScopeSteps(
+    const std::vector<std::pair<int, int>>& inserted_tip_64ths) {
+  auto steps = Steps(static_cast<int>(inserted_tip_64ths.size()));
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    steps[i].inserted_m = inserted_tip_64ths[i].first / 64.0;
+    steps[i].tip_arc_m = inserted_tip_64ths[i].second / 64.0;
+  }
+  return steps;
+}
+
+TEST(Metrics, AScopePulledOutAfterADeepReductionIsNotInALoop) {
+  // In to 40/64 m with the tip, then withdrawn 10/64 while the hooked tip
+  // holds at 40 (slack -10: the colon straightened onto the scope), then the
+  // tip slips back and the scope comes out. Measured from the lowest slack
+  // ever (-10), the last steps would read as a 10/64 m loop with no scope in
+  // the patient; measured at each depth, they are not a loop.
+  const auto acc = Accumulate(ScopeSteps({{10, 10},
+                                          {20, 20},
+                                          {30, 30},
+                                          {40, 40},
+                                          {35, 40},
+                                          {30, 40},
+                                          {25, 24},
+                                          {10, 10},
+                                          {0, 0},
+                                          {0, 0}}));
+  EXPECT_EQ(acc.Result().loop_count, 0u);
+  EXPECT_EQ(acc.loop_index_m(), 0.0);
+}
+
+TEST(Metrics, PushingBackAfterAReductionAtTheSameDepthIsALoop) {
+  // The same reduction, then the scope pushed 6/64 m back in while the tip
+  // stays at 40: the sigmoid bows again, a loop of 6/64 m.
+  const auto acc = Accumulate(
+      ScopeSteps({{10, 10}, {20, 20}, {30, 30}, {40, 40}, {30, 40}, {33, 40}, {36, 40}}));
+  EXPECT_EQ(acc.Result().loop_count, 1u);
+  EXPECT_EQ(acc.loop_index_m(), 6.0 / 64.0);
 }
 
 TEST(Metrics, AdvancingTipWithTheScopeMakesNoLoop) {
