@@ -42,27 +42,42 @@ InputSample NoviceOperator::Act(const Perception&) {
 }
 
 InputSample ExpertOperator::Act(const Perception& p) {
-  const double slack_m = slack_.Update(p.inserted_m, p.tip_arc_m);
+  const double loop_m = loop_index_.Update(p.inserted_m, p.tip_arc_m);
+  // What the hand and the image tell: scope in beyond the path to the tip.
+  const double slack_m = p.inserted_m - p.tip_arc_m;
+  if (pushing_through_) {
+    if (p.peak_stretch_m > kPainStretch_m) pain_s_ += dt_s_;
+    if (slack_m > kBoldSlackLimit_m || pain_s_ > kBoldPainLimit_s) pushing_through_ = false;
+  }
+  const double push_N = pushing_through_ ? kBoldPushForce_N : kPushForce_N;
+  const double force_limit_N = pushing_through_ ? kBoldForceLimit_N : kForceLimit_N;
+  const double complaint_m = pushing_through_ ? kBoldComplaintStretch_m : kComplaintStretch_m;
+  const double loop_start_m = pushing_through_ ? kBoldLoopStart_m : kLoopStart_m;
+
   if (!withdrawing_) {
-    const bool loop = slack_m > kLoopStart_m || p.base_force_N > kForceLimit_N ||
-                      p.peak_stretch_m > kComplaintStretch_m;
+    const bool loop =
+        loop_m > loop_start_m || p.base_force_N > force_limit_N || p.peak_stretch_m > complaint_m;
     const bool stalled =
         p.t_s - window_start_s_ >= kStallWindow_s && p.tip_arc_m - window_arc_m_ < kStallAdvance_m;
     if (p.t_s - window_start_s_ >= kStallWindow_s) {
       window_start_s_ = p.t_s;
       window_arc_m_ = p.tip_arc_m;
     }
-    if (loop || stalled) {
+    if (!pushing_through_ && stalled && !loop && slack_m < kTorqueSlack_m) {
+      // Nothing to pull out: torque the shaft while pushing on.
+      torque_until_s_ = p.t_s + kTorque_s;
+      roll_direction_ = -roll_direction_;
+    } else if (loop || stalled) {
       withdrawing_ = true;
       phase_start_s_ = p.t_s;
-      slack_at_start_m_ = slack_m;
+      loop_at_start_m_ = loop_m;
       roll_direction_ = -roll_direction_;  // alternate the torque between attempts
     }
   } else if (const double elapsed_s = p.t_s - phase_start_s_;
-             elapsed_s >= kWithdrawMax_s ||
-             (elapsed_s >= kWithdraw_s && p.base_force_N < 0.5 * kForceLimit_N &&
-              p.peak_stretch_m < 0.5 * kComplaintStretch_m &&
-              slack_m < std::max(kLoopDone_m, 0.5 * slack_at_start_m_))) {
+             elapsed_s >= kWithdrawMax_s || slack_m < kStraightSlack_m ||
+             (elapsed_s >= kWithdraw_s && p.base_force_N < 0.5 * force_limit_N &&
+              p.peak_stretch_m < 0.5 * complaint_m &&
+              loop_m < std::max(kLoopDone_m, 0.5 * loop_at_start_m_))) {
     withdrawing_ = false;
     window_start_s_ = p.t_s;
     window_arc_m_ = p.tip_arc_m;
@@ -73,7 +88,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
   in.view_mode = ViewMode::kTextured;
   in.fluoroscopy_on = false;
   if (withdrawing_) {
-    in.push_force_N = kPullForce_N;
+    in.push_force_N = slack_m < kRelaxHandSlack_m ? 0.0 : kPullForce_N;
     roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
     const double relax = std::max(0.0, 1.0 - kKnobRelax_per_s * dt_s_);
     knob_up_rad_ *= relax;
@@ -88,7 +103,8 @@ InputSample ExpertOperator::Act(const Perception& p) {
                                  -p.angulation_right_rad, p.angulation_right_rad);
     // Push less while the lumen is off the view axis.
     const double off_axis_rad = std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0));
-    in.push_force_N = kPushForce_N * std::clamp(1.0 - off_axis_rad / 1.2, 0.2, 1.0);
+    in.push_force_N = push_N * std::clamp(1.0 - off_axis_rad / 1.2, 0.2, 1.0);
+    if (p.t_s < torque_until_s_) roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
   }
   in.roll_rad = roll_rad_;
   in.knob_up_down_rad = knob_up_rad_;

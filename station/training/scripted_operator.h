@@ -47,16 +47,23 @@ class NoviceOperator final : public ScriptedOperator {
   InputSample Act(const Perception& perception) override;
 };
 
-// Steers the tip toward the lumen with the knobs and pushes; when a loop
-// builds (the scope goes in but the image does not advance), the hand force
-// rises, the patient complains of stretch, or the tip stops advancing, pulls back while torquing
-// and relaxing the tip, then advances again; fluoroscopy off, textured view.
+// Steers the tip toward the lumen with the knobs. It starts by pushing
+// through firmly (the mobile sigmoid can only be passed by bowing it), then,
+// for good once the loop has taken 20 cm of scope or the patient has hurt for
+// 10 s, works gently: when a loop builds (the scope goes in but the image does
+// not advance), the hand force rises, the patient complains of stretch, or the
+// tip stops advancing, it pulls back while torquing and relaxing the tip, then
+// advances again. It stops pulling once the scope is shorter than the path to
+// its tip (more would only drag the colon), and torques instead of pulling
+// when it stalls with no slack to take out. Fluoroscopy off, textured view.
+// docs/scoring.md, "Scripted operators".
 class ExpertOperator final : public ScriptedOperator {
  public:
+  // Gentle technique.
   static constexpr double kPushForce_N = 4.0;
   static constexpr double kPullForce_N = -1.5;
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
-  static constexpr double kLoopStart_m = 0.04;     // slack that triggers a reduction
+  static constexpr double kLoopStart_m = 0.04;     // loop index that triggers a reduction
   static constexpr double kLoopDone_m = 0.01;
   static constexpr double kForceLimit_N = 6.0;
   static constexpr double kComplaintStretch_m = 0.025;  // the patient starts to complain
@@ -66,18 +73,37 @@ class ExpertOperator final : public ScriptedOperator {
   static constexpr double kWithdraw_s = 0.6;       // shortest pull-back
   static constexpr double kWithdrawMax_s = 2.0;    // longest pull-back
   static constexpr double kKnobRelax_per_s = 2.0;  // knobs ease toward neutral while pulling
+  // Slack (inserted length minus the tip's arc) below which a pull-back ends:
+  // the scope is already shorter than the path to its tip.
+  static constexpr double kStraightSlack_m = -0.02;
+  // A stall with less slack than this is torqued through, not pulled back.
+  static constexpr double kTorqueSlack_m = 0.03;
+  static constexpr double kTorque_s = 1.5;
+  // During a pull-back with less slack than this the hand relaxes (0 N).
+  static constexpr double kRelaxHandSlack_m = 0.02;
+  // Pushing through: the same rules with these limits, until either ends it.
+  static constexpr double kBoldPushForce_N = 9.0;
+  static constexpr double kBoldForceLimit_N = 12.0;
+  static constexpr double kBoldComplaintStretch_m = 0.08;
+  static constexpr double kBoldLoopStart_m = 0.30;
+  static constexpr double kBoldSlackLimit_m = 0.20;  // this much scope in a loop ends it
+  static constexpr double kBoldPainLimit_s = 10.0;   // so does this much pain
+  static constexpr double kPainStretch_m = 0.03;     // stretch the patient calls pain
 
   explicit ExpertOperator(double dt_s) : dt_s_(dt_s) {}
   InputSample Act(const Perception& perception) override;
 
  private:
   double dt_s_;
-  LoopIndex slack_;
+  LoopIndex loop_index_;
+  bool pushing_through_{true};
+  double pain_s_{0.0};
   bool withdrawing_{false};
   double phase_start_s_{0.0};
-  double slack_at_start_m_{0.0};
+  double loop_at_start_m_{0.0};
   double window_start_s_{0.0};
   double window_arc_m_{0.0};
+  double torque_until_s_{-1.0};
   double roll_direction_{1.0};
   double knob_up_rad_{0.0};
   double knob_right_rad_{0.0};
