@@ -217,8 +217,10 @@ int main(int argc, char** argv) {
   ves::model::ModelState earlier = state;
   // Read once: the switches below are consulted every step.
   const char* relax = std::getenv("PROBE_RELAX");
-  const double lookahead_m =
-      std::getenv("PROBE_LOOKAHEAD") ? std::atof(std::getenv("PROBE_LOOKAHEAD")) : 0.0;
+  // PROBE_LOOKAHEAD: how far ahead of the tip (m) the rule aims.
+  const double lookahead_m = std::getenv("PROBE_LOOKAHEAD")
+                                 ? std::atof(std::getenv("PROBE_LOOKAHEAD"))
+                                 : ves::training::kLumenLookahead_m;
   const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
   const char* dump = std::getenv("PROBE_DUMP_AT");
   const double wall_over_N =
@@ -229,14 +231,7 @@ int main(int argc, char** argv) {
   double max_tip_arc_m = 0.0, max_stretch_m = 0.0, max_wall_N = 0.0, max_base_N = 0.0;
   int stretched_s = 0, printed_s = 0, spike_steps = 0;
   while (state.time_s < seconds) {
-    auto p = ves::training::Perceive(params, state, out);
-    // PROBE_LOOKAHEAD: how far ahead of the tip (m) the rule aims (the image's 4 cm otherwise).
-    if (lookahead_m > 0.0) {
-      const Eigen::Vector3d d_Tip =
-          state.X_WTip.inverse() *
-          ves::training::ColonPointAtArc(params, state, state.tip_arc_m + lookahead_m);
-      if (d_Tip.norm() > 1e-9) p.lumen_Tip = d_Tip.normalized();
-    }
+    const auto p = ves::training::Perceive(params, state, out, lookahead_m);
     const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
     const double right_err = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
     in.knob_up_rad = std::clamp(in.knob_up_rad + gain_per_s * up_err * params.dt_s,

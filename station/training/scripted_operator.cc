@@ -8,14 +8,8 @@
 #include "station/training/observer.h"
 
 namespace ves::training {
-namespace {
-
-constexpr double kLumenLookahead_m = 0.04;
-
-}  // namespace
-
 Perception Perceive(const model::ModelParams& params, const model::ModelState& state,
-                    const model::StepOutput& output) {
+                    const model::StepOutput& output, double lumen_lookahead_m) {
   Perception p;
   p.t_s = state.time_s;
   p.inserted_m = state.inserted_m;
@@ -23,7 +17,7 @@ Perception Perceive(const model::ModelParams& params, const model::ModelState& s
   p.base_force_N = output.base_force_N;
   p.peak_stretch_m = output.peak_stretch_m;
   const Eigen::Vector3d target_W =
-      ColonPointAtArc(params, state, state.tip_arc_m + kLumenLookahead_m);
+      ColonPointAtArc(params, state, state.tip_arc_m + lumen_lookahead_m);
   const Eigen::Vector3d d_Tip = state.X_WTip.inverse() * target_W;
   if (d_Tip.norm() > 1e-9) p.lumen_Tip = d_Tip.normalized();
   p.angulation_up_rad = std::min(params.scope.angulation_up_rad, params.scope.angulation_down_rad);
@@ -47,16 +41,15 @@ InputSample ExpertOperator::Act(const Perception& p) {
   const double slack_m = p.inserted_m - p.tip_arc_m;
   if (pushing_through_) {
     if (p.peak_stretch_m > kPainStretch_m) pain_s_ += dt_s_;
-    if (slack_m > kBoldSlackLimit_m || pain_s_ > kBoldPainLimit_s) pushing_through_ = false;
+    if (slack_m > kPushThroughSlackLimit_m || pain_s_ > kPushThroughPainLimit_s) {
+      pushing_through_ = false;
+    }
   }
-  const double push_N = pushing_through_ ? kBoldPushForce_N : kPushForce_N;
-  const double force_limit_N = pushing_through_ ? kBoldForceLimit_N : kForceLimit_N;
-  const double complaint_m = pushing_through_ ? kBoldComplaintStretch_m : kComplaintStretch_m;
-  const double loop_start_m = pushing_through_ ? kBoldLoopStart_m : kLoopStart_m;
+  const Technique& t = pushing_through_ ? kPushThrough : kGentle;
 
   if (!withdrawing_) {
-    const bool loop =
-        loop_m > loop_start_m || p.base_force_N > force_limit_N || p.peak_stretch_m > complaint_m;
+    const bool loop = loop_m > t.loop_start_m || p.base_force_N > t.force_limit_N ||
+                      p.peak_stretch_m > t.complaint_stretch_m;
     const bool stalled =
         p.t_s - window_start_s_ >= kStallWindow_s && p.tip_arc_m - window_arc_m_ < kStallAdvance_m;
     if (p.t_s - window_start_s_ >= kStallWindow_s) {
@@ -75,8 +68,8 @@ InputSample ExpertOperator::Act(const Perception& p) {
     }
   } else if (const double elapsed_s = p.t_s - phase_start_s_;
              elapsed_s >= kWithdrawMax_s || slack_m < kStraightSlack_m ||
-             (elapsed_s >= kWithdraw_s && p.base_force_N < 0.5 * force_limit_N &&
-              p.peak_stretch_m < 0.5 * complaint_m &&
+             (elapsed_s >= kWithdraw_s && p.base_force_N < 0.5 * t.force_limit_N &&
+              p.peak_stretch_m < 0.5 * t.complaint_stretch_m &&
               loop_m < std::max(kLoopDone_m, 0.5 * loop_at_start_m_))) {
     withdrawing_ = false;
     window_start_s_ = p.t_s;
@@ -103,7 +96,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
                                  -p.angulation_right_rad, p.angulation_right_rad);
     // Push less while the lumen is off the view axis.
     const double off_axis_rad = std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0));
-    in.push_force_N = push_N * std::clamp(1.0 - off_axis_rad / 1.2, 0.2, 1.0);
+    in.push_force_N = t.push_N * std::clamp(1.0 - off_axis_rad / 1.2, 0.2, 1.0);
     if (p.t_s < torque_until_s_) roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
   }
   in.roll_rad = roll_rad_;

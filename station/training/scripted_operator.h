@@ -28,8 +28,12 @@ struct Perception {
   double angulation_right_rad{model::kPi};
 };
 
+// How far ahead of the tip the image shows the lumen: the deformed centerline
+// at this arc beyond the tip.
+inline constexpr double kLumenLookahead_m = 0.04;
+
 Perception Perceive(const model::ModelParams& params, const model::ModelState& state,
-                    const model::StepOutput& output);
+                    const model::StepOutput& output, double lumen_lookahead_m = kLumenLookahead_m);
 
 // A scripted trainee: produces the same InputSample a person's hands produce
 // (for tests, demos and calibration, docs/scoring.md). Deterministic.
@@ -59,36 +63,42 @@ class NoviceOperator final : public ScriptedOperator {
 // docs/scoring.md, "Scripted operators".
 class ExpertOperator final : public ScriptedOperator {
  public:
-  // Gentle technique.
-  static constexpr double kPushForce_N = 4.0;
+  // How hard a technique pushes and what makes it pull back: the hand force,
+  // the stretch (the patient complains) or the loop index passing these.
+  struct Technique {
+    double push_N;
+    double force_limit_N;
+    double complaint_stretch_m;
+    double loop_start_m;
+  };
+  static constexpr Technique kGentle{
+      .push_N = 4.0, .force_limit_N = 6.0, .complaint_stretch_m = 0.025, .loop_start_m = 0.04};
+  static constexpr Technique kPushThrough{
+      .push_N = 9.0, .force_limit_N = 12.0, .complaint_stretch_m = 0.08, .loop_start_m = 0.30};
+  // Pushing through ends for good at this much scope in a loop (inserted
+  // length minus the tip's arc) or this much pain.
+  static constexpr double kPushThroughSlackLimit_m = 0.20;
+  static constexpr double kPushThroughPainLimit_s = 10.0;
+  // The stretch the patient calls pain: the metrics' pain level.
+  static constexpr double kPainStretch_m = MetricThresholds{}.pain_stretch_m;
+
   static constexpr double kPullForce_N = -1.5;
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
-  static constexpr double kLoopStart_m = 0.04;     // loop index that triggers a reduction
   static constexpr double kLoopDone_m = 0.01;
-  static constexpr double kForceLimit_N = 6.0;
-  static constexpr double kComplaintStretch_m = 0.025;  // the patient starts to complain
   static constexpr double kRollRate_rad_per_s = 1.0;
   static constexpr double kStallWindow_s = 1.5;  // no advance over this long is a stall
   static constexpr double kStallAdvance_m = 0.003;
   static constexpr double kWithdraw_s = 0.6;       // shortest pull-back
   static constexpr double kWithdrawMax_s = 2.0;    // longest pull-back
   static constexpr double kKnobRelax_per_s = 2.0;  // knobs ease toward neutral while pulling
-  // Slack (inserted length minus the tip's arc) below which a pull-back ends:
-  // the scope is already shorter than the path to its tip.
+  // Slack below which a pull-back ends: the scope is already shorter than
+  // the path to its tip.
   static constexpr double kStraightSlack_m = -0.02;
-  // A stall with less slack than this is torqued through, not pulled back.
+  // Gentle: a stall with less slack than this is torqued through, not pulled back.
   static constexpr double kTorqueSlack_m = 0.03;
   static constexpr double kTorque_s = 1.5;
   // During a pull-back with less slack than this the hand relaxes (0 N).
   static constexpr double kRelaxHandSlack_m = 0.02;
-  // Pushing through: the same rules with these limits, until either ends it.
-  static constexpr double kBoldPushForce_N = 9.0;
-  static constexpr double kBoldForceLimit_N = 12.0;
-  static constexpr double kBoldComplaintStretch_m = 0.08;
-  static constexpr double kBoldLoopStart_m = 0.30;
-  static constexpr double kBoldSlackLimit_m = 0.20;  // this much scope in a loop ends it
-  static constexpr double kBoldPainLimit_s = 10.0;   // so does this much pain
-  static constexpr double kPainStretch_m = 0.03;     // stretch the patient calls pain
 
   explicit ExpertOperator(double dt_s) : dt_s_(dt_s) {}
   InputSample Act(const Perception& perception) override;
