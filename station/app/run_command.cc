@@ -367,7 +367,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   if (recorder) recorder->Close();
   const std::string device_line =
       DeviceReportLine("sim", "socketpair", rig.driver().counters(), source,
-                       rig.cycle().safety().trips(), rig.cycle().safety().fault());
+                       rig.cycle().safety());
   std::cout << device_line;
   if (recorder) {
     std::cout << " can_log=" << o.can_log << " can_log_frames=" << recorder->written()

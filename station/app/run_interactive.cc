@@ -102,45 +102,27 @@ std::string StateText(const PanelNumbers& numbers, haptics::SafetyFault fault) {
   return text;
 }
 
-// The simulated VES-IV served against the wall clock on its own thread, its
-// hand gripping the scope and pulling it toward the keyboard's target, which
-// it follows no faster than a person pushes a colonoscope (a key press is a
-// push, not a jump). The target comes lock-free from the UI.
-class SimulatedHandThread {
+// The simulated hand gripping the scope on the simulated VES-IV, moved on the
+// loop's thread just before the device answers each SYNC: it pulls the scope
+// toward the keyboard's target (lock-free from the UI), following it no
+// faster than a person pushes a colonoscope (a key press is a push, not a
+// jump). Its speed is in device time (one period per SYNC), as the plant's.
+class KeyboardHand {
  public:
-  SimulatedHandThread(haptics::SimulatedBallDrive* device,
-                      const haptics::SeqLock<HandTarget>* target)
-      : device_(device), target_(target) {
-    thread_ = std::thread([this] { Main(); });
-  }
-  ~SimulatedHandThread() { Stop(); }
-  void Stop() {
-    running_.store(false, std::memory_order_release);
-    if (thread_.joinable()) thread_.join();
+  KeyboardHand(const haptics::SeqLock<HandTarget>* target, double period_s)
+      : target_(target), period_s_(period_s) {}
+  void Move(haptics::SimulatedBallDrive* device) {
+    HandTarget target;
+    target_->Load(&target);
+    const double max_move_m = kHandSpeed_m_per_s * period_s_;
+    commanded_m_ += std::clamp(target.insertion_m - commanded_m_, -max_move_m, max_move_m);
+    device->set_hand(HandAtTargets(commanded_m_, target.roll_rad));
   }
 
  private:
-  void Main() {
-    haptics::TryEnableRealtime(kDeviceThreadPriority, "simulated device");
-    double commanded_m = 0.0;
-    double last_s = haptics::MonotonicSeconds();
-    while (running_.load(std::memory_order_acquire)) {
-      HandTarget target;
-      target_->Load(&target);
-      const double now_s = haptics::MonotonicSeconds();
-      const double max_move_m = kHandSpeed_m_per_s * (now_s - last_s);
-      last_s = now_s;
-      commanded_m += std::clamp(target.insertion_m - commanded_m, -max_move_m, max_move_m);
-      device_->set_hand(HandAtTargets(commanded_m, target.roll_rad));
-      device_->ServiceWait(2, now_s);
-    }
-  }
-
-  static constexpr int kDeviceThreadPriority = 79;  // just below the haptic loop
-  haptics::SimulatedBallDrive* device_;
   const haptics::SeqLock<HandTarget>* target_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
+  double period_s_;
+  double commanded_m_{0.0};
 };
 
 // The session side of the loop thread: repeats asked for by the UI, records
@@ -269,14 +251,24 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   }
   haptics::SeqLock<HandTarget> hand;
   std::unique_ptr<haptics::SimulatedBallDrive> simulated_device;
-  std::unique_ptr<SimulatedHandThread> hand_thread;
+  std::unique_ptr<haptics::InlineSimulatedDevice> inline_device;
+  KeyboardHand keyboard_hand(&hand, run.params.dt_s);
+  haptics::HapticDevice* haptic_device = &driver;
   if (simulated) {
+    // Served on the loop's thread: it answers every SYNC in time, as the
+    // real device's own hardware does (haptics::InlineSimulatedDevice).
     simulated_device =
         std::make_unique<haptics::SimulatedBallDrive>(std::move(*device_end), device_options);
-    hand_thread = std::make_unique<SimulatedHandThread>(simulated_device.get(), &hand);
+    inline_device =
+        std::make_unique<haptics::InlineSimulatedDevice>(&driver, simulated_device.get());
+    inline_device->set_before_service(
+        [&keyboard_hand](double, haptics::SimulatedBallDrive* device) {
+          keyboard_hand.Move(device);
+        });
+    haptic_device = inline_device.get();
   }
   haptics::DeviceState device_state;
-  if (!haptics::BringUpDevice(&driver, &device_state, 2.0)) {
+  if (!haptics::BringUpDevice(haptic_device, &device_state, 2.0)) {
     throw std::runtime_error("the VES-IV on " + bus_name +
                              " did not become operational within 2 s");
   }
@@ -290,7 +282,7 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   haptics::CycleOptions cycle_options;
   cycle_options.period_s = run.params.dt_s;
   cycle_options.control.mode = haptics::ControlMode::kCoupled;
-  haptics::HapticCycle cycle(&driver, session.source(), cycle_options);
+  haptics::HapticCycle cycle(haptic_device, session.source(), cycle_options);
   cycle.SetInitialDeviceState(device_state);
   haptics::LoopOptions loop_options;
   loop_options.period_s = run.params.dt_s;
@@ -298,7 +290,6 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   loop.Start();
   const auto stop_all = [&] {
     loop.Stop();
-    if (hand_thread) hand_thread->Stop();
     if (recorder) recorder->Close();
   };
   if (!loop.ArmAfter(20, 2.0)) {
@@ -404,7 +395,7 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   result.next_scope = next_scope;
   result.device_report =
       DeviceReportLine(simulated ? "sim" : "can:" + bus_name, bus_name, driver.counters(),
-                       *session.source(), cycle.safety().trips(), cycle.safety().fault());
+                       *session.source(), cycle.safety());
   const haptics::LoopStats& stats = loop.stats();
   char timing[160];
   std::snprintf(timing, sizeof(timing),

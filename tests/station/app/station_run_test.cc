@@ -145,7 +145,7 @@ TEST_F(StationRun, TheHeadlessSessionRunsThroughTheSimulatedDeviceAndReplaysExac
   EXPECT_GE(NumberAfter(device, "frames_received"), 2.0 * periods) << device;
   EXPECT_EQ(NumberAfter(device, "lost_frames"), 0.0) << device;
   EXPECT_EQ(NumberAfter(device, "malformed_frames"), 0.0) << device;
-  EXPECT_EQ(NumberAfter(device, "safe_state_trips"), 0.0) << device;
+  EXPECT_EQ(NumberAfter(device, "hard_faults"), 0.0) << device;
   // The novice pushes 6 N: the scope goes in, measured by the insertion encoder.
   EXPECT_GT(NumberAfter(device, "encoder_travel_m"), 0.05) << device;
 

@@ -1,0 +1,67 @@
+// `ves-station haptic-check` as a process that is stopped (SIGSTOP) for
+// 30 ms five times while it runs the spring mode on the wall clock: a stall of
+// the station's own process is not silence of the device, so the run ends
+// with no hard fault and still draws the spring line of the paper's Fig. 6.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <string>
+#include <thread>
+
+#include "tests/station/app/child_process.h"
+
+namespace ves::station::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using std::chrono::milliseconds;
+
+const std::string kStationBin = VES_BINARY_DIR "/station/app/ves-station";
+
+// The number after "KEY=" in `text` (NaN when absent).
+double NumberAfter(const std::string& text, const std::string& key) {
+  const size_t at = text.find(key + "=");
+  if (at == std::string::npos) return std::nan("");
+  return std::atof(text.c_str() + at + key.size() + 1);
+}
+
+// The summary line of one axis ("mode=spring axis=thrust ...").
+std::string AxisLine(const std::string& out, const std::string& axis) {
+  const size_t at = out.find("axis=" + axis);
+  if (at == std::string::npos) return "";
+  return out.substr(at, out.find('\n', at) - at);
+}
+
+TEST(HapticCheck, StoppingTheProcessFiveTimesFor30MsIsNoFaultAndKeepsTheSpringLine) {
+  const fs::path dir = MakeTempDir("haptic-check");
+  ChildProcess check({kStationBin, "haptic-check", "--device", "sim", "--mode", "spring",
+                      "--profile", "sine:20:0.25", "--seconds", "4", "--csv",
+                      (dir / "run.csv").string()},
+                     dir / "check");
+  std::this_thread::sleep_for(milliseconds(800));  // past bring-up and arming
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(check.Running());
+    ASSERT_EQ(::kill(check.pid(), SIGSTOP), 0);
+    std::this_thread::sleep_for(milliseconds(30));
+    ASSERT_EQ(::kill(check.pid(), SIGCONT), 0);
+    std::this_thread::sleep_for(milliseconds(400));
+  }
+  const ProcessResult result = check.Wait(std::chrono::seconds(60));
+  ASSERT_EQ(result.exit_code, 0) << result.out << result.err;
+  EXPECT_EQ(NumberAfter(result.err, "hard_faults"), 0.0) << result.err;
+  EXPECT_GE(NumberAfter(result.err, "station_stalls"), 5.0) << result.err;
+  const std::string thrust = AxisLine(result.out, "thrust");
+  const std::string roll = AxisLine(result.out, "roll");
+  EXPECT_NEAR(NumberAfter(thrust, "slope_N_per_m"), 100.0, 5.0) << result.out;
+  EXPECT_GE(NumberAfter(thrust, "r2"), 0.99) << result.out;
+  EXPECT_NEAR(NumberAfter(roll, "slope_Nm_per_rad"), 0.05, 0.0025) << result.out;
+  EXPECT_GE(NumberAfter(roll, "r2"), 0.99) << result.out;
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ves::station::testing
