@@ -3,8 +3,9 @@
 //   headless: a scripted operator drives the model; frames and a summary go to --out.
 //   interactive: the three windows; the keyboard and mouse drive the simulated hand.
 // Either way the finished session is committed to the outbox before any upload.
-// Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments or
-// input (no such case), 1 the station failed (outbox, output folder, ...).
+// Exit status (the same for `sim`): 0 a session ran to its end, whatever its
+// outcome; 2 bad arguments or input (no such case); 1 the station failed
+// (outbox, output folder, ...) or the model diverged.
 #include <unistd.h>
 
 #include <algorithm>
@@ -51,7 +52,6 @@ constexpr char kName[] = "ves-station run";
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
 constexpr int kExitUsage = 2;
-constexpr int kExitNotReached = 3;
 // For the crash tests: with this set, the process SIGKILLs itself right after
 // the outbox commit, before any upload (docs/station-run.md).
 constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
@@ -70,7 +70,8 @@ constexpr char kUsage[] =
     "or SocketCAN), commits it to the outbox, then uploads it. Headless: a scripted operator's\n"
     "hand drives the simulated device; endoscope frames, fluoroscopy.png, summary.txt,\n"
     "device.txt and session.session go to DIR.\n"
-    "Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments/input, 1 failure.";
+    "Exit status: 0 the session ran to its end (any outcome), 2 bad arguments/input,\n"
+    "1 failure (the model diverged, the outbox or --out could not be written).";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -411,7 +412,11 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
     CollectServerVerdicts(*o.server, *lessons, record.uuid(), o.verdict_wait_s, std::cout);
   }
   std::cout << summary << "\n";
-  return result.outcome == training::Outcome::kCecumReached ? kExitOk : kExitNotReached;
+  if (result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 // The device of an interactive run: SocketCAN when --device can:IFACE (throws
@@ -566,7 +571,7 @@ int Run(RunOptions o) {
   interactive.records = std::move(records);
   if (interactive.records.empty()) {
     std::cout << "quit before the session started: nothing to record\n";
-    return kExitNotReached;
+    return kExitOk;
   }
   std::optional<sync::LessonCache> lessons;
   // Every repeat is an attempt. The aids were enforced: a wireframe-free lesson
@@ -585,8 +590,11 @@ int Run(RunOptions o) {
                           o.verdict_wait_s, std::cout);
   }
   std::cout << training::SummaryLine(interactive.result) << "\n";
-  return interactive.result.outcome == training::Outcome::kCecumReached ? kExitOk
-                                                                        : kExitNotReached;
+  if (interactive.result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 }  // namespace

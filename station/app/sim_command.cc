@@ -37,7 +37,9 @@ constexpr char kUsage[] =
     "                       [--session-out FILE.session] [--csv OUT] [--segments N] ...\n\n"
     "Runs the endoscope-colon model (paper §3) on a case and writes one row per 10 ms:\n"
     "t_s,inserted_m,tip_arc_m,base_force_N,base_torque_Nm,peak_stretch_m,peak_stretch_arc_m,"
-    "peak_wall_force_N";
+    "peak_wall_force_N. With --operator: one summary line (docs/scoring.md).\n"
+    "Exit status (as run): 0 the session ran to its end (any outcome), 2 bad arguments/input,\n"
+    "1 failure (the model diverged, an output could not be written).";
 
 // Everything the run needs, parsed and checked; more driving modes (a
 // scripted operator) slot in as further fields and a branch in InputAt.
@@ -227,6 +229,11 @@ int RunOperatorSim(const SimOptions& o) {
     }
   }
   std::cout << training::SummaryLine(result) << "\n";
+  // As `run`: a session that ran to its end is a success, whatever its outcome.
+  if (result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return 1;
+  }
   return csv.is_open() && !csv.good() ? 1 : 0;
 }
 
