@@ -1,7 +1,10 @@
-// `ves-station haptic-check` as a process that is stopped (SIGSTOP) for
-// 30 ms five times while it runs the spring mode on the wall clock: a stall of
-// the station's own process is not silence of the device, so the run ends
-// with no hard fault and still draws the spring line of the paper's Fig. 6.
+// ves-station subcommands that need no server, as processes:
+//  - `haptic-check` stopped (SIGSTOP) for 30 ms five times while it runs the
+//    spring mode on the wall clock: a stall of the station's own process is
+//    not silence of the device, so the run ends with no hard fault and still
+//    draws the spring line of the paper's Fig. 6;
+//  - `sim --operator` and `replay` of its session file print the same
+//    summary line, byte for byte.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -60,6 +63,28 @@ TEST(HapticCheck, StoppingTheProcessFiveTimesFor30MsIsNoFaultAndKeepsTheSpringLi
   EXPECT_GE(NumberAfter(thrust, "r2"), 0.99) << result.out;
   EXPECT_NEAR(NumberAfter(roll, "slope_Nm_per_rad"), 0.05, 0.0025) << result.out;
   EXPECT_GE(NumberAfter(roll, "r2"), 0.99) << result.out;
+  fs::remove_all(dir);
+}
+
+TEST(SimAndReplay, ReplayPrintsTheSimsSummaryByteForByte) {
+  const fs::path dir = MakeTempDir("sim-replay");
+  const fs::path session = dir / "novice.session";
+  const ProcessResult sim = RunProgram(
+      {kStationBin, "sim", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+       "--operator", "novice", "--seconds", "3", "--session-out", session.string()},
+      dir / "sim");
+  // A session that ran to its end is a success, whatever its outcome.
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  ASSERT_EQ(sim.out.rfind("outcome=", 0), 0u) << sim.out;
+  // Three seconds do not reach the cecum: what did not happen is "-".
+  EXPECT_NE(sim.out.find(" time_to_cecum_s=- inserted_at_cecum_m=- deepest_tip_arc_m="),
+            std::string::npos)
+      << sim.out;
+  EXPECT_NE(sim.out.find(" deepest_region="), std::string::npos) << sim.out;
+  EXPECT_NE(sim.out.find("/100\n"), std::string::npos) << sim.out;
+  const ProcessResult replay = RunProgram({kStationBin, "replay", session.string()}, dir / "replay");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_EQ(replay.out, sim.out);
   fs::remove_all(dir);
 }
 
