@@ -253,7 +253,7 @@ int RunHapticCheckCommand(const CommandArgs& args) {
       "mode", po::value(&mode)->required(), "free or spring")(
       "k-N-per-m", po::value(&options.k_N_per_m)->default_value(100.0),
       "spring mode: thrust spring stiffness, N/m")(
-      "k-roll-Nm-per-rad", po::value(&options.k_Nm_per_rad)->default_value(0.05),
+      "k-roll-Nm-per-rad", po::value(&options.k_Nm_per_rad)->default_value(0.05, "0.05"),
       "spring mode: roll torsional stiffness, N·m/rad")(
       "profile", po::value(&profile)->required(),
       "hand motion sine:AMP_MM:FREQ_HZ (thrust; roll moves the scope surface by the same arc)")(

@@ -4,7 +4,8 @@
 //    not silence of the device, so the run ends with no hard fault and still
 //    draws the spring line of the paper's Fig. 6;
 //  - `sim --operator` and `replay` of its session file print the same
-//    summary line, byte for byte.
+//    summary line, byte for byte;
+//  - help texts print their defaults as written, not as binary fractions.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -85,6 +86,21 @@ TEST(SimAndReplay, ReplayPrintsTheSimsSummaryByteForByte) {
   const ProcessResult replay = RunProgram({kStationBin, "replay", session.string()}, dir / "replay");
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   EXPECT_EQ(replay.out, sim.out);
+  fs::remove_all(dir);
+}
+
+TEST(Help, DefaultsAreRoundedAsWritten) {
+  const fs::path dir = MakeTempDir("help");
+  for (const char* command : {"run", "sim", "replay", "snapshot", "haptic-check", "import-case",
+                              "export-case", "status", "sync"}) {
+    const ProcessResult help = RunProgram({kStationBin, command, "--help"}, dir / command);
+    ASSERT_EQ(help.exit_code, 0) << command << help.err;
+    // "(=0.050000000000000003)" is 0.05 printed with all its binary digits.
+    for (size_t at = help.out.find("(="); at != std::string::npos; at = help.out.find("(=", at + 1)) {
+      const std::string value = help.out.substr(at + 2, help.out.find(')', at) - at - 2);
+      EXPECT_LT(value.size(), 12u) << command << ": default " << value;
+    }
+  }
   fs::remove_all(dir);
 }
 
