@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
@@ -60,12 +61,13 @@ constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
 constexpr std::size_t kCanLogCapacity = std::size_t{1} << 18;
 
 constexpr char kUsage[] =
-    "usage: ves-station run --trainee ID --case ID|--lesson next [--server ADDR --token T\n"
+    "usage: ves-station run --trainee ID --case ID|FILE|--lesson next [--server ADDR --token T\n"
     "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
     "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
     "                       [--can-log FILE]\n\n"
-    "Gets the case (the server's latest version into the offline cache, else the cached one),\n"
+    "Gets the case (the server's latest version into the offline cache, else the cached one;\n"
+    "a case FILE is read and put into the cache),\n"
     "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
     "or SocketCAN), commits it to the outbox, then uploads it. Headless: a scripted operator's\n"
     "hand drives the simulated device; endoscope frames, fluoroscopy.png, summary.txt,\n"
@@ -108,7 +110,7 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   RunOptions o;
   if (!vm.count("trainee")) throw UsageError("--trainee ID is required");
   if (vm.count("case") == vm.count("lesson")) {
-    throw UsageError("give --case ID or --lesson next (one of them)");
+    throw UsageError("give --case ID|FILE or --lesson next (one of them)");
   }
   if (vm.count("lesson")) {
     o.lesson = vm["lesson"].as<std::string>();
@@ -478,6 +480,7 @@ int Run(RunOptions o) {
   }
   const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
   std::optional<ObtainedCase> obtained;
+  bool obtained_from_file = false;
   ves::v1::EndoscopeSpec scope;
   training::CaseRun run;
   try {
@@ -489,6 +492,9 @@ int Run(RunOptions o) {
       const double limit_s = o.lesson_plan->lesson.time_limit_s();
       o.seconds = o.seconds_given ? std::min(o.seconds, limit_s) : limit_s;
       obtained = ObtainLessonCase(o.server, o.lesson_plan->lesson, cache, std::cerr);
+    } else if (IsCaseFileArgument(o.case_id)) {
+      obtained = ObtainCaseFile(o.case_id, cache);
+      obtained_from_file = true;
     } else {
       obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
     }
@@ -511,7 +517,10 @@ int Run(RunOptions o) {
   run.config.case_sha256_hex = obtained->entry.sha256_hex;
   std::cout << "case " << obtained->entry.id << " v" << obtained->entry.version << " sha256="
             << obtained->entry.sha256_hex.substr(0, 16) << "… ("
-            << (obtained->from_server ? "from the server" : "offline cache") << ")\n";
+            << (obtained_from_file      ? "from " + o.case_id + ", now in the offline cache"
+                : obtained->from_server ? std::string("from the server")
+                                        : std::string("offline cache"))
+            << ")\n";
   if (o.lesson_plan) PrintLessonBrief(*o.lesson_plan, o.seconds, std::cout);
   if (o.headless) {
     std::cout << "device: sim (the scripted " << o.operator_kind
@@ -606,7 +615,9 @@ int RunRunCommand(const CommandArgs& args) {
       "token", po::value<std::string>(), "station bearer token")(
       "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
       "trainee", po::value<std::string>(), "trainee id")(
-      "case", po::value<std::string>(), "case id")(
+      "case", po::value<std::string>(),
+      "case id (cached or on the server), or a case file (.textproto, .vescase, .csv, "
+      ".mrk.json) put into the offline cache first")(
       "lesson", po::value<std::string>(),
       "next: the trainee's next lesson instead of --case (docs/lessons.md)")(
       "verdict-wait-s", po::value<double>()->default_value(30.0),
@@ -647,7 +658,10 @@ int RunSyncCommand(const CommandArgs& args) {
       "station data folder (default $VES_STATION_DIR or ~/.ves-station)")(
       "attempts", po::value<int>()->default_value(3), "passes (with backoff) before giving up")(
       "verdict-wait-s", po::value<double>()->default_value(30.0),
-      "how long to wait for the server's verdicts on uploaded lesson sessions");
+      "how long to wait for the server's verdicts on uploaded lesson sessions")(
+      "add", po::value<std::vector<std::string>>()->composing(),
+      "queue this session file (e.g. from `sim --session-out`) in the outbox first; "
+      "repeatable. Without --server: only queue");
   sync::ServerEndpoint endpoint;
   std::string data_dir;
   int attempts = 3;
@@ -655,19 +669,28 @@ int RunSyncCommand(const CommandArgs& args) {
   po::variables_map vm;
   if (auto stop = ParseCommandLine(
           "ves-station sync",
-          "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] [--data-dir DIR]\n\n"
-          "Uploads the outbox's pending sessions. Exit status 0 when none is left pending, 1 "
-          "when some are (server unreachable).",
+          "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] [--data-dir DIR]\n"
+          "                        [--add FILE.session]...\n"
+          "   or: ves-station sync --add FILE.session... [--data-dir DIR]   (queue only)\n\n"
+          "Uploads the outbox's pending sessions. --add first queues session files (as\n"
+          "`sim --operator ... --session-out` writes them) like a finished run. Exit status 0\n"
+          "when none is left pending (or, queue only, when all were queued), 1 when some are\n"
+          "(server unreachable), 2 for a bad file.",
           args, desc, &vm)) {
     return *stop;
   }
+  std::vector<std::string> to_add;
+  if (vm.count("add")) to_add = vm["add"].as<std::vector<std::string>>();
+  const bool queue_only = !to_add.empty() && !vm.count("server") && !vm.count("token");
   try {
-    if (!vm.count("server") || !vm.count("token")) {
-      throw UsageError("--server ADDR and --token T are required");
+    if (!queue_only && (!vm.count("server") || !vm.count("token"))) {
+      throw UsageError("--server ADDR and --token T are required (or only --add FILE to queue)");
     }
-    endpoint.address = vm["server"].as<std::string>();
-    endpoint.token = vm["token"].as<std::string>();
-    if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    if (!queue_only) {
+      endpoint.address = vm["server"].as<std::string>();
+      endpoint.token = vm["token"].as<std::string>();
+      if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    }
     data_dir = vm["data-dir"].as<std::string>();
     attempts = vm["attempts"].as<int>();
     verdict_wait_s = vm["verdict-wait-s"].as<double>();
@@ -678,8 +701,37 @@ int RunSyncCommand(const CommandArgs& args) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;
   }
+  // Session files to queue: each read whole and checked (a truncated or
+  // damaged file, a record without trainee) before any is committed.
+  std::vector<ves::v1::SessionRecord> added;
+  for (const std::string& file : to_add) {
+    try {
+      std::ifstream in(file, std::ios::binary);
+      if (!in) throw std::runtime_error("cannot read it");
+      std::ostringstream bytes;
+      bytes << in.rdbuf();
+      ves::v1::SessionRecord record = training::DecodeSessionFile(bytes.str());
+      if (record.trainee_id().empty()) {
+        throw std::runtime_error("the session names no trainee (write it with `sim ... --trainee ID`)");
+      }
+      added.push_back(std::move(record));
+    } catch (const std::exception& error) {
+      std::cerr << "ves-station sync: --add " << file << ": " << error.what() << "\n";
+      return kExitUsage;
+    }
+  }
   try {
     sync::Outbox outbox(sync::ResolveStationPaths(data_dir).outbox_db());
+    for (const auto& record : added) {
+      outbox.Commit(record);
+      std::cout << "session " << record.uuid() << " (trainee " << record.trainee_id() << ", case "
+                << record.case_id() << ") queued in the outbox\n";
+    }
+    if (queue_only) {
+      std::cout << outbox.PendingCount() << " pending; `ves-station sync --server ADDR --token T` "
+                   "uploads them\n";
+      return kExitOk;
+    }
     const DeliveryReport report = DeliverOutbox(endpoint, outbox, attempts);
     std::cout << "uploaded " << report.acknowledged << " session(s), " << report.rejected
               << " refused, " << report.still_pending << " pending\n";
