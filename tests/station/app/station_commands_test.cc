@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "tests/station/app/child_process.h"
 
@@ -86,6 +87,35 @@ TEST(SimAndReplay, ReplayPrintsTheSimsSummaryByteForByte) {
   const ProcessResult replay = RunProgram({kStationBin, "replay", session.string()}, dir / "replay");
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   EXPECT_EQ(replay.out, sim.out);
+  fs::remove_all(dir);
+}
+
+TEST(Snapshot, TheCarmAngleAndZoomGiveAnotherImageAndBadValuesAreRefused) {
+  const fs::path dir = MakeTempDir("snapshot");
+  const std::vector<std::string> base = {
+      kStationBin, "snapshot", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+      "--insert-mm", "200", "--width", "160", "--height", "120", "--segments", "60"};
+  auto with = [&](std::vector<std::string> extra, const fs::path& out) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    args.insert(args.end(), {"--out", out.string()});
+    return RunProgram(args, out.string() + "-log");
+  };
+  const ProcessResult plain = with({}, dir / "plain");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_FALSE(fs::exists(dir / "plain" / "fluoroscopy_c-arm.png"));
+  const ProcessResult turned = with({"--c-arm-deg", "35", "--zoom", "2"}, dir / "turned");
+  ASSERT_EQ(turned.exit_code, 0) << turned.err;
+  ASSERT_TRUE(fs::exists(dir / "turned" / "fluoroscopy_c-arm.png"));
+  // Zoom 2 around the tip: the AP image is another one.
+  EXPECT_NE(ReadFile(dir / "plain" / "fluoroscopy_ap.png"),
+            ReadFile(dir / "turned" / "fluoroscopy_ap.png"));
+  const ProcessResult far = with({"--zoom", "20"}, dir / "far");
+  EXPECT_EQ(far.exit_code, 2);
+  EXPECT_NE(far.err.find("--zoom"), std::string::npos) << far.err;
+  const ProcessResult tilt = with({"--tilt-deg", "10"}, dir / "tilt");
+  EXPECT_EQ(tilt.exit_code, 2);
+  EXPECT_NE(tilt.err.find("--c-arm-deg"), std::string::npos) << tilt.err;
   fs::remove_all(dir);
 }
 
