@@ -55,9 +55,9 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   training::InputSample sample;
   sample.thrust_mode = training::ThrustMode::kForce;
   sample.insertion_m = insertion_m + insertion_offset_m_;
-  // Virtual coupling: F_c = k_c·(x_device + offset − x_model) pushes the model's base.
-  sample.push_force_N =
-      coupling_stiffness_N_per_m_ * (sample.insertion_m - runner_->state().inserted_m);
+  sample.push_force_N = haptics::CalcCouplingForce_N(coupling_stiffness_N_per_m_, insertion_m,
+                                                     insertion_offset_m_,
+                                                     runner_->state().inserted_m);
   sample.roll_rad = roll_rad + roll_offset_rad_;
   sample.knob_up_down_rad = controls.knob_up_down_rad;
   sample.knob_left_right_rad = controls.knob_left_right_rad;

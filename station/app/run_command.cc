@@ -180,15 +180,6 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
 }
 
 
-render::EndoscopeMode ToRenderMode(training::ViewMode mode) {
-  switch (mode) {
-    case training::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
-    case training::ViewMode::kFlat: return render::EndoscopeMode::kPolygon;
-    case training::ViewMode::kTextured: break;
-  }
-  return render::EndoscopeMode::kTexture;
-}
-
 void WritePng(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) {
     throw std::runtime_error("cannot write '" + path.string() + "'");
@@ -218,7 +209,7 @@ class FrameWriter {
     char name[64];
     std::snprintf(name, sizeof(name), "endoscope_%06.1fs.png", t_s);
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
-    WritePng(dir_ / name, views_->Endoscope(scene_, ToRenderMode(input.view_mode)));
+    WritePng(dir_ / name, views_->Endoscope(scene_, input.view_mode));
     ++frames_;
   }
 
@@ -227,7 +218,7 @@ class FrameWriter {
               bool show_fluoroscopy = true) {
     if (!views_) return;
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
-    WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, ToRenderMode(mode)));
+    WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, mode));
     ++frames_;
     if (!show_fluoroscopy) return;
     FluoroscopyControls controls;

@@ -67,24 +67,6 @@ struct Published {
   std::uint64_t sequence{0};
 };
 
-training::ViewMode ToTrainingMode(ui::ViewMode mode) {
-  switch (mode) {
-    case ui::ViewMode::kWireframe: return training::ViewMode::kWireframe;
-    case ui::ViewMode::kPolygon: return training::ViewMode::kFlat;
-    case ui::ViewMode::kTexture: break;
-  }
-  return training::ViewMode::kTextured;
-}
-
-render::EndoscopeMode ToRenderMode(ui::ViewMode mode) {
-  switch (mode) {
-    case ui::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
-    case ui::ViewMode::kPolygon: return render::EndoscopeMode::kPolygon;
-    case ui::ViewMode::kTexture: break;
-  }
-  return render::EndoscopeMode::kTexture;
-}
-
 // For people: "cecum reached", "time limit reached", "aborted".
 std::string OutcomeText(training::Outcome outcome) {
   switch (outcome) {
@@ -344,51 +326,110 @@ std::string InteractiveReport(InteractiveRig& rig, const haptics::HapticCycle& c
   return report + timing;
 }
 
-}  // namespace
+// The 1 kHz side: the session's model in the coupled mode behind the
+// device, running and armed; stopped (and the CAN log closed) by Stop() or
+// the destructor.
+class CoupledLoop {
+ public:
+  CoupledLoop(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+              double time_limit_s, InteractiveRig* rig)
+      : rig_(rig),
+        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_,
+                 &published_),
+        cycle_(rig->device(), session_.source(), CycleOptionsFor(run.params.dt_s)),
+        loop_(&cycle_, LoopOptionsFor(run.params.dt_s)) {
+    session_.Start(rig->initial_state().insertion_m, rig->initial_state().roll_rad);
+    cycle_.SetInitialDeviceState(rig->initial_state());
+    loop_.Start();
+    if (!loop_.ArmAfter(20, 2.0)) {
+      Stop();
+      throw std::runtime_error("the haptic loop did not start");
+    }
+  }
+  ~CoupledLoop() { Stop(); }
 
-InteractiveResult RunInteractive(const training::CaseRun& run,
-                                 const ves::v1::ColonCase& colon_case, double time_limit_s,
-                                 InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
-                                 const InteractiveChoices* choices) {
-  ui::TrainingWindow window;  // throws first when there is no display
-  SessionViews views(run.params, colon_case);
-  haptics::SeqLock<HandTarget> hand;
-  InteractiveRig rig(std::move(device), run.params.dt_s, &hand);
-
-  // The loop: the session's model in the coupled mode behind the device.
-  haptics::SeqLock<ModelControls> model_controls;
-  std::mutex published_mutex;
-  Published published;
-  LoopSession session(run, colon_case, time_limit_s, &model_controls, &published_mutex,
-                      &published);
-  session.Start(rig.initial_state().insertion_m, rig.initial_state().roll_rad);
-  haptics::CycleOptions cycle_options;
-  cycle_options.period_s = run.params.dt_s;
-  cycle_options.control.mode = haptics::ControlMode::kCoupled;
-  haptics::HapticCycle cycle(rig.device(), session.source(), cycle_options);
-  cycle.SetInitialDeviceState(rig.initial_state());
-  haptics::LoopOptions loop_options;
-  loop_options.period_s = run.params.dt_s;
-  haptics::HapticLoop loop(&cycle, loop_options);
-  loop.Start();
-  const auto stop_all = [&] {
-    loop.Stop();
-    rig.CloseLog();
-  };
-  if (!loop.ArmAfter(20, 2.0)) {
-    stop_all();
-    throw std::runtime_error("the haptic loop did not start");
+  void Stop() {
+    loop_.Stop();
+    rig_->CloseLog();
+  }
+  // UI thread: copies the loop's latest publication when there is a new one.
+  bool TakePublication(std::uint64_t* sequence, model::ModelState* state,
+                       model::StepOutput* output, PanelNumbers* numbers) {
+    // Only copies under the lock (the loop skips a publication meanwhile).
+    std::lock_guard<std::mutex> lock(published_mutex_);
+    if (published_.sequence == *sequence) return false;
+    *state = published_.state;
+    *output = published_.output;
+    *numbers = published_.numbers;
+    *sequence = published_.sequence;
+    return true;
+  }
+  haptics::HapticSnapshot Latest() const {
+    haptics::HapticSnapshot snapshot;
+    loop_.latest().Load(&snapshot);
+    return snapshot;
+  }
+  // What the operator does, to the loop: the model's controls (knobs, view,
+  // X-ray) and repeats; a repeat re-arms a fault that needs it.
+  void SetControls(const ModelControls& controls) { model_controls_.Store(controls); }
+  void Repeat(haptics::SafetyFault fault) {
+    session_.RequestRepeat();
+    // A transient fault clears by itself; a hard one needs the re-arm.
+    if (fault != haptics::SafetyFault::kNone && !haptics::IsTransient(fault)) {
+      loop_.RequestRearm();
+    }
+  }
+  // After Stop().
+  InteractiveResult Finish() {
+    InteractiveResult result = session_.Finish();
+    result.device_report = InteractiveReport(*rig_, cycle_, loop_, *session_.source());
+    return result;
   }
 
-  // The UI on this thread: compose the screen from the latest publication,
-  // poll keys and mouse, hand the controls to the loop.
+ private:
+  static haptics::CycleOptions CycleOptionsFor(double period_s) {
+    haptics::CycleOptions options;
+    options.period_s = period_s;
+    options.control.mode = haptics::ControlMode::kCoupled;
+    return options;
+  }
+  static haptics::LoopOptions LoopOptionsFor(double period_s) {
+    haptics::LoopOptions options;
+    options.period_s = period_s;
+    return options;
+  }
+
+  InteractiveRig* rig_;
+  haptics::SeqLock<ModelControls> model_controls_;
+  std::mutex published_mutex_;
+  Published published_;
+  LoopSession session_;
+  haptics::HapticCycle cycle_;
+  haptics::HapticLoop loop_;
+};
+
+// The training screen on the UI thread until the trainee quits or picks
+// another case or scope: composes the screen from the loop's latest
+// publication, polls keys and mouse, hands the controls to the loop and the
+// keyboard's hand target to the simulated hand. Returns the chosen case and
+// scope when the run is to switch.
+struct ScreenExit {
+  std::optional<int> next_case;
+  std::optional<int> next_scope;
+};
+
+ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+                             const ves::v1::LessonAids* lesson_aids,
+                             const InteractiveChoices* choices, const std::string& device_label,
+                             ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
+                             haptics::SeqLock<HandTarget>* hand) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
   auto enforce_aids = [lesson_aids](ui::ControlState* c) {
     if (lesson_aids == nullptr) return;
     if (!lesson_aids->fluoroscopy_allowed()) c->fluoroscopy_visible = false;
-    if (!lesson_aids->wireframe_allowed() && c->view_mode == ui::ViewMode::kWireframe) {
-      c->view_mode = ui::ViewMode::kPolygon;
+    if (!lesson_aids->wireframe_allowed() && c->view_mode == training::ViewMode::kWireframe) {
+      c->view_mode = training::ViewMode::kFlat;
     }
   };
   enforce_aids(&controls);
@@ -407,71 +448,61 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   model::StepOutput shown_output;
   PanelNumbers numbers;
   std::uint64_t shown_sequence = 0;
-  std::optional<int> next_case;
-  std::optional<int> next_scope;
-  try {
-    while (!controls.quit_requested) {
-      bool fresh = false;
-      {
-        // Only copies under the lock (the loop skips a publication meanwhile).
-        std::lock_guard<std::mutex> lock(published_mutex);
-        if (published.sequence != shown_sequence) {
-          shown_state = published.state;
-          shown_output = published.output;
-          numbers = published.numbers;
-          shown_sequence = published.sequence;
-          fresh = true;
-        }
-      }
-      if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
-      haptics::HapticSnapshot snapshot;
-      loop.latest().Load(&snapshot);
-      FillScreenModel(numbers, snapshot, shown_state, colon_case, rig.label(), &screen);
-      cv::Mat endoscope;
-      cv::Mat fluoroscopy;
-      if (shown_sequence > 0) {
-        FluoroscopyControls fluoro;
-        fluoro.yaw_rad = controls.fluoro_yaw_rad;
-        fluoro.pitch_rad = controls.fluoro_pitch_rad;
-        fluoro.zoom = controls.fluoro_zoom;
-        fluoro.damage_display = controls.damage_display;
-        endoscope = views.Endoscope(scene, ToRenderMode(controls.view_mode));
-        if (controls.fluoroscopy_visible) fluoroscopy = views.Fluoroscopy(scene, fluoro);
-      }
-      window.Show(ui::ComposeScreen(window.layout(), endoscope, fluoroscopy, screen, controls));
-      window.Poll(kPollMs, screen, &controls);
-      enforce_aids(&controls);
-      if (controls.repeat_requested && choices != nullptr &&
-          (controls.case_choice != choices->current_case ||
-           controls.scope_choice != choices->current_scope)) {
-        // Another case or scope: this run ends, the caller starts that one.
-        next_case = controls.case_choice;
-        next_scope = controls.scope_choice;
-        break;
-      }
-      if (controls.repeat_requested) {
-        // The hand stays where it is; the new session maps the model onto it.
-        controls.repeat_requested = false;
-        session.RequestRepeat();
-        // A fault that needs a re-arm gets it (a transient one clears by itself).
-        if (snapshot.fault != haptics::SafetyFault::kNone && !haptics::IsTransient(snapshot.fault)) {
-          loop.RequestRearm();
-        }
-      }
-      hand.Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
-      model_controls.Store(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
-                                         ToTrainingMode(controls.view_mode),
-                                         controls.fluoroscopy_visible});
+  while (!controls.quit_requested) {
+    if (loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers)) {
+      render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     }
-  } catch (...) {
-    stop_all();
-    throw;
+    const haptics::HapticSnapshot snapshot = loop->Latest();
+    FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
+    cv::Mat endoscope;
+    cv::Mat fluoroscopy;
+    if (shown_sequence > 0) {
+      FluoroscopyControls fluoro;
+      fluoro.yaw_rad = controls.fluoro_yaw_rad;
+      fluoro.pitch_rad = controls.fluoro_pitch_rad;
+      fluoro.zoom = controls.fluoro_zoom;
+      fluoro.damage_display = controls.damage_display;
+      endoscope = views->Endoscope(scene, controls.view_mode);
+      if (controls.fluoroscopy_visible) fluoroscopy = views->Fluoroscopy(scene, fluoro);
+    }
+    window->Show(ui::ComposeScreen(window->layout(), endoscope, fluoroscopy, screen, controls));
+    window->Poll(kPollMs, screen, &controls);
+    enforce_aids(&controls);
+    if (controls.repeat_requested && choices != nullptr &&
+        (controls.case_choice != choices->current_case ||
+         controls.scope_choice != choices->current_scope)) {
+      // Another case or scope: this run ends, the caller starts that one.
+      return {controls.case_choice, controls.scope_choice};
+    }
+    if (controls.repeat_requested) {
+      // The hand stays where it is; the new session maps the model onto it.
+      controls.repeat_requested = false;
+      loop->Repeat(snapshot.fault);
+    }
+    hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
+    loop->SetControls(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
+                                    controls.view_mode, controls.fluoroscopy_visible});
   }
-  stop_all();
-  InteractiveResult result = session.Finish();
-  result.next_case = next_case;
-  result.next_scope = next_scope;
-  result.device_report = InteractiveReport(rig, cycle, loop, *session.source());
+  return {};
+}
+
+}  // namespace
+
+InteractiveResult RunInteractive(const training::CaseRun& run,
+                                 const ves::v1::ColonCase& colon_case, double time_limit_s,
+                                 InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
+                                 const InteractiveChoices* choices) {
+  ui::TrainingWindow window;  // throws first when there is no display
+  SessionViews views(run.params, colon_case);
+  haptics::SeqLock<HandTarget> hand;
+  InteractiveRig rig(std::move(device), run.params.dt_s, &hand);
+  CoupledLoop loop(run, colon_case, time_limit_s, &rig);
+  const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
+                                            &window, &views, &loop, &hand);
+  loop.Stop();
+  InteractiveResult result = loop.Finish();
+  result.next_case = exit.next_case;
+  result.next_scope = exit.next_scope;
   return result;
 }
 

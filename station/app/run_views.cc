@@ -44,8 +44,17 @@ SessionViews::SessionViews(const model::ModelParams& params, const ves::v1::Colo
 
 SessionViews::~SessionViews() = default;
 
-cv::Mat SessionViews::Endoscope(const render::SceneGeometry& scene, render::EndoscopeMode mode) {
-  endoscope_->set_mode(mode);
+render::EndoscopeMode ToEndoscopeMode(training::ViewMode mode) {
+  switch (mode) {
+    case training::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
+    case training::ViewMode::kFlat: return render::EndoscopeMode::kPolygon;
+    case training::ViewMode::kTextured: break;
+  }
+  return render::EndoscopeMode::kTexture;
+}
+
+cv::Mat SessionViews::Endoscope(const render::SceneGeometry& scene, training::ViewMode mode) {
+  endoscope_->set_mode(ToEndoscopeMode(mode));
   return endoscope_->Render(scene).image;
 }
 

@@ -38,8 +38,8 @@ std::string NameAt(const std::vector<std::string>& names, int index) {
 bool IsActive(PanelAction action, const ControlState& state) {
   switch (action) {
     case PanelAction::kWireframe: return state.view_mode == ViewMode::kWireframe;
-    case PanelAction::kPolygon: return state.view_mode == ViewMode::kPolygon;
-    case PanelAction::kTexture: return state.view_mode == ViewMode::kTexture;
+    case PanelAction::kPolygon: return state.view_mode == ViewMode::kFlat;
+    case PanelAction::kTexture: return state.view_mode == ViewMode::kTextured;
     case PanelAction::kToggleFluoroscopy: return state.fluoroscopy_visible;
     case PanelAction::kToggleDamage: return state.damage_display;
     default: return false;
@@ -60,8 +60,8 @@ std::string Format(const char* format, double a, double b = 0.0, double c = 0.0)
 const char* ModeName(ViewMode mode) {
   switch (mode) {
     case ViewMode::kWireframe: return "wire-frame";
-    case ViewMode::kPolygon: return "polygon";
-    case ViewMode::kTexture: break;
+    case ViewMode::kFlat: return "polygon";
+    case ViewMode::kTextured: break;
   }
   return "texture";
 }
@@ -193,8 +193,8 @@ std::optional<PanelAction> HitTestScreen(const ScreenLayout& layout, int x, int 
 void ApplyPanelAction(PanelAction action, const ScreenModel& model, ControlState* state) {
   switch (action) {
     case PanelAction::kWireframe: state->view_mode = ViewMode::kWireframe; break;
-    case PanelAction::kPolygon: state->view_mode = ViewMode::kPolygon; break;
-    case PanelAction::kTexture: state->view_mode = ViewMode::kTexture; break;
+    case PanelAction::kPolygon: state->view_mode = ViewMode::kFlat; break;
+    case PanelAction::kTexture: state->view_mode = ViewMode::kTextured; break;
     case PanelAction::kToggleFluoroscopy:
       state->fluoroscopy_visible = !state->fluoroscopy_visible;
       break;

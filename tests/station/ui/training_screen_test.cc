@@ -163,7 +163,7 @@ TEST_F(Compose, XrayOffSaysSoInsteadOfAnImage) {
 }
 
 TEST_F(Compose, ActiveModeButtonIsHighlighted) {
-  controls_.view_mode = ViewMode::kTexture;
+  controls_.view_mode = ViewMode::kTextured;
   const cv::Mat texture = Draw();
   controls_.view_mode = ViewMode::kWireframe;
   const cv::Mat wire = Draw();
