@@ -84,11 +84,11 @@ SafetyMonitor::SafetyMonitor(SafetyLimits limits) : limits_(limits) {
                                 std::to_string(limits_.model_stall_periods));
   }
   if (!(limits_.hard_after_s > limits_.healthy_before_fade_s &&
-        limits_.healthy_before_fade_s >= 0.0)) {
+        limits_.healthy_before_fade_s >= 0.0 && limits_.max_transient_s >= limits_.hard_after_s)) {
     throw std::invalid_argument(
-        "SafetyLimits needs 0 <= healthy_before_fade_s < hard_after_s, got " +
-        std::to_string(limits_.healthy_before_fade_s) + " and " +
-        std::to_string(limits_.hard_after_s));
+        "SafetyLimits needs 0 <= healthy_before_fade_s < hard_after_s <= max_transient_s, got " +
+        std::to_string(limits_.healthy_before_fade_s) + ", " +
+        std::to_string(limits_.hard_after_s) + " and " + std::to_string(limits_.max_transient_s));
   }
 }
 
@@ -137,6 +137,7 @@ void SafetyMonitor::Latch(SafetyFault fault) {
   ++hard_faults_;
   episode_s_ = 0.0;
   healthy_s_ = 0.0;
+  unhealthy_s_ = 0.0;
 }
 
 SafetyFault SafetyMonitor::Check(const DeviceState& device, double now_s, bool non_finite,
@@ -175,28 +176,34 @@ SafetyFault SafetyMonitor::Check(const DeviceState& device, double now_s, bool n
       ++transient_faults_;
       episode_s_ = 0.0;
       healthy_s_ = 0.0;
+      unhealthy_s_ = 0.0;
       output_scale_ = 0.0;
     } else {
       output_scale_ = std::min(1.0, output_scale_ + dt_s / limits_.fade_in_s);
     }
     return fault_;
   }
-  // In a transient fault: wait for a healthy bus, or give up after hard_after_s.
+  // In a transient fault: wait for the bus to be healthy for a while. A gap
+  // of hard_after_s without a healthy period, or no recovery within
+  // max_transient_s, is no longer transient.
   episode_s_ += dt_s;
-  if (episode_s_ >= limits_.hard_after_s - kTimeSlack_s) {
-    Latch(SafetyFault::kCommunicationLost);
-    return fault_;
-  }
   if (transient == SafetyFault::kNone && BusHealthy(device)) {
     healthy_s_ += dt_s;
+    unhealthy_s_ = 0.0;
     if (healthy_s_ >= limits_.healthy_before_fade_s - kTimeSlack_s) {
       fault_ = SafetyFault::kNone;
       ++recoveries_;
       episode_s_ = 0.0;
       output_scale_ = 0.0;  // rises from the next period on
+      return fault_;
     }
   } else {
     healthy_s_ = 0.0;
+    unhealthy_s_ += dt_s;
+  }
+  if (unhealthy_s_ >= limits_.hard_after_s - kTimeSlack_s ||
+      episode_s_ >= limits_.max_transient_s - kTimeSlack_s) {
+    Latch(SafetyFault::kCommunicationLost);
   }
   return fault_;
 }

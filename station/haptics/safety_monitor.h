@@ -8,8 +8,10 @@
 //     - a NaN or Inf in the measurements, the model response or the command
 //     - no model update (coupled mode) for model_stall_periods periods
 //     - an EMCY from the device other than "heartbeat lost"
-//     - a transient fault that has not cleared after hard_after_s of bus time
-//       (communication-lost: long silence)
+//     - a communication gap of hard_after_s of bus time (communication-lost:
+//       long silence, a device that will not restart), or a transient fault
+//       that has not cleared within max_transient_s (a bus that keeps
+//       dropping out)
 //   transient — a communication gap; cleared without a re-arm:
 //     - no encoder or sensor frame for sensor_timeout_s of bus time
 //     - no device heartbeat for heartbeat_timeout_s of bus time
@@ -38,6 +40,7 @@ struct SafetyLimits {
   double heartbeat_timeout_s{0.025};
   int model_stall_periods{2};
   double hard_after_s{0.100};
+  double max_transient_s{1.0};
   double stall_gap_s{0.002};
   double healthy_before_fade_s{0.050};
   double fade_in_s{0.300};
@@ -115,8 +118,9 @@ class SafetyMonitor {
   Silence sensor_;
   Silence encoder_;
   Silence heartbeat_;
-  double episode_s_{0.0};  // bus time in the current transient fault
-  double healthy_s_{0.0};  // bus time the bus has been healthy within it
+  double episode_s_{0.0};    // bus time in the current transient fault
+  double healthy_s_{0.0};    // bus time the bus has been healthy since it last was not
+  double unhealthy_s_{0.0};  // bus time it has not been healthy since it last was
   double output_scale_{1.0};
   std::optional<std::uint64_t> last_model_count_;
   int stale_model_periods_{0};

@@ -156,13 +156,17 @@ class StallingSource final : public BaseResponseSource {
 
 // The loop thread stops for 20-50 ms while the device thread runs on: the
 // device misses the station's heartbeat and cuts its motors. Each stall is a
-// transient fault at most; the output comes back without a re-arm.
+// transient fault at most; the output comes back without a re-arm. Both
+// threads ask for SCHED_FIFO (as the station does): the device thread
+// stands for hardware that always answers, and a device starved by the OS
+// for 100 ms is a long silence, rightly a hard fault (seen under a loaded
+// `ctest -j2` with normal scheduling).
 TEST(HapticLoop, StallsOfTheLoopThreadEndWithoutAFaultThatNeedsARearm) {
   auto [host, bus_device] = CanBus::CreateSocketPair();
   SimulatedBallDriveOptions device_options;
   Ves4Device driver(std::move(host), device_options.params);
   SimulatedBallDrive device(std::move(bus_device), device_options);
-  SimulatedDeviceThread device_thread(&device, /*realtime=*/false);
+  SimulatedDeviceThread device_thread(&device, /*realtime=*/true);
   DeviceState state;
   ASSERT_TRUE(BringUpDevice(&driver, &state, 2.0));
   StallingSource source;
@@ -170,7 +174,7 @@ TEST(HapticLoop, StallsOfTheLoopThreadEndWithoutAFaultThatNeedsARearm) {
   cycle_options.control.mode = ControlMode::kCoupled;
   HapticCycle cycle(&driver, &source, cycle_options);
   cycle.SetInitialDeviceState(state);
-  HapticLoop loop(&cycle, LoopOptions{.realtime = false});
+  HapticLoop loop(&cycle, LoopOptions{.realtime = true});
   loop.Start();
   ASSERT_TRUE(loop.ArmAfter(20, 5.0));
   for (int stall_ms : {20, 30, 50, 30, 40}) {

@@ -148,6 +148,44 @@ TEST(Safety, LongSensorSilenceIsAHardFault) {
   EXPECT_EQ(rig.cycle().safety().hard_faults(), 1u);
 }
 
+// A short drop-out while the bus recovers restarts the wait for a healthy
+// bus but is no long silence: still no re-arm needed.
+TEST(Safety, ABriefDropOutWhileRecoveringIsStillTransient) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  rig.device().set_faults({.mute_sensor_pdo = true});
+  for (int i = 0; i < 30; ++i) rig.Step();
+  EXPECT_EQ(rig.cycle().output().fault, SafetyFault::kSensorTimeout);
+  rig.device().set_faults({});
+  for (int i = 0; i < 40; ++i) ASSERT_EQ(rig.Step().fault, SafetyFault::kSensorTimeout);
+  rig.device().set_faults({.mute_sensor_pdo = true});
+  for (int i = 0; i < 8; ++i) rig.Step();
+  rig.device().set_faults({});
+  ExpectRecoversWithoutRearm(rig);
+  EXPECT_EQ(rig.cycle().safety().transient_faults(), 1u);
+}
+
+// A bus that keeps dropping out never gives 50 ms of health: after 1 s the
+// fault is no longer transient.
+TEST(Safety, ABusThatKeepsDroppingOutBecomesAHardFault) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  const double limit_s = rig.cycle().options().safety.max_transient_s;
+  ASSERT_EQ(rig.Step().fault, SafetyFault::kNone);
+  int steps = 0;
+  while (rig.cycle().output().fault != SafetyFault::kCommunicationLost && steps < 3000) {
+    rig.device().set_faults({.mute_sensor_pdo = (steps % 40) < 10});  // 10 ms of every 40
+    const SafetyFault fault = rig.cycle().output().fault;
+    ASSERT_TRUE(fault == SafetyFault::kNone || IsTransient(fault)) << ToString(fault);
+    rig.Step();
+    ++steps;
+  }
+  EXPECT_EQ(rig.cycle().output().fault, SafetyFault::kCommunicationLost);
+  EXPECT_GE(steps * kPeriod_s, limit_s);
+  EXPECT_LE(steps * kPeriod_s, limit_s + 0.05);
+  EXPECT_EQ(rig.cycle().safety().recoveries(), 0u);
+}
+
 TEST(Safety, SilentEncoderAlsoCountsAsSilentSensor) {
   SimulatedRig rig(HoldingHand(ControlMode::kFree));
   ASSERT_TRUE(rig.BringUp());
