@@ -107,6 +107,15 @@ class StationUi : public StationFixture {
       std::this_thread::sleep_for(milliseconds(20));
     }
     ASSERT_FALSE(display_.empty()) << "Xvfb did not start: " << ReadFile(dir_ / "xvfb.err");
+    // Ours and answering: the screen has our size.
+    std::string geometry;
+    for (int i = 0; i < 50 && geometry.empty(); ++i) {
+      const ProcessResult r = X({"xdotool", "getdisplaygeometry"});
+      if (r.exit_code == 0) geometry = r.out;
+      if (geometry.empty()) std::this_thread::sleep_for(milliseconds(100));
+    }
+    ASSERT_EQ(geometry, std::to_string(kScreen.width) + " " + std::to_string(kScreen.height) + "\n")
+        << "display " << display_ << " is not this test's Xvfb";
     if (const char* shots = std::getenv("VES_TEST_SHOTS_DIR")) shots_dir_ = shots;
   }
   void TearDown() override {
@@ -164,6 +173,30 @@ class StationUi : public StationFixture {
     }
     return shot;
   }
+  // Waits (up to a minute on a loaded machine) until the training screen is
+  // up: the window covers the screen with its background at the corners and
+  // the endoscope image is drawn (not the black "starting" area).
+  cv::Mat WaitForScreen() {
+    cv::Mat shot;
+    for (int i = 0; i < 60; ++i) {
+      const fs::path file = dir_ / ("wait-" + std::to_string(++log_counter_) + ".xwd");
+      X({"xwd", "-root", "-silent", "-out", file.string()});
+      shot = DecodeXwd(ReadFile(file));
+      if (shot.size() == kScreen) {
+        const cv::Vec3b corner = shot.at<cv::Vec3b>(2, 2);
+        const cv::Scalar mean = cv::mean(shot(layout_.endoscope));
+        if (std::abs(corner[0] - 28) + std::abs(corner[1] - 28) + std::abs(corner[2] - 28) < 10 &&
+            mean[0] + mean[1] + mean[2] > 60.0) {
+          std::this_thread::sleep_for(kSettle);  // a few frames more
+          return Shot("ready");
+        }
+      }
+      if (station_ && !station_->Running()) break;
+      std::this_thread::sleep_for(seconds(1));
+    }
+    ADD_FAILURE() << "the training screen did not come up: " << ReadFile(dir_ / "interactive.err");
+    return {};
+  }
   void Keys(const std::vector<std::string>& keys) {
     // One key per UI frame at most: highgui keeps only the last key that
     // arrived between two polls.
@@ -199,15 +232,14 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
                 data.string(), "--seconds", "90"});
   const std::string window = WindowId();
   ASSERT_FALSE(window.empty()) << ReadFile(dir_ / "interactive.err");
-  std::this_thread::sleep_for(kSettle);
+  const cv::Mat start = WaitForScreen();
+  ASSERT_FALSE(start.empty());
 
   // One window covering the screen, with no toolbar: its corners are the
   // screen's background, its parts where the layout puts them.
   const ProcessResult geometry = X({"xdotool", "getwindowgeometry", window});
   EXPECT_NE(geometry.out.find("Position: 0,0"), std::string::npos) << geometry.out;
   EXPECT_NE(geometry.out.find("Geometry: 1366x768"), std::string::npos) << geometry.out;
-  const cv::Mat start = Shot("start");
-  ASSERT_FALSE(start.empty());
   for (const cv::Point corner : {cv::Point(2, 2), cv::Point(kScreen.width - 3, kScreen.height - 3)}) {
     const cv::Vec3b p = start.at<cv::Vec3b>(corner);
     EXPECT_LT(std::abs(p[0] - 28) + std::abs(p[1] - 28) + std::abs(p[2] - 28), 10)
@@ -332,10 +364,9 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
                 data.string(), "--seconds", "120"});
   ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
-  std::this_thread::sleep_for(kSettle);
 
   // The panel's ">" next to the case: the case name changes, nothing else.
-  const cv::Mat before = Shot("before");
+  const cv::Mat before = WaitForScreen();
   Click(ButtonRect(layout_, ui::PanelAction::kNextCase));
   const cv::Mat after = Shot("next-case");
   const cv::Rect& previous = ButtonRect(layout_, ui::PanelAction::kPreviousCase);
@@ -390,11 +421,10 @@ TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) 
   StartStation({"run", "--trainee", "trainee-ui", "--lesson", "next", "--server", address_,
                 "--token", station_token_, "--data-dir", data.string(), "--seconds", "120"});
   ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
-  std::this_thread::sleep_for(kSettle);
 
   // f: X-ray on (in a free run this changes the X-ray area, test above); 1:
   // wire-frame view. Neither the X-ray area nor the view-mode buttons change.
-  const cv::Mat before = Shot("before");
+  const cv::Mat before = WaitForScreen();
   Keys({"f", "1"});
   const cv::Mat after = Shot("after");
   EXPECT_LT(ChangedShare(before, after, layout_.fluoroscopy), kUnchanged);
