@@ -14,7 +14,7 @@ PACKAGES=(
   # PostgreSQL store and its test cluster (deploy/with-postgres.sh)
   libpqxx-dev postgresql postgresql-client
   # views: OpenCV (highgui with Qt), EGL/GLES offscreen through Mesa
-  libopencv-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri xvfb xauth
+  libopencv-dev libx11-dev libegl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri xvfb xauth
   # the station's UI test drives the windows under Xvfb: keys/mouse and screenshots
   xdotool x11-apps
   # tests and benchmarks

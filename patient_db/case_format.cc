@@ -25,6 +25,12 @@ std::optional<CaseFileKind> CaseFileKindOf(const std::filesystem::path& path) {
   return std::nullopt;
 }
 
+std::filesystem::path MarkupsLandmarksPath(const std::filesystem::path& markups_path) {
+  std::string name = markups_path.filename().string();
+  if (EndsWith(name, ".mrk.json")) name.resize(name.size() - 9);
+  return markups_path.parent_path() / (name + ".regions.mrk.json");
+}
+
 std::filesystem::path MarkupsRadiusSidecarPath(const std::filesystem::path& markups_path) {
   std::string name = markups_path.filename().string();
   if (EndsWith(name, ".mrk.json")) name.resize(name.size() - 9);
@@ -69,7 +75,10 @@ ves::v1::ColonCase LoadCaseFile(const std::filesystem::path& path, const ImportO
       const auto sidecar_path = MarkupsRadiusSidecarPath(path);
       std::optional<std::string> sidecar;
       if (std::filesystem::exists(sidecar_path, ec)) sidecar = ReadFileBytes(sidecar_path);
-      return ImportSlicerMarkups(bytes, sidecar, label, import);
+      const auto landmarks_path = MarkupsLandmarksPath(path);
+      std::optional<std::string> landmarks;
+      if (std::filesystem::exists(landmarks_path, ec)) landmarks = ReadFileBytes(landmarks_path);
+      return ImportSlicerMarkups(bytes, sidecar, label, import, landmarks);
     }
   }
   throw CaseError(label, "(file)", -1, "", "unreachable");

@@ -24,7 +24,8 @@ std::optional<CaseFileKind> CaseFileKindOf(const std::filesystem::path& path);
 
 // Reads, parses and validates; throws CaseError (unreadable file, unknown
 // extension, syntax, validation). Never returns an invalid case. For .mrk.json
-// the radius sidecar "<stem>.radius.csv" next to it is used when present.
+// the radius sidecar "<stem>.radius.csv" and the region landmarks
+// "<stem>.regions.mrk.json" next to it are used when present.
 // `import` applies to .csv and .mrk.json only.
 ves::v1::ColonCase LoadCaseFile(const std::filesystem::path& path,
                                 const ImportOptions& import = {});
@@ -39,5 +40,7 @@ std::string ReadFileBytes(const std::filesystem::path& path);
 
 // Sidecar path of a markups file: "dir/x.mrk.json" -> "dir/x.radius.csv".
 std::filesystem::path MarkupsRadiusSidecarPath(const std::filesystem::path& markups_path);
+// Region landmarks next to a markups file: "dir/x.mrk.json" -> "dir/x.regions.mrk.json".
+std::filesystem::path MarkupsLandmarksPath(const std::filesystem::path& markups_path);
 
 }  // namespace ves::patient_db

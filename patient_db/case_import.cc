@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -115,11 +116,46 @@ std::map<std::string, int> MapColumns(const CsvTable& table, const std::vector<s
   return columns;
 }
 
+// A region landmark: the region that begins where `p_W_m` projects onto the curve.
+struct RegionLandmark {
+  std::array<double, 3> p_W_m;  // same frame as ImportedPoints::p_W_m
+  ves::v1::Region region;
+};
+
 struct ImportedPoints {
   std::vector<std::array<double, 3>> p_W_m;     // patient frame, not yet translated
   std::vector<double> radius_m;                 // empty: use options.radius_mm
-  std::vector<ves::v1::Region> regions;         // empty: use options.region
+  std::vector<ves::v1::Region> regions;         // empty: landmarks or options.region
+  std::vector<RegionLandmark> landmarks;        // regions by position along the curve
 };
+
+// Arc length along the polyline through `points` of the point of it nearest
+// to `p` (the first of equally near ones).
+double ProjectOntoPolyline(const std::vector<std::array<double, 3>>& points,
+                           const std::vector<double>& arcs_m, const std::array<double, 3>& p) {
+  double best_distance2 = std::numeric_limits<double>::infinity();
+  double best_arc_m = 0.0;
+  for (size_t i = 0; i + 1 < points.size(); ++i) {
+    double d[3];
+    double w[3];
+    double length2 = 0.0;
+    double along = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      d[k] = points[i + 1][k] - points[i][k];
+      w[k] = p[k] - points[i][k];
+      length2 += d[k] * d[k];
+      along += w[k] * d[k];
+    }
+    const double t = length2 > 0.0 ? std::clamp(along / length2, 0.0, 1.0) : 0.0;
+    double distance2 = 0.0;
+    for (int k = 0; k < 3; ++k) distance2 += (w[k] - t * d[k]) * (w[k] - t * d[k]);
+    if (distance2 < best_distance2) {
+      best_distance2 = distance2;
+      best_arc_m = arcs_m[i] + t * (arcs_m[i + 1] - arcs_m[i]);
+    }
+  }
+  return best_arc_m;
+}
 
 ves::v1::ColonCase BuildCase(const ImportedPoints& in, const std::string& file,
                              const ImportOptions& options, const std::string& source) {
@@ -129,9 +165,14 @@ ves::v1::ColonCase BuildCase(const ImportedPoints& in, const std::string& file,
     problems.push_back({file, "radius_mm", -1, "",
                         "no radius: give a radius column/sidecar or a constant (--radius-mm)"});
   }
-  if (in.regions.empty() && !options.region) {
+  if (in.regions.empty() && in.landmarks.empty() && !options.region) {
     problems.push_back({file, "region", -1, "",
-                        "no region column: give the region of the whole centerline (--region)"});
+                        "no region column or landmarks: give the region of the whole "
+                        "centerline (--region)"});
+  }
+  if (!in.regions.empty() && !in.landmarks.empty()) {
+    problems.push_back({file, "region", -1, "",
+                        "regions given twice (a region column and landmarks): keep one"});
   }
   if (!problems.empty()) throw CaseError(std::move(problems));
 
@@ -157,7 +198,28 @@ ves::v1::ColonCase BuildCase(const ImportedPoints& in, const std::string& file,
   }
   // Region spans: a run of equal names from its first point to the next run's first point.
   const double length_m = arcs_m.back();
-  if (in.regions.empty()) {
+  if (!in.landmarks.empty()) {
+    // Each landmark starts its region where it projects onto the curve; the
+    // first region also covers the curve before its landmark (from the anus).
+    std::vector<std::pair<double, ves::v1::Region>> starts;
+    for (const auto& landmark : in.landmarks) {
+      starts.emplace_back(ProjectOntoPolyline(in.p_W_m, arcs_m, landmark.p_W_m), landmark.region);
+    }
+    std::stable_sort(starts.begin(), starts.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (size_t i = 0; i < starts.size(); ++i) {
+      if (c.regions_size() > 0 && c.regions(c.regions_size() - 1).region() == starts[i].second) {
+        continue;  // the same region again: one span
+      }
+      const double start_m = c.regions_size() == 0 ? 0.0 : starts[i].first;
+      if (c.regions_size() > 0) c.mutable_regions(c.regions_size() - 1)->set_end_arc_m(start_m);
+      auto* span = c.add_regions();
+      span->set_region(starts[i].second);
+      span->set_start_arc_m(start_m);
+      *span->mutable_tissue() = DefaultTissue(starts[i].second);
+    }
+    c.mutable_regions(c.regions_size() - 1)->set_end_arc_m(length_m);
+  } else if (in.regions.empty()) {
     auto* span = c.add_regions();
     span->set_region(*options.region);
     span->set_start_arc_m(0.0);
@@ -252,41 +314,43 @@ ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::str
   return BuildCase(in, file_label, options, "imported centerline (CSV)");
 }
 
-ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
-                                       const std::optional<std::string>& radius_csv_text,
-                                       const std::string& file_label,
-                                       const ImportOptions& options) {
-  using nlohmann::json;
-  json doc;
-  try {
-    doc = json::parse(json_text);
-  } catch (const json::exception& e) {
-    throw CaseError(file_label, "json", -1, "", std::string("not JSON: ") + e.what());
-  }
-  auto fail = [&](std::string field, std::string value, std::string message) {
-    throw CaseError(file_label, std::move(field), -1, std::move(value), std::move(message));
-  };
-  if (!doc.is_object() || !doc.contains("markups") || !doc["markups"].is_array() ||
-      doc["markups"].empty()) {
-    fail("markups", "", "no markups array (not a 3D Slicer markups file)");
-  }
-  const json& markup = doc["markups"][0];
+namespace {
+
+// Coordinates of a markup node in W (metres): its coordinateSystem and
+// coordinateUnits read and checked; `where` names the markup in messages.
+struct MarkupFrame {
+  bool lps{true};
+  double metres_per_unit{1e-3};
+};
+
+MarkupFrame ReadMarkupFrame(const nlohmann::json& markup, const std::string& file_label,
+                            const std::string& where) {
+  MarkupFrame frame;
   const std::string system = markup.value("coordinateSystem", std::string("LPS"));
   if (system != "LPS" && system != "RAS") {
-    fail("markups[0].coordinateSystem", system, "must be LPS or RAS");
+    throw CaseError(file_label, where + ".coordinateSystem", -1, system, "must be LPS or RAS");
   }
+  frame.lps = system == "LPS";
   const std::string units = markup.value("coordinateUnits", std::string("mm"));
-  double metres_per_unit = kMetresPerMillimetre;
   if (units == "um") {
-    metres_per_unit = 1e-6;
+    frame.metres_per_unit = 1e-6;
   } else if (units != "mm") {
-    fail("markups[0].coordinateUnits", units, "must be mm or um");
+    throw CaseError(file_label, where + ".coordinateUnits", -1, units, "must be mm or um");
   }
+  return frame;
+}
+
+// controlPoints[].position of `markup` in W; problems for malformed points.
+std::vector<std::array<double, 3>> ReadControlPoints(const nlohmann::json& markup,
+                                                     const MarkupFrame& frame,
+                                                     const std::string& file_label,
+                                                     const std::string& where,
+                                                     std::vector<CaseProblem>& problems) {
+  using nlohmann::json;
+  std::vector<std::array<double, 3>> points;
   if (!markup.contains("controlPoints") || !markup["controlPoints"].is_array()) {
-    fail("markups[0].controlPoints", "", "missing");
+    throw CaseError(file_label, where + ".controlPoints", -1, "", "missing");
   }
-  ImportedPoints in;
-  std::vector<CaseProblem> problems;
   int index = 0;
   for (const json& point : markup["controlPoints"]) {
     const json* position = point.is_object() && point.contains("position") ? &point["position"]
@@ -294,20 +358,148 @@ ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
     if (!position || !position->is_array() || position->size() != 3 ||
         !std::all_of(position->begin(), position->end(),
                      [](const json& v) { return v.is_number(); })) {
-      problems.push_back({file_label, "markups[0].controlPoints.position", index,
+      problems.push_back({file_label, where + ".controlPoints.position", index,
                           position ? position->dump() : "", "must be an array of 3 numbers"});
+      points.push_back({0.0, 0.0, 0.0});
       ++index;
       continue;
     }
-    const double a = (*position)[0].get<double>() * metres_per_unit;
-    const double b = (*position)[1].get<double>() * metres_per_unit;
-    const double c = (*position)[2].get<double>() * metres_per_unit;
+    const double a = (*position)[0].get<double>() * frame.metres_per_unit;
+    const double b = (*position)[1].get<double>() * frame.metres_per_unit;
+    const double c = (*position)[2].get<double>() * frame.metres_per_unit;
     // W is RAS (+x right, +y anterior, +z superior): LPS -> (-x, -y, z).
-    in.p_W_m.push_back(system == "LPS" ? std::array<double, 3>{-a, -b, c}
-                                       : std::array<double, 3>{a, b, c});
+    points.push_back(frame.lps ? std::array<double, 3>{-a, -b, c} : std::array<double, 3>{a, b, c});
     ++index;
   }
+  return points;
+}
+
+bool IsPointList(const nlohmann::json& markup) {
+  const std::string type = markup.value("type", std::string());
+  return type == "Fiducial" || type == "PointList";
+}
+
+// The labelled points of a point list markup as region landmarks; a label
+// that is no region is a problem naming it.
+void ReadLandmarks(const nlohmann::json& markup, const std::string& file_label,
+                   const std::string& where, ImportedPoints& in,
+                   std::vector<CaseProblem>& problems) {
+  const MarkupFrame frame = ReadMarkupFrame(markup, file_label, where);
+  const auto points = ReadControlPoints(markup, frame, file_label, where, problems);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const std::string label = markup["controlPoints"][i].value("label", std::string());
+    const auto region = ParseRegionName(label);
+    if (!region) {
+      problems.push_back({file_label, where + ".controlPoints.label", static_cast<int>(i), label,
+                          "must name the region that begins there (rectum, sigmoid, descending, "
+                          "splenic-flexure, transverse, hepatic-flexure, ascending, cecum)"});
+      continue;
+    }
+    in.landmarks.push_back({points[i], *region});
+  }
+  if (points.empty()) problems.push_back({file_label, where + ".controlPoints", -1, "", "no landmarks"});
+}
+
+// The curve's "Radius" measurement, one value per control point (Slicer's
+// Extract Centerline writes it): radii in metres, or empty when absent.
+std::vector<double> ReadRadiusMeasurement(const nlohmann::json& markup, size_t point_count,
+                                          const std::string& file_label,
+                                          std::vector<CaseProblem>& problems) {
+  if (!markup.contains("measurements") || !markup["measurements"].is_array()) return {};
+  int index = 0;
+  for (const auto& measurement : markup["measurements"]) {
+    const std::string where = "markups[0].measurements[" + std::to_string(index++) + "]";
+    if (!measurement.is_object()) continue;
+    std::string name = measurement.value("name", std::string());
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (name != "radius") continue;
+    const std::string units = measurement.value("units", std::string("mm"));
+    const double metres_per_unit = units == "mm" ? 1e-3 : units == "cm" ? 1e-2 : units == "um" ? 1e-6 : 0.0;
+    if (metres_per_unit == 0.0) {
+      problems.push_back({file_label, where + ".units", -1, units, "must be mm, cm or um"});
+      return {};
+    }
+    if (!measurement.contains("controlPointValues") ||
+        !measurement["controlPointValues"].is_array()) {
+      problems.push_back({file_label, where + ".controlPointValues", -1, "",
+                          "missing: the Radius measurement needs one value per control point"});
+      return {};
+    }
+    const auto& values = measurement["controlPointValues"];
+    if (values.size() != point_count) {
+      problems.push_back({file_label, where + ".controlPointValues", -1,
+                          std::to_string(values.size()) + " values",
+                          "must have one value per control point (" +
+                              std::to_string(point_count) + ")"});
+      return {};
+    }
+    std::vector<double> radius_m;
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (!values[i].is_number() || !std::isfinite(values[i].get<double>())) {
+        problems.push_back({file_label, where + ".controlPointValues", static_cast<int>(i),
+                            values[i].dump(), "not a finite number"});
+        radius_m.push_back(0.0);
+        continue;
+      }
+      radius_m.push_back(values[i].get<double>() * metres_per_unit);
+    }
+    return radius_m;
+  }
+  return {};
+}
+
+}  // namespace
+
+ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
+                                       const std::optional<std::string>& radius_csv_text,
+                                       const std::string& file_label,
+                                       const ImportOptions& options,
+                                       const std::optional<std::string>& landmarks_json_text) {
+  using nlohmann::json;
+  const auto parse = [](std::string_view text, const std::string& label) {
+    try {
+      return json::parse(text);
+    } catch (const json::exception& e) {
+      throw CaseError(label, "json", -1, "", std::string("not JSON: ") + e.what());
+    }
+  };
+  const json doc = parse(json_text, file_label);
+  if (!doc.is_object() || !doc.contains("markups") || !doc["markups"].is_array() ||
+      doc["markups"].empty()) {
+    throw CaseError(file_label, "markups", -1, "",
+                    "no markups array (not a 3D Slicer markups file)");
+  }
+  const json& markup = doc["markups"][0];
+  ImportedPoints in;
+  std::vector<CaseProblem> problems;
+  in.p_W_m = ReadControlPoints(markup, ReadMarkupFrame(markup, file_label, "markups[0]"),
+                               file_label, "markups[0]", problems);
+  in.radius_m = ReadRadiusMeasurement(markup, in.p_W_m.size(), file_label, problems);
+  // Point lists after the curve in the same file are region landmarks.
+  for (size_t m = 1; m < doc["markups"].size(); ++m) {
+    if (IsPointList(doc["markups"][m])) {
+      ReadLandmarks(doc["markups"][m], file_label, "markups[" + std::to_string(m) + "]", in,
+                    problems);
+    }
+  }
+  if (landmarks_json_text) {
+    const std::string label = file_label + " (region landmarks)";
+    const json landmarks = parse(*landmarks_json_text, label);
+    bool found = false;
+    if (landmarks.is_object() && landmarks.contains("markups") && landmarks["markups"].is_array()) {
+      for (size_t m = 0; m < landmarks["markups"].size(); ++m) {
+        if (!IsPointList(landmarks["markups"][m])) continue;
+        ReadLandmarks(landmarks["markups"][m], label, "markups[" + std::to_string(m) + "]", in,
+                      problems);
+        found = true;
+      }
+    }
+    if (!found) problems.push_back({label, "markups", -1, "", "no point list of landmarks"});
+  }
   if (radius_csv_text) {
+    // The sidecar, when there is one, gives the radii (over the measurement).
+    in.radius_m.clear();
     const std::string sidecar = file_label + " (radius sidecar)";
     std::vector<CaseProblem> row_problems;
     const CsvTable table = ReadCsvTable(*radius_csv_text, sidecar, row_problems);

@@ -38,7 +38,7 @@ CaseRow ReadCaseRow(const pqxx::row& r) {
 constexpr const char* kSessionColumns =
     "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
-    "stored_unix_ms";
+    "stored_unix_ms, operator_kind, max_tip_arc_m";
 
 SessionRow ReadSessionRow(const pqxx::row& r) {
   SessionRow s;
@@ -57,6 +57,8 @@ SessionRow ReadSessionRow(const pqxx::row& r) {
   s.score = r[12].as<double>();
   s.body_sha256_hex = r[13].as<std::string>();
   s.stored_unix_ms = r[14].as<int64_t>();
+  s.operator_kind = r[15].as<std::string>();
+  s.max_tip_arc_m = r[16].as<double>();
   return s;
 }
 
@@ -244,7 +246,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
     for (size_t k = 0; k < order.size(); ++k) {
       const SessionRow& row = batch.sessions[order[k]];
       insert += k == 0 ? "(" : ", (";
-      for (int c = 1; c <= 16; ++c) {
+      for (int c = 1; c <= 18; ++c) {
         insert += (c == 1 ? "$" : ", $") + std::to_string(params.size() + c);
       }
       insert += ")";
@@ -254,7 +256,8 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
             std::to_string(row.end_unix_ms), std::to_string(row.outcome),
             std::string(row.completed ? "1" : "0"), pqxx::to_string(row.time_to_cecum_s),
             pqxx::to_string(row.pain_s), pqxx::to_string(row.score), row.body_sha256_hex,
-            std::to_string(row.stored_unix_ms), ByteaHex(row.body)}) {
+            std::to_string(row.stored_unix_ms), row.operator_kind,
+            pqxx::to_string(row.max_tip_arc_m), ByteaHex(row.body)}) {
         params.push_back(v);
       }
     }
@@ -338,7 +341,7 @@ StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
         std::string("SELECT ") + kSessionColumns + ", body FROM sessions WHERE uuid = $1", uuid);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
     out = ReadSessionRow(r[0]);
-    out.body = pqxx::binarystring(r[0][15]).str();
+    out.body = pqxx::binarystring(r[0][17]).str();
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;

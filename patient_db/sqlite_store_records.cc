@@ -35,7 +35,7 @@ CaseRow ReadCaseRow(const SqliteStatement& s) {
 constexpr const char* kSessionColumns =
     "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
-    "stored_unix_ms";
+    "stored_unix_ms, operator_kind, max_tip_arc_m";
 
 SessionRow ReadSessionRow(const SqliteStatement& s) {
   SessionRow r;
@@ -54,6 +54,8 @@ SessionRow ReadSessionRow(const SqliteStatement& s) {
   r.score = s.Real(12);
   r.body_sha256_hex = s.Text(13);
   r.stored_unix_ms = s.Int(14);
+  r.operator_kind = s.Text(15);
+  r.max_tip_arc_m = s.Real(16);
   return r;
 }
 
@@ -262,14 +264,15 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
     return StoreStatus::Ok();
   }
   s = db.Prepare(std::string("INSERT INTO sessions (") + kSessionColumns +
-                     ", body) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                     ", body) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                  nullptr);
   if (!s) return Internal(db, "insert session");
   s->Bind(1, row.uuid).Bind(2, row.trainee_id).Bind(3, row.institution).Bind(4, row.case_id);
   s->Bind(5, int64_t{row.case_version}).Bind(6, row.station_id).Bind(7, row.start_unix_ms);
   s->Bind(8, row.end_unix_ms).Bind(9, int64_t{row.outcome}).Bind(10, int64_t{row.completed});
   s->Bind(11, row.time_to_cecum_s).Bind(12, row.pain_s).Bind(13, row.score);
-  s->Bind(14, row.body_sha256_hex).Bind(15, row.stored_unix_ms).BindBlob(16, row.body);
+  s->Bind(14, row.body_sha256_hex).Bind(15, row.stored_unix_ms).Bind(16, row.operator_kind);
+  s->Bind(17, row.max_tip_arc_m).BindBlob(18, row.body);
   if (!Run(s, &rc)) return Internal(db, "insert session " + row.uuid);
   if (!row.lesson_id.empty()) {  // queued for the lesson judge with the session itself
     s = db.Prepare(
@@ -331,7 +334,7 @@ StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
   std::optional<SessionRow> row;
   if (s->Step(&rc)) {
     row = ReadSessionRow(*s);
-    row->body = s->Blob(15);
+    row->body = s->Blob(17);
   }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get session");

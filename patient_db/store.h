@@ -105,6 +105,8 @@ struct SessionRow {
   double time_to_cecum_s = 0;
   double pain_s = 0;
   double score = 0;
+  std::string operator_kind;  // "human", "novice", "expert"; "" for rows stored before it
+  double max_tip_arc_m = 0;   // the deepest tip position; 0 for rows stored before it
   std::string body_sha256_hex;
   int64_t stored_unix_ms = 0;
   std::string body;  // serialized ves.v1.SessionRecord; empty in listings

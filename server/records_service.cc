@@ -129,6 +129,8 @@ ves::v1::SessionSummary ToSummary(const patient_db::SessionRow& r) {
   s.set_time_to_cecum_s(r.time_to_cecum_s);
   s.set_pain_s(r.pain_s);
   s.set_score(r.score);
+  s.set_operator_kind(r.operator_kind);
+  s.set_max_tip_arc_m(r.max_tip_arc_m);
   return s;
 }
 
@@ -210,6 +212,8 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.time_to_cecum_s = rec.metrics().time_to_cecum_s();
   row.pain_s = rec.metrics().pain_s();
   row.score = rec.score();
+  row.operator_kind = rec.operator_kind();
+  row.max_tip_arc_m = rec.metrics().max_tip_arc_m();
   row.body = DeterministicBytes(rec);
   row.body_sha256_hex = Sha256HexOf(row.body);
   row.stored_unix_ms = NowUnixMs();

@@ -238,12 +238,13 @@ int main(int argc, char** argv) {
               us(stats.spin_margin.PercentileNs(0.5)), us(stats.spin_margin.PercentileNs(0.99)),
               us(stats.spin_margin.max_ns()));
   std::printf(
-      "frames_sent=%llu frames_received=%llu lost_frames=%llu safe_state_trips=%llu "
-      "last_fault=%s\n",
+      "frames_sent=%llu frames_received=%llu lost_frames=%llu transient_faults=%llu "
+      "hard_faults=%llu last_fault=%s\n",
       static_cast<unsigned long long>(counters.frames_sent),
       static_cast<unsigned long long>(counters.frames_received),
       static_cast<unsigned long long>(counters.lost_frames),
-      static_cast<unsigned long long>(cycle.safety().trips()),
+      static_cast<unsigned long long>(cycle.safety().transient_faults()),
+      static_cast<unsigned long long>(cycle.safety().hard_faults()),
       hx::ToString(cycle.safety().fault()));
   return 0;
 }

@@ -80,13 +80,100 @@ std::string FormatUtcMinute(int64_t unix_ms) {
 
 namespace {
 
+// The station's names (`outcome=` of its summary line).
 const char* OutcomeName(ves::v1::Outcome o) {
   switch (o) {
-    case ves::v1::OUTCOME_CECUM_REACHED: return "cecum";
+    case ves::v1::OUTCOME_CECUM_REACHED: return "cecum_reached";
     case ves::v1::OUTCOME_ABORTED: return "aborted";
-    case ves::v1::OUTCOME_TIMED_OUT: return "timed-out";
-    default: return "?";
+    case ves::v1::OUTCOME_TIMED_OUT: return "timed_out";
+    default: return "-";
   }
+}
+
+std::string FormatUtcSecond(int64_t unix_ms) {
+  const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M:%S UTC", &tm);
+  return buf;
+}
+
+std::string Fixed(double value, int digits) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, value);
+  return buf;
+}
+
+const char* EventKindName(ves::v1::EventKind kind) {
+  switch (kind) {
+    case ves::v1::EVENT_KIND_EXCESSIVE_FORCE: return "excessive force";
+    case ves::v1::EVENT_KIND_PAIN: return "pain";
+    case ves::v1::EVENT_KIND_LOOP: return "loop";
+    case ves::v1::EVENT_KIND_DAMAGE: return "damage";
+    case ves::v1::EVENT_KIND_REDOUT: return "red-out";
+    case ves::v1::EVENT_KIND_VIEW_MODE: return "view mode";
+    case ves::v1::EVENT_KIND_FLUOROSCOPY: return "fluoroscopy";
+    case ves::v1::EVENT_KIND_CECUM_REACHED: return "cecum reached";
+    case ves::v1::EVENT_KIND_REPEAT: return "repeat";
+    default: return "other";
+  }
+}
+
+// `ves-admin session show`: what a supervisor reads, not the whole record
+// (no case centreline, no input log bytes; --raw has them).
+void PrintSessionSummary(const ves::v1::SessionRecord& r, std::ostream& out) {
+  const ves::v1::SessionMetrics& m = r.metrics();
+  const auto line = [&out](const std::string& name, const std::string& value) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "  %-24s ", name.c_str());
+    out << buf << value << "\n";
+  };
+  const std::string none = "-";
+  out << "session " << r.uuid() << "\n";
+  line("trainee", r.trainee_id());
+  line("operator", r.operator_kind().empty() ? none : r.operator_kind());
+  line("case", r.case_id() + " v" + std::to_string(r.case_version()) +
+                   (r.case_sha256_hex().empty() ? "" : " sha256=" + r.case_sha256_hex().substr(0, 16) + "…"));
+  line("scope", r.scope().title().empty() ? (r.scope().id().empty() ? none : r.scope().id())
+                                           : r.scope().title());
+  line("station", r.station_id().empty() ? none : r.station_id());
+  line("lesson", r.lesson_id().empty() ? none : r.lesson_id());
+  line("started", FormatUtcSecond(r.start_unix_ms()));
+  line("ended", FormatUtcSecond(r.end_unix_ms()));
+  line("outcome", OutcomeName(r.outcome()));
+  line("score", Fixed(r.score(), 1) + " / 100");
+  out << "metrics:\n";
+  line("duration_s", Fixed(m.duration_s(), 1));
+  line("time_to_cecum_s", m.completed() ? Fixed(m.time_to_cecum_s(), 1) : none);
+  line("inserted_at_cecum_m", m.completed() ? Fixed(m.inserted_at_cecum_m(), 3) : none);
+  line("deepest_tip_arc_m", Fixed(m.max_tip_arc_m(), 3));
+  line("max_insertion_m", Fixed(m.max_insertion_m(), 3));
+  line("peak_insertion_force_N", Fixed(m.peak_insertion_force_n(), 2));
+  line("mean_insertion_force_N", Fixed(m.mean_insertion_force_n(), 2));
+  line("excessive_force", std::to_string(m.excessive_force_episodes()) + " episodes, " +
+                              Fixed(m.excessive_force_s(), 1) + " s");
+  line("pain_s", Fixed(m.pain_s(), 1));
+  line("peak_stretch_m", Fixed(m.peak_stretch_m(), 3));
+  line("loop", std::to_string(m.loop_count()) + " loops, " + Fixed(m.loop_s(), 1) + " s");
+  line("redout_s", Fixed(m.redout_s(), 1));
+  line("mucosa_seen", Fixed(100.0 * m.mucosa_seen_fraction(), 0) + " %");
+  line("xray_s", Fixed(m.xray_s(), 1));
+  line("tip_path_m", Fixed(m.tip_path_m(), 2));
+  line("damage", std::to_string(m.damage_events()) + " events, " +
+                     Fixed(m.damage_impulse_n_s(), 2) + " N·s");
+  out << "events: " << r.events_size() << "\n";
+  for (const auto& e : r.events()) {
+    out << "  t=" << Fixed(e.t_s(), 1) << " s  " << EventKindName(e.kind());
+    if (e.duration_s() > 0.0) out << "  for " << Fixed(e.duration_s(), 1) << " s";
+    if (e.arc_m() > 0.0) out << "  at " << Fixed(e.arc_m(), 3) << " m";
+    if (!e.detail().empty()) out << "  " << e.detail();
+    out << "\n";
+  }
+  out << "input log: " << r.input_log().sample_count() << " samples at "
+      << Fixed(r.input_log().dt_s() * 1e3, 1) << " ms, " << r.input_log().encoded().size()
+      << " bytes; software " << (r.software_version().empty() ? none : r.software_version())
+      << "\n";
 }
 
 template <typename Service>
@@ -209,14 +296,19 @@ int RunScoresCommand(const CommandArgs& args) {
   ves::v1::ListSessionsResponse r;
   auto status = Stub<ves::v1::Trainees>(client)->ListSessions(&ctx, q, &r);
   if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
-  std::printf("%-16s  %-20s  %-9s  %12s  %11s  %6s\n", "date (UTC)", "case", "outcome",
-              "to cecum (s)", "pain (s)", "score");
+  // One session a line, oldest first; `session show SESSION` reads one.
+  std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8s  %7s\n", "date (UTC)",
+              "session", "trainee", "operator", "case", "outcome", "depth (m)", "cecum (s)",
+              "pain (s)", "score");
   for (const auto& s : r.sessions()) {
-    const std::string to_cecum =
-        s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
-    std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
-                FormatUtcMinute(s.start_unix_ms()).c_str(), s.case_id().c_str(),
-                OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
+    const std::string to_cecum = s.completed() ? Fixed(s.time_to_cecum_s(), 1) : "-";
+    const std::string depth = s.max_tip_arc_m() > 0.0 ? Fixed(s.max_tip_arc_m(), 2) : "-";
+    const std::string case_label = s.case_id() + " v" + std::to_string(s.case_version());
+    std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8.1f  %7s\n",
+                FormatUtcMinute(s.start_unix_ms()).c_str(), s.uuid().c_str(),
+                s.trainee_id().c_str(), s.operator_kind().empty() ? "-" : s.operator_kind().c_str(),
+                case_label.c_str(), OutcomeName(s.outcome()), depth.c_str(), to_cecum.c_str(),
+                s.pain_s(), (Fixed(s.score(), 1) + "/100").c_str());
   }
   return kExitOk;
 }
@@ -227,13 +319,16 @@ int RunSessionCommand(const CommandArgs& args) {
   std::string action, uuid;
   po::options_description options("options");
   AddRemoteOptions(&options, &client, &deadline_s);
+  bool raw = false;
   options.add_options()("action", po::value(&action)->required(), "show")(
-      "uuid", po::value(&uuid)->required(), "session uuid");
+      "uuid", po::value(&uuid)->required(), "session uuid")(
+      "raw", po::bool_switch(&raw), "the whole record (text format) instead of the summary");
   po::positional_options_description pos;
   pos.add("action", 1).add("uuid", 1);
   po::variables_map vm;
   const int rc =
-      ParseRemote("session", "session show UUID", args, options, &pos, &vm, &client, deadline_s);
+      ParseRemote("session", "session show UUID [--raw]", args, options, &pos, &vm, &client,
+                  deadline_s);
   if (rc >= 0) return rc;
   if (action != "show") {
     std::cerr << "ves-admin session: unknown action '" << action << "' (only: show)\n";
@@ -246,7 +341,12 @@ int RunSessionCommand(const CommandArgs& args) {
   ves::v1::GetSessionResponse r;
   auto status = Stub<ves::v1::Trainees>(client)->GetSession(&ctx, q, &r);
   if (!status.ok()) return ReportRpcError("session", status.error_code(), status.error_message());
-  // The whole record except the input log's bytes, which only a replay reads.
+  if (!raw) {
+    PrintSessionSummary(r.record(), std::cout);
+    return kExitOk;
+  }
+  // The whole record except the input log's bytes (binary, only a replay
+  // reads them).
   ves::v1::SessionRecord shown = r.record();
   const size_t log_bytes = shown.input_log().encoded().size();
   shown.mutable_input_log()->clear_encoded();

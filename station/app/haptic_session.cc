@@ -55,9 +55,9 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   training::InputSample sample;
   sample.thrust_mode = training::ThrustMode::kForce;
   sample.insertion_m = insertion_m + insertion_offset_m_;
-  // Virtual coupling: F_c = k_c·(x_device + offset − x_model) pushes the model's base.
-  sample.push_force_N =
-      coupling_stiffness_N_per_m_ * (sample.insertion_m - runner_->state().inserted_m);
+  sample.push_force_N = haptics::CalcCouplingForce_N(coupling_stiffness_N_per_m_, insertion_m,
+                                                     insertion_offset_m_,
+                                                     runner_->state().inserted_m);
   sample.roll_rad = roll_rad + roll_offset_rad_;
   sample.knob_up_down_rad = controls.knob_up_down_rad;
   sample.knob_left_right_rad = controls.knob_left_right_rad;
@@ -81,13 +81,13 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
 
 std::string DeviceReportLine(const std::string& device, const std::string& bus,
                              const haptics::DeviceCounters& counters,
-                             const SessionModelSource& source, std::uint64_t safe_state_trips,
-                             haptics::SafetyFault fault) {
+                             const SessionModelSource& source,
+                             const haptics::SafetyMonitor& safety) {
   char line[512];
   std::snprintf(line, sizeof(line),
                 "device=%s bus=%s frames_sent=%llu frames_received=%llu lost_frames=%llu "
                 "malformed_frames=%llu bus_errors=%llu model_steps=%llu encoder_travel_m=%.4f "
-                "roll_travel_rad=%.4f safe_state_trips=%llu fault=%s",
+                "roll_travel_rad=%.4f transient_faults=%llu hard_faults=%llu fault=%s",
                 device.c_str(), bus.c_str(),
                 static_cast<unsigned long long>(counters.frames_sent),
                 static_cast<unsigned long long>(counters.frames_received),
@@ -95,8 +95,10 @@ std::string DeviceReportLine(const std::string& device, const std::string& bus,
                 static_cast<unsigned long long>(counters.malformed_frames),
                 static_cast<unsigned long long>(counters.bus_errors),
                 static_cast<unsigned long long>(source.model_steps()), source.encoder_travel_m(),
-                source.roll_encoder_travel_rad(), static_cast<unsigned long long>(safe_state_trips),
-                haptics::ToString(fault));
+                source.roll_encoder_travel_rad(),
+                static_cast<unsigned long long>(safety.transient_faults()),
+                static_cast<unsigned long long>(safety.hard_faults()),
+                haptics::ToString(safety.fault()));
   return line;
 }
 

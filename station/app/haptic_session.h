@@ -97,11 +97,12 @@ class SessionModelSource final : public haptics::BaseResponseSource {
 };
 
 // One line of key=value pairs saying what went over the bus, e.g.
-// `device=sim bus=socketpair frames_sent=... encoder_travel_m=... safe_state_trips=0 fault=none`.
+// `device=sim bus=socketpair frames_sent=... encoder_travel_m=... transient_faults=0
+// hard_faults=0 fault=none`.
 std::string DeviceReportLine(const std::string& device, const std::string& bus,
                              const haptics::DeviceCounters& counters,
-                             const SessionModelSource& source, std::uint64_t safe_state_trips,
-                             haptics::SafetyFault fault);
+                             const SessionModelSource& source,
+                             const haptics::SafetyMonitor& safety);
 
 // The simulated hand for a scripted operator's sample (headless): in the
 // force mode the hand pushes the scope with push_force_N; in the position

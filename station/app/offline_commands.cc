@@ -6,6 +6,7 @@
 #include <optional>
 #include <string_view>
 
+#include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
@@ -38,22 +39,49 @@ sync::StationPaths Paths(const po::variables_map& vm) {
 int RunImportCaseCommand(const CommandArgs& args) {
   po::options_description options("options");
   options.add_options()("file", po::value<std::vector<std::string>>()->required(),
-                        "case bundle(s) (*.vescase)");
+                        "case files: bundle (.vescase), textproto, CSV or 3D Slicer markups")(
+      "radius-mm", po::value<double>(), "CSV/markups: constant lumen radius (mm)")(
+      "region", po::value<std::string>(),
+      "CSV/markups: region of the whole centerline (rectum, sigmoid, ..., cecum)")(
+      "id", po::value<std::string>(), "CSV/markups: case id (default: from the file name)")(
+      "title", po::value<std::string>(), "CSV/markups: title");
   po::positional_options_description positional;
   positional.add("file", -1);
   po::variables_map vm;
-  if (auto stop =
-          ParseOfflineArgs("ves-station import-case",
-                           "usage: ves-station import-case FILE.vescase... [--data-dir DIR]", args,
-                           options, positional, &vm)) {
+  if (auto stop = ParseOfflineArgs(
+          "ves-station import-case",
+          "usage: ves-station import-case FILE... [--radius-mm R] [--region NAME] [--id ID]\n"
+          "                               [--title T] [--data-dir DIR]\n\n"
+          "Puts cases into the station's offline cache. FILE is any format `ves-admin case\n"
+          "convert` reads (docs/case-format.md): a bundle (.vescase, the paper's CD-ROM), a\n"
+          "textproto, a centerline CSV or a 3D Slicer markups file (.mrk.json, its Radius\n"
+          "measurement or a <stem>.radius.csv sidecar, region landmarks in <stem>.regions.mrk.json).",
+          args, options, positional, &vm)) {
     return *stop;
   }
+  patient_db::ImportOptions import;
+  if (vm.count("radius-mm")) import.radius_mm = vm["radius-mm"].as<double>();
+  if (vm.count("region")) {
+    import.region = patient_db::ParseRegionName(vm["region"].as<std::string>());
+    if (!import.region) {
+      std::cerr << "ves-station import-case: --region '" << vm["region"].as<std::string>()
+                << "' is not a region (rectum, sigmoid, descending, splenic-flexure, "
+                   "transverse, hepatic-flexure, ascending, cecum)\n";
+      return 2;
+    }
+  }
+  if (vm.count("id")) import.id = vm["id"].as<std::string>();
+  if (vm.count("title")) import.title = vm["title"].as<std::string>();
   try {
     sync::CaseCache cache(Paths(vm).cases());
     int failures = 0;
     for (const auto& file : vm["file"].as<std::vector<std::string>>()) {
       try {
-        const auto entry = cache.ImportBundleFile(file);
+        // A bundle is stored as it is (its hash checked); every other format
+        // is read, validated and stored as a bundle.
+        const auto entry = patient_db::CaseFileKindOf(file) == patient_db::CaseFileKind::kBundle
+                               ? cache.ImportBundleFile(file)
+                               : cache.Put(patient_db::LoadCaseFile(file, import));
         std::cout << "imported " << entry.id << " v" << entry.version << " sha256=" << entry.sha256_hex
                   << "\n";
       } catch (const std::exception& error) {

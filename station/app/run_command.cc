@@ -3,8 +3,9 @@
 //   headless: a scripted operator drives the model; frames and a summary go to --out.
 //   interactive: the three windows; the keyboard and mouse drive the simulated hand.
 // Either way the finished session is committed to the outbox before any upload.
-// Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments or
-// input (no such case), 1 the station failed (outbox, output folder, ...).
+// Exit status (the same for `sim`): 0 a session ran to its end, whatever its
+// outcome; 2 bad arguments or input (no such case); 1 the station failed
+// (outbox, output folder, ...) or the model diverged.
 #include <unistd.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
@@ -51,7 +53,6 @@ constexpr char kName[] = "ves-station run";
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
 constexpr int kExitUsage = 2;
-constexpr int kExitNotReached = 3;
 // For the crash tests: with this set, the process SIGKILLs itself right after
 // the outbox commit, before any upload (docs/station-run.md).
 constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
@@ -60,17 +61,19 @@ constexpr char kKillAfterCommitEnv[] = "VES_STATION_KILL_AFTER_COMMIT";
 constexpr std::size_t kCanLogCapacity = std::size_t{1} << 18;
 
 constexpr char kUsage[] =
-    "usage: ves-station run --trainee ID --case ID|--lesson next [--server ADDR --token T\n"
+    "usage: ves-station run --trainee ID --case ID|FILE|--lesson next [--server ADDR --token T\n"
     "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
     "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
     "                       [--can-log FILE]\n\n"
-    "Gets the case (the server's latest version into the offline cache, else the cached one),\n"
+    "Gets the case (the server's latest version into the offline cache, else the cached one;\n"
+    "a case FILE is read and put into the cache),\n"
     "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
     "or SocketCAN), commits it to the outbox, then uploads it. Headless: a scripted operator's\n"
     "hand drives the simulated device; endoscope frames, fluoroscopy.png, summary.txt,\n"
     "device.txt and session.session go to DIR.\n"
-    "Exit status: 0 cecum reached, 3 timed out or aborted, 2 bad arguments/input, 1 failure.";
+    "Exit status: 0 the session ran to its end (any outcome), 2 bad arguments/input,\n"
+    "1 failure (the model diverged, the outbox or --out could not be written).";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -107,7 +110,7 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   RunOptions o;
   if (!vm.count("trainee")) throw UsageError("--trainee ID is required");
   if (vm.count("case") == vm.count("lesson")) {
-    throw UsageError("give --case ID or --lesson next (one of them)");
+    throw UsageError("give --case ID|FILE or --lesson next (one of them)");
   }
   if (vm.count("lesson")) {
     o.lesson = vm["lesson"].as<std::string>();
@@ -177,15 +180,6 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
 }
 
 
-render::EndoscopeMode ToRenderMode(training::ViewMode mode) {
-  switch (mode) {
-    case training::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
-    case training::ViewMode::kFlat: return render::EndoscopeMode::kPolygon;
-    case training::ViewMode::kTextured: break;
-  }
-  return render::EndoscopeMode::kTexture;
-}
-
 void WritePng(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) {
     throw std::runtime_error("cannot write '" + path.string() + "'");
@@ -215,7 +209,7 @@ class FrameWriter {
     char name[64];
     std::snprintf(name, sizeof(name), "endoscope_%06.1fs.png", t_s);
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
-    WritePng(dir_ / name, views_->Endoscope(scene_, ToRenderMode(input.view_mode)));
+    WritePng(dir_ / name, views_->Endoscope(scene_, input.view_mode));
     ++frames_;
   }
 
@@ -224,7 +218,7 @@ class FrameWriter {
               bool show_fluoroscopy = true) {
     if (!views_) return;
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
-    WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, ToRenderMode(mode)));
+    WritePng(dir_ / "endoscope_final.png", views_->Endoscope(scene_, mode));
     ++frames_;
     if (!show_fluoroscopy) return;
     FluoroscopyControls controls;
@@ -367,7 +361,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   if (recorder) recorder->Close();
   const std::string device_line =
       DeviceReportLine("sim", "socketpair", rig.driver().counters(), source,
-                       rig.cycle().safety().trips(), rig.cycle().safety().fault());
+                       rig.cycle().safety());
   std::cout << device_line;
   if (recorder) {
     std::cout << " can_log=" << o.can_log << " can_log_frames=" << recorder->written()
@@ -411,7 +405,11 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
     CollectServerVerdicts(*o.server, *lessons, record.uuid(), o.verdict_wait_s, std::cout);
   }
   std::cout << summary << "\n";
-  return result.outcome == training::Outcome::kCecumReached ? kExitOk : kExitNotReached;
+  if (result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 // The device of an interactive run: SocketCAN when --device can:IFACE (throws
@@ -473,6 +471,7 @@ int Run(RunOptions o) {
   }
   const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
   std::optional<ObtainedCase> obtained;
+  bool obtained_from_file = false;
   ves::v1::EndoscopeSpec scope;
   training::CaseRun run;
   try {
@@ -484,6 +483,9 @@ int Run(RunOptions o) {
       const double limit_s = o.lesson_plan->lesson.time_limit_s();
       o.seconds = o.seconds_given ? std::min(o.seconds, limit_s) : limit_s;
       obtained = ObtainLessonCase(o.server, o.lesson_plan->lesson, cache, std::cerr);
+    } else if (IsCaseFileArgument(o.case_id)) {
+      obtained = ObtainCaseFile(o.case_id, cache);
+      obtained_from_file = true;
     } else {
       obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
     }
@@ -506,7 +508,10 @@ int Run(RunOptions o) {
   run.config.case_sha256_hex = obtained->entry.sha256_hex;
   std::cout << "case " << obtained->entry.id << " v" << obtained->entry.version << " sha256="
             << obtained->entry.sha256_hex.substr(0, 16) << "… ("
-            << (obtained->from_server ? "from the server" : "offline cache") << ")\n";
+            << (obtained_from_file      ? "from " + o.case_id + ", now in the offline cache"
+                : obtained->from_server ? std::string("from the server")
+                                        : std::string("offline cache"))
+            << ")\n";
   if (o.lesson_plan) PrintLessonBrief(*o.lesson_plan, o.seconds, std::cout);
   if (o.headless) {
     std::cout << "device: sim (the scripted " << o.operator_kind
@@ -566,7 +571,7 @@ int Run(RunOptions o) {
   interactive.records = std::move(records);
   if (interactive.records.empty()) {
     std::cout << "quit before the session started: nothing to record\n";
-    return kExitNotReached;
+    return kExitOk;
   }
   std::optional<sync::LessonCache> lessons;
   // Every repeat is an attempt. The aids were enforced: a wireframe-free lesson
@@ -585,8 +590,11 @@ int Run(RunOptions o) {
                           o.verdict_wait_s, std::cout);
   }
   std::cout << training::SummaryLine(interactive.result) << "\n";
-  return interactive.result.outcome == training::Outcome::kCecumReached ? kExitOk
-                                                                        : kExitNotReached;
+  if (interactive.result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 }  // namespace
@@ -598,7 +606,9 @@ int RunRunCommand(const CommandArgs& args) {
       "token", po::value<std::string>(), "station bearer token")(
       "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
       "trainee", po::value<std::string>(), "trainee id")(
-      "case", po::value<std::string>(), "case id")(
+      "case", po::value<std::string>(),
+      "case id (cached or on the server), or a case file (.textproto, .vescase, .csv, "
+      ".mrk.json) put into the offline cache first")(
       "lesson", po::value<std::string>(),
       "next: the trainee's next lesson instead of --case (docs/lessons.md)")(
       "verdict-wait-s", po::value<double>()->default_value(30.0),
@@ -639,7 +649,10 @@ int RunSyncCommand(const CommandArgs& args) {
       "station data folder (default $VES_STATION_DIR or ~/.ves-station)")(
       "attempts", po::value<int>()->default_value(3), "passes (with backoff) before giving up")(
       "verdict-wait-s", po::value<double>()->default_value(30.0),
-      "how long to wait for the server's verdicts on uploaded lesson sessions");
+      "how long to wait for the server's verdicts on uploaded lesson sessions")(
+      "add", po::value<std::vector<std::string>>()->composing(),
+      "queue this session file (e.g. from `sim --session-out`) in the outbox first; "
+      "repeatable. Without --server: only queue");
   sync::ServerEndpoint endpoint;
   std::string data_dir;
   int attempts = 3;
@@ -647,19 +660,28 @@ int RunSyncCommand(const CommandArgs& args) {
   po::variables_map vm;
   if (auto stop = ParseCommandLine(
           "ves-station sync",
-          "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] [--data-dir DIR]\n\n"
-          "Uploads the outbox's pending sessions. Exit status 0 when none is left pending, 1 "
-          "when some are (server unreachable).",
+          "usage: ves-station sync --server ADDR --token T [--tls-ca FILE] [--data-dir DIR]\n"
+          "                        [--add FILE.session]...\n"
+          "   or: ves-station sync --add FILE.session... [--data-dir DIR]   (queue only)\n\n"
+          "Uploads the outbox's pending sessions. --add first queues session files (as\n"
+          "`sim --operator ... --session-out` writes them) like a finished run. Exit status 0\n"
+          "when none is left pending (or, queue only, when all were queued), 1 when some are\n"
+          "(server unreachable), 2 for a bad file.",
           args, desc, &vm)) {
     return *stop;
   }
+  std::vector<std::string> to_add;
+  if (vm.count("add")) to_add = vm["add"].as<std::vector<std::string>>();
+  const bool queue_only = !to_add.empty() && !vm.count("server") && !vm.count("token");
   try {
-    if (!vm.count("server") || !vm.count("token")) {
-      throw UsageError("--server ADDR and --token T are required");
+    if (!queue_only && (!vm.count("server") || !vm.count("token"))) {
+      throw UsageError("--server ADDR and --token T are required (or only --add FILE to queue)");
     }
-    endpoint.address = vm["server"].as<std::string>();
-    endpoint.token = vm["token"].as<std::string>();
-    if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    if (!queue_only) {
+      endpoint.address = vm["server"].as<std::string>();
+      endpoint.token = vm["token"].as<std::string>();
+      if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
+    }
     data_dir = vm["data-dir"].as<std::string>();
     attempts = vm["attempts"].as<int>();
     verdict_wait_s = vm["verdict-wait-s"].as<double>();
@@ -670,8 +692,37 @@ int RunSyncCommand(const CommandArgs& args) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;
   }
+  // Session files to queue: each read whole and checked (a truncated or
+  // damaged file, a record without trainee) before any is committed.
+  std::vector<ves::v1::SessionRecord> added;
+  for (const std::string& file : to_add) {
+    try {
+      std::ifstream in(file, std::ios::binary);
+      if (!in) throw std::runtime_error("cannot read it");
+      std::ostringstream bytes;
+      bytes << in.rdbuf();
+      ves::v1::SessionRecord record = training::DecodeSessionFile(bytes.str());
+      if (record.trainee_id().empty()) {
+        throw std::runtime_error("the session names no trainee (write it with `sim ... --trainee ID`)");
+      }
+      added.push_back(std::move(record));
+    } catch (const std::exception& error) {
+      std::cerr << "ves-station sync: --add " << file << ": " << error.what() << "\n";
+      return kExitUsage;
+    }
+  }
   try {
     sync::Outbox outbox(sync::ResolveStationPaths(data_dir).outbox_db());
+    for (const auto& record : added) {
+      outbox.Commit(record);
+      std::cout << "session " << record.uuid() << " (trainee " << record.trainee_id() << ", case "
+                << record.case_id() << ") queued in the outbox\n";
+    }
+    if (queue_only) {
+      std::cout << outbox.PendingCount() << " pending; `ves-station sync --server ADDR --token T` "
+                   "uploads them\n";
+      return kExitOk;
+    }
     const DeliveryReport report = DeliverOutbox(endpoint, outbox, attempts);
     std::cout << "uploaded " << report.acknowledged << " session(s), " << report.rejected
               << " refused, " << report.still_pending << " pending\n";

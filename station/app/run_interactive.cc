@@ -7,12 +7,13 @@
 #include <cstdio>
 #include <memory>
 #include <mutex>
-#include <opencv2/highgui.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
+#include "patient_db/case_geometry.h"
+#include "patient_db/case_regions.h"
 #include "station/app/haptic_session.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
@@ -23,12 +24,12 @@
 #include "station/haptics/sim_rig.h"
 #include "station/haptics/simulated_ball_drive.h"
 #include "station/haptics/ves4_device.h"
-#include "station/training/replay.h"
 #include "station/render/model_scene.h"
+#include "station/training/replay.h"
 #include "station/training/session_runner.h"
 #include "station/training/uuid.h"
-#include "station/ui/control_panel.h"
-#include "station/ui/station_windows.h"
+#include "station/ui/training_screen.h"
+#include "station/ui/training_window.h"
 
 namespace ves::station {
 namespace {
@@ -37,9 +38,6 @@ namespace {
 // person pushes a colonoscope, so a key press is a push, not a jump.
 constexpr double kHandSpeed_m_per_s = 0.15;
 constexpr int kPollMs = 5;
-constexpr int kViewHeight = 480;      // SessionViews' default image size
-constexpr int kQtWindowWidth = 1500;  // highgui's Qt window with its toolbar
-constexpr int kWindowMargin = 80;     // title bar and status line
 
 // UI -> simulated hand: where the keyboard wants the scope (device coordinates).
 struct HandTarget {
@@ -53,7 +51,9 @@ struct HandTarget {
 struct PanelNumbers {
   training::SessionState state{training::SessionState::kReady};
   training::Outcome outcome{training::Outcome::kNone};
+  double score{0.0};  // when finished
   double elapsed_s{0.0};
+  double time_limit_s{0.0};
   double excessive_force_N{5.0};
   double pain_s{0.0};
   double loop_s{0.0};
@@ -67,80 +67,33 @@ struct Published {
   std::uint64_t sequence{0};
 };
 
-training::ViewMode ToTrainingMode(ui::ViewMode mode) {
-  switch (mode) {
-    case ui::ViewMode::kWireframe: return training::ViewMode::kWireframe;
-    case ui::ViewMode::kPolygon: return training::ViewMode::kFlat;
-    case ui::ViewMode::kTexture: break;
+// For people: "cecum reached", "time limit reached", "aborted".
+std::string OutcomeText(training::Outcome outcome) {
+  switch (outcome) {
+    case training::Outcome::kCecumReached: return "cecum reached";
+    case training::Outcome::kTimedOut: return "time limit reached";
+    case training::Outcome::kAborted: return "aborted";
+    case training::Outcome::kNone: break;
   }
-  return training::ViewMode::kTextured;
+  return "-";
 }
 
-render::EndoscopeMode ToRenderMode(ui::ViewMode mode) {
-  switch (mode) {
-    case ui::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
-    case ui::ViewMode::kPolygon: return render::EndoscopeMode::kPolygon;
-    case ui::ViewMode::kTexture: break;
-  }
-  return render::EndoscopeMode::kTexture;
-}
-
-
-std::string StateText(const PanelNumbers& numbers, haptics::SafetyFault fault) {
-  std::string text;
-  if (numbers.state == training::SessionState::kRunning) {
-    text = "running";
-  } else if (numbers.state == training::SessionState::kReady) {
-    text = "ready";
-  } else {
-    text = std::string("finished: ") + training::OutcomeName(numbers.outcome) +
-           " (r: repeat, q: quit)";
-  }
-  if (fault != haptics::SafetyFault::kNone) {
-    text += std::string(" | device safe: ") + haptics::ToString(fault) + " (r re-arms)";
-  }
-  return text;
-}
-
-// The simulated VES-IV served against the wall clock on its own thread, its
-// hand gripping the scope and pulling it toward the keyboard's target, which
-// it follows no faster than a person pushes a colonoscope (a key press is a
-// push, not a jump). The target comes lock-free from the UI.
-class SimulatedHandThread {
+class KeyboardHand {
  public:
-  SimulatedHandThread(haptics::SimulatedBallDrive* device,
-                      const haptics::SeqLock<HandTarget>* target)
-      : device_(device), target_(target) {
-    thread_ = std::thread([this] { Main(); });
-  }
-  ~SimulatedHandThread() { Stop(); }
-  void Stop() {
-    running_.store(false, std::memory_order_release);
-    if (thread_.joinable()) thread_.join();
+  KeyboardHand(const haptics::SeqLock<HandTarget>* target, double period_s)
+      : target_(target), period_s_(period_s) {}
+  void Move(haptics::SimulatedBallDrive* device) {
+    HandTarget target;
+    target_->Load(&target);
+    const double max_move_m = kHandSpeed_m_per_s * period_s_;
+    commanded_m_ += std::clamp(target.insertion_m - commanded_m_, -max_move_m, max_move_m);
+    device->set_hand(HandAtTargets(commanded_m_, target.roll_rad));
   }
 
  private:
-  void Main() {
-    haptics::TryEnableRealtime(kDeviceThreadPriority, "simulated device");
-    double commanded_m = 0.0;
-    double last_s = haptics::MonotonicSeconds();
-    while (running_.load(std::memory_order_acquire)) {
-      HandTarget target;
-      target_->Load(&target);
-      const double now_s = haptics::MonotonicSeconds();
-      const double max_move_m = kHandSpeed_m_per_s * (now_s - last_s);
-      last_s = now_s;
-      commanded_m += std::clamp(target.insertion_m - commanded_m, -max_move_m, max_move_m);
-      device_->set_hand(HandAtTargets(commanded_m, target.roll_rad));
-      device_->ServiceWait(2, now_s);
-    }
-  }
-
-  static constexpr int kDeviceThreadPriority = 79;  // just below the haptic loop
-  haptics::SimulatedBallDrive* device_;
   const haptics::SeqLock<HandTarget>* target_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
+  double period_s_;
+  double commanded_m_{0.0};
 };
 
 // The session side of the loop thread: repeats asked for by the UI, records
@@ -157,11 +110,17 @@ class LoopSession {
         published_mutex_(published_mutex),
         published_(published) {
     source_.set_before_update([this](double insertion_m, double roll_rad) {
+      // A session that just ended is shown as over (once the UI is not
+      // reading: try_lock), though no model step publishes it any more.
+      if (runner_.session().state() == training::SessionState::kFinished && !final_published_) {
+        final_published_ = Publish();
+      }
       const std::uint32_t requested = repeat_requests_.load(std::memory_order_acquire);
       if (requested == repeats_done_) return;
       repeats_done_ = requested;
       FinishAndKeep();
       runner_.Repeat();
+      final_published_ = false;
       source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
     });
     source_.set_after_step([this](const training::SessionRunner&) {
@@ -193,7 +152,10 @@ class LoopSession {
     PanelNumbers& numbers = published_->numbers;
     numbers.state = session.state();
     numbers.outcome = session.outcome();
+    numbers.score =
+        session.state() == training::SessionState::kFinished ? session.score() : 0.0;
     numbers.elapsed_s = metrics.duration_s;
+    numbers.time_limit_s = session.config().time_limit_s;
     numbers.excessive_force_N = session.config().thresholds.excessive_wall_force_N;
     numbers.pain_s = metrics.pain_s;
     numbers.loop_s = metrics.loop_s;
@@ -227,9 +189,302 @@ class LoopSession {
   std::atomic<std::uint32_t> repeat_requests_{0};
   std::uint32_t repeats_done_{0};
   int steps_since_publish_{0};
+  bool final_published_{false};
   std::int64_t start_ms_{0};
   InteractiveResult result_;
 };
+
+// Device bring-up: the bus (SocketCAN to the real VES-IV, or a socketpair to
+// the simulated one served on the loop's thread, its hand on the keyboard),
+// the driver, the candump log.
+class InteractiveRig {
+ public:
+  InteractiveRig(InteractiveDevice device, double period_s,
+                 const haptics::SeqLock<HandTarget>* hand_target)
+      : simulated_(!device.can_bus.has_value()), keyboard_hand_(hand_target, period_s) {
+    std::optional<haptics::CanBus> device_end;
+    haptics::CanBus host_end = [&] {
+      if (!simulated_) return std::move(*device.can_bus);
+      auto [host, sim] = haptics::CanBus::CreateSocketPair();
+      device_end.emplace(std::move(sim));
+      return std::move(host);
+    }();
+    bus_name_ = simulated_ ? "socketpair" : host_end.name();
+    haptics::SimulatedBallDriveOptions device_options;
+    device_options.period_s = period_s;
+    haptics::Ves4DeviceOptions driver_options;
+    driver_options.period_s = period_s;
+    driver_ = std::make_unique<haptics::Ves4Device>(std::move(host_end), device_options.params,
+                                                    driver_options);
+    if (!device.can_log.empty()) {
+      recorder_ = std::make_unique<haptics::CanFrameRecorder>(
+          device.can_log, simulated_ ? "sim0" : bus_name_,
+          haptics::MonotonicToEpochOffsetSeconds());
+      driver_->SetRecorder(recorder_.get());
+    }
+    device_ = driver_.get();
+    if (simulated_) {
+      // Served on the loop's thread: it answers every SYNC in time, as the
+      // real device's own hardware does (haptics::InlineSimulatedDevice).
+      simulated_device_ =
+          std::make_unique<haptics::SimulatedBallDrive>(std::move(*device_end), device_options);
+      inline_device_ =
+          std::make_unique<haptics::InlineSimulatedDevice>(driver_.get(), simulated_device_.get());
+      inline_device_->set_before_service(
+          [this](double, haptics::SimulatedBallDrive* sim) { keyboard_hand_.Move(sim); });
+      device_ = inline_device_.get();
+    }
+    if (!haptics::BringUpDevice(device_, &initial_state_, 2.0)) {
+      throw std::runtime_error("the VES-IV on " + bus_name_ +
+                               " did not become operational within 2 s");
+    }
+  }
+
+  haptics::HapticDevice* device() { return device_; }
+  const haptics::DeviceState& initial_state() const { return initial_state_; }
+  bool simulated() const { return simulated_; }
+  const std::string& bus_name() const { return bus_name_; }
+  std::string label() const { return simulated_ ? "sim" : "can:" + bus_name_; }
+  void CloseLog() {
+    if (recorder_) recorder_->Close();
+  }
+
+ private:
+  bool simulated_;
+  std::string bus_name_;
+  KeyboardHand keyboard_hand_;
+  std::unique_ptr<haptics::Ves4Device> driver_;
+  std::unique_ptr<haptics::CanFrameRecorder> recorder_;
+  std::unique_ptr<haptics::SimulatedBallDrive> simulated_device_;
+  std::unique_ptr<haptics::InlineSimulatedDevice> inline_device_;
+  haptics::HapticDevice* device_{nullptr};
+  haptics::DeviceState initial_state_;
+};
+
+// The device line of the screen: force feedback on, fading in, paused by a
+// transient fault (clears by itself) or in the safe state (r re-arms).
+void DescribeDevice(const haptics::HapticSnapshot& snapshot, const std::string& label,
+                    ui::ScreenModel* screen) {
+  const haptics::SafetyFault fault = snapshot.fault;
+  if (fault == haptics::SafetyFault::kNone) {
+    screen->device_status =
+        snapshot.output_scale < 1.0 ? ui::DeviceStatus::kRecovering : ui::DeviceStatus::kOk;
+    screen->device_text = label + (snapshot.output_scale < 1.0 ? ", force fading back in"
+                                                               : ", force feedback on");
+  } else if (haptics::IsTransient(fault)) {
+    screen->device_status = ui::DeviceStatus::kRecovering;
+    screen->device_text = label + ", force paused: " + haptics::ToString(fault) +
+                          " (recovers by itself)";
+  } else {
+    screen->device_status = ui::DeviceStatus::kSafe;
+    screen->device_text =
+        label + ", SAFE STATE: " + haptics::ToString(fault) + " - no force; r re-arms";
+  }
+}
+
+// Everything the screen shows besides the views, from the latest
+// publication of the loop and the device's snapshot.
+void FillScreenModel(const PanelNumbers& numbers, const haptics::HapticSnapshot& snapshot,
+                     const model::ModelState& state, const ves::v1::ColonCase& colon_case,
+                     const std::string& device_label, ui::ScreenModel* screen) {
+  switch (numbers.state) {
+    case training::SessionState::kReady: screen->phase = ui::SessionPhase::kReady; break;
+    case training::SessionState::kRunning: screen->phase = ui::SessionPhase::kRunning; break;
+    case training::SessionState::kFinished: screen->phase = ui::SessionPhase::kOver; break;
+  }
+  screen->outcome = OutcomeText(numbers.outcome);
+  screen->score = numbers.score;
+  screen->elapsed_s = numbers.elapsed_s;
+  screen->time_limit_s = numbers.time_limit_s;
+  screen->inserted_m = state.inserted_m;
+  screen->tip_arc_m = state.tip_arc_m;
+  screen->tip_region = patient_db::RegionName(patient_db::CalcRegionAt(colon_case, state.tip_arc_m));
+  screen->roll_rad = state.roll_rad;
+  screen->hand_force_N = snapshot.force_N;
+  screen->excessive_force_N = numbers.excessive_force_N;
+  screen->pain_s = numbers.pain_s;
+  screen->loop_s = numbers.loop_s;
+  screen->xray_s = numbers.xray_s;
+  screen->redout_fraction = numbers.redout_fraction;
+  DescribeDevice(snapshot, device_label, screen);
+}
+
+// The device line at the end of a run: what went over the bus, the safety
+// monitor's counts and the loop's timing.
+std::string InteractiveReport(InteractiveRig& rig, const haptics::HapticCycle& cycle,
+                              const haptics::HapticLoop& loop, const SessionModelSource& source) {
+  std::string report = DeviceReportLine(rig.label(), rig.bus_name(), rig.device()->counters(),
+                                        source, cycle.safety());
+  const haptics::LoopStats& stats = loop.stats();
+  char timing[200];
+  std::snprintf(timing, sizeof(timing),
+                " loop_cycles=%llu overruns=%llu station_stalls=%llu p99_period_error_us=%.0f",
+                static_cast<unsigned long long>(stats.cycles),
+                static_cast<unsigned long long>(stats.overruns),
+                static_cast<unsigned long long>(cycle.safety().stalls()),
+                static_cast<double>(stats.period_error.PercentileNs(0.99)) / 1000.0);
+  return report + timing;
+}
+
+// The 1 kHz side: the session's model in the coupled mode behind the
+// device, running and armed; stopped (and the CAN log closed) by Stop() or
+// the destructor.
+class CoupledLoop {
+ public:
+  CoupledLoop(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+              double time_limit_s, InteractiveRig* rig)
+      : rig_(rig),
+        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_,
+                 &published_),
+        cycle_(rig->device(), session_.source(), CycleOptionsFor(run.params.dt_s)),
+        loop_(&cycle_, LoopOptionsFor(run.params.dt_s)) {
+    session_.Start(rig->initial_state().insertion_m, rig->initial_state().roll_rad);
+    cycle_.SetInitialDeviceState(rig->initial_state());
+    loop_.Start();
+    if (!loop_.ArmAfter(20, 2.0)) {
+      Stop();
+      throw std::runtime_error("the haptic loop did not start");
+    }
+  }
+  ~CoupledLoop() { Stop(); }
+
+  void Stop() {
+    loop_.Stop();
+    rig_->CloseLog();
+  }
+  // UI thread: copies the loop's latest publication when there is a new one.
+  bool TakePublication(std::uint64_t* sequence, model::ModelState* state,
+                       model::StepOutput* output, PanelNumbers* numbers) {
+    // Only copies under the lock (the loop skips a publication meanwhile).
+    std::lock_guard<std::mutex> lock(published_mutex_);
+    if (published_.sequence == *sequence) return false;
+    *state = published_.state;
+    *output = published_.output;
+    *numbers = published_.numbers;
+    *sequence = published_.sequence;
+    return true;
+  }
+  haptics::HapticSnapshot Latest() const {
+    haptics::HapticSnapshot snapshot;
+    loop_.latest().Load(&snapshot);
+    return snapshot;
+  }
+  // What the operator does, to the loop: the model's controls (knobs, view,
+  // X-ray) and repeats; a repeat re-arms a fault that needs it.
+  void SetControls(const ModelControls& controls) { model_controls_.Store(controls); }
+  void Repeat(haptics::SafetyFault fault) {
+    session_.RequestRepeat();
+    // A transient fault clears by itself; a hard one needs the re-arm.
+    if (fault != haptics::SafetyFault::kNone && !haptics::IsTransient(fault)) {
+      loop_.RequestRearm();
+    }
+  }
+  // After Stop().
+  InteractiveResult Finish() {
+    InteractiveResult result = session_.Finish();
+    result.device_report = InteractiveReport(*rig_, cycle_, loop_, *session_.source());
+    return result;
+  }
+
+ private:
+  static haptics::CycleOptions CycleOptionsFor(double period_s) {
+    haptics::CycleOptions options;
+    options.period_s = period_s;
+    options.control.mode = haptics::ControlMode::kCoupled;
+    return options;
+  }
+  static haptics::LoopOptions LoopOptionsFor(double period_s) {
+    haptics::LoopOptions options;
+    options.period_s = period_s;
+    return options;
+  }
+
+  InteractiveRig* rig_;
+  haptics::SeqLock<ModelControls> model_controls_;
+  std::mutex published_mutex_;
+  Published published_;
+  LoopSession session_;
+  haptics::HapticCycle cycle_;
+  haptics::HapticLoop loop_;
+};
+
+// The training screen on the UI thread until the trainee quits or picks
+// another case or scope: composes the screen from the loop's latest
+// publication, polls keys and mouse, hands the controls to the loop and the
+// keyboard's hand target to the simulated hand. Returns the chosen case and
+// scope when the run is to switch.
+struct ScreenExit {
+  std::optional<int> next_case;
+  std::optional<int> next_scope;
+};
+
+ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
+                             const ves::v1::LessonAids* lesson_aids,
+                             const InteractiveChoices* choices, const std::string& device_label,
+                             ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
+                             haptics::SeqLock<HandTarget>* hand) {
+  ui::ControlState controls;
+  // A lesson's aids that are off stay off, whatever the keys and panel ask.
+  auto enforce_aids = [lesson_aids](ui::ControlState* c) {
+    if (lesson_aids == nullptr) return;
+    if (!lesson_aids->fluoroscopy_allowed()) c->fluoroscopy_visible = false;
+    if (!lesson_aids->wireframe_allowed() && c->view_mode == training::ViewMode::kWireframe) {
+      c->view_mode = training::ViewMode::kFlat;
+    }
+  };
+  enforce_aids(&controls);
+  ui::ScreenModel screen;
+  screen.case_names = {colon_case.id()};
+  screen.scope_names = {"default"};
+  screen.fluoroscopy_allowed = lesson_aids == nullptr || lesson_aids->fluoroscopy_allowed();
+  if (choices != nullptr && !choices->case_names.empty() && !choices->scope_names.empty()) {
+    screen.case_names = choices->case_names;
+    screen.scope_names = choices->scope_names;
+    controls.case_choice = choices->current_case;
+    controls.scope_choice = choices->current_scope;
+  }
+  render::SceneGeometry scene;
+  model::ModelState shown_state;
+  model::StepOutput shown_output;
+  PanelNumbers numbers;
+  std::uint64_t shown_sequence = 0;
+  while (!controls.quit_requested) {
+    if (loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers)) {
+      render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
+    }
+    const haptics::HapticSnapshot snapshot = loop->Latest();
+    FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
+    cv::Mat endoscope;
+    cv::Mat fluoroscopy;
+    if (shown_sequence > 0) {
+      FluoroscopyControls fluoro;
+      fluoro.yaw_rad = controls.fluoro_yaw_rad;
+      fluoro.pitch_rad = controls.fluoro_pitch_rad;
+      fluoro.zoom = controls.fluoro_zoom;
+      fluoro.damage_display = controls.damage_display;
+      endoscope = views->Endoscope(scene, controls.view_mode);
+      if (controls.fluoroscopy_visible) fluoroscopy = views->Fluoroscopy(scene, fluoro);
+    }
+    window->Show(ui::ComposeScreen(window->layout(), endoscope, fluoroscopy, screen, controls));
+    window->Poll(kPollMs, screen, &controls);
+    enforce_aids(&controls);
+    if (controls.repeat_requested && choices != nullptr &&
+        (controls.case_choice != choices->current_case ||
+         controls.scope_choice != choices->current_scope)) {
+      // Another case or scope: this run ends, the caller starts that one.
+      return {controls.case_choice, controls.scope_choice};
+    }
+    if (controls.repeat_requested) {
+      // The hand stays where it is; the new session maps the model onto it.
+      controls.repeat_requested = false;
+      loop->Repeat(snapshot.fault);
+    }
+    hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
+    loop->SetControls(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
+                                    controls.view_mode, controls.fluoroscopy_visible});
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -237,182 +492,17 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
                                  const InteractiveChoices* choices) {
-  ui::StationWindows windows;  // throws first when there is no display
-  if (lesson_aids != nullptr) windows.SetFluoroscopyAllowed(lesson_aids->fluoroscopy_allowed());
-  // Tiled rather than stacked at the screen's corner: the two views one above
-  // the other, the panel to their right (Qt's toolbar makes windows wide).
-  cv::moveWindow(ui::StationWindows::kEndoscopeWindow, 0, 0);
-  cv::moveWindow(ui::StationWindows::kFluoroscopyWindow, 0, kViewHeight + kWindowMargin);
-  cv::moveWindow(ui::StationWindows::kPanelWindow, kQtWindowWidth + kWindowMargin, 0);
+  ui::TrainingWindow window;  // throws first when there is no display
   SessionViews views(run.params, colon_case);
-
-  // The bus: SocketCAN to the real device, or a socketpair to the simulated one.
-  const bool simulated = !device.can_bus.has_value();
-  std::optional<haptics::CanBus> device_end;
-  haptics::CanBus host_end = [&] {
-    if (!simulated) return std::move(*device.can_bus);
-    auto [host, sim] = haptics::CanBus::CreateSocketPair();
-    device_end.emplace(std::move(sim));
-    return std::move(host);
-  }();
-  const std::string bus_name = simulated ? "socketpair" : host_end.name();
-  haptics::SimulatedBallDriveOptions device_options;
-  device_options.period_s = run.params.dt_s;
-  haptics::Ves4DeviceOptions driver_options;
-  driver_options.period_s = run.params.dt_s;
-  haptics::Ves4Device driver(std::move(host_end), device_options.params, driver_options);
-  std::unique_ptr<haptics::CanFrameRecorder> recorder;
-  if (!device.can_log.empty()) {
-    recorder = std::make_unique<haptics::CanFrameRecorder>(
-        device.can_log, simulated ? "sim0" : bus_name, haptics::MonotonicToEpochOffsetSeconds());
-    driver.SetRecorder(recorder.get());
-  }
   haptics::SeqLock<HandTarget> hand;
-  std::unique_ptr<haptics::SimulatedBallDrive> simulated_device;
-  std::unique_ptr<SimulatedHandThread> hand_thread;
-  if (simulated) {
-    simulated_device =
-        std::make_unique<haptics::SimulatedBallDrive>(std::move(*device_end), device_options);
-    hand_thread = std::make_unique<SimulatedHandThread>(simulated_device.get(), &hand);
-  }
-  haptics::DeviceState device_state;
-  if (!haptics::BringUpDevice(&driver, &device_state, 2.0)) {
-    throw std::runtime_error("the VES-IV on " + bus_name +
-                             " did not become operational within 2 s");
-  }
-
-  haptics::SeqLock<ModelControls> model_controls;
-  std::mutex published_mutex;
-  Published published;
-  LoopSession session(run, colon_case, time_limit_s, &model_controls, &published_mutex,
-                      &published);
-  session.Start(device_state.insertion_m, device_state.roll_rad);
-  haptics::CycleOptions cycle_options;
-  cycle_options.period_s = run.params.dt_s;
-  cycle_options.control.mode = haptics::ControlMode::kCoupled;
-  haptics::HapticCycle cycle(&driver, session.source(), cycle_options);
-  cycle.SetInitialDeviceState(device_state);
-  haptics::LoopOptions loop_options;
-  loop_options.period_s = run.params.dt_s;
-  haptics::HapticLoop loop(&cycle, loop_options);
-  loop.Start();
-  const auto stop_all = [&] {
-    loop.Stop();
-    if (hand_thread) hand_thread->Stop();
-    if (recorder) recorder->Close();
-  };
-  if (!loop.ArmAfter(20, 2.0)) {
-    stop_all();
-    throw std::runtime_error("the haptic loop did not start");
-  }
-
-  ui::ControlState controls;
-  // A lesson's aids that are off stay off, whatever the keys and panel ask.
-  auto enforce_aids = [lesson_aids](ui::ControlState* c) {
-    if (lesson_aids == nullptr) return;
-    if (!lesson_aids->fluoroscopy_allowed()) c->fluoroscopy_visible = false;
-    if (!lesson_aids->wireframe_allowed() && c->view_mode == ui::ViewMode::kWireframe) {
-      c->view_mode = ui::ViewMode::kPolygon;
-    }
-  };
-  enforce_aids(&controls);
-  render::SceneGeometry scene;
-  model::ModelState shown_state;
-  model::StepOutput shown_output;
-  ui::PanelModel panel;
-  panel.case_names = {colon_case.id()};
-  panel.scope_names = {"default"};
-  if (choices != nullptr && !choices->case_names.empty() && !choices->scope_names.empty()) {
-    panel.case_names = choices->case_names;
-    panel.scope_names = choices->scope_names;
-    controls.case_choice = choices->current_case;
-    controls.scope_choice = choices->current_scope;
-  }
-  std::optional<int> next_case;
-  std::optional<int> next_scope;
-  PanelNumbers numbers;
-  std::uint64_t shown_sequence = 0;
-  try {
-    while (!controls.quit_requested) {
-      bool fresh = false;
-      {
-        // Only copies under the lock (the loop skips a publication meanwhile).
-        std::lock_guard<std::mutex> lock(published_mutex);
-        if (published.sequence != shown_sequence) {
-          shown_state = published.state;
-          shown_output = published.output;
-          numbers = published.numbers;
-          shown_sequence = published.sequence;
-          fresh = true;
-        }
-      }
-      if (fresh) {
-        render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
-        panel.inserted_m = shown_state.inserted_m;
-        panel.tip_arc_m = shown_state.tip_arc_m;
-      }
-      haptics::HapticSnapshot snapshot;
-      loop.latest().Load(&snapshot);
-      panel.session_state = StateText(numbers, snapshot.fault);
-      panel.elapsed_s = numbers.elapsed_s;
-      // The gauge: what the motors render to the hand, + resists insertion.
-      panel.base_force_N = -snapshot.base_thrust_force_N;
-      panel.excessive_force_N = numbers.excessive_force_N;
-      panel.pain_s = numbers.pain_s;
-      panel.loop_s = numbers.loop_s;
-      panel.xray_s = numbers.xray_s;
-      panel.redout_fraction = numbers.redout_fraction;
-      if (shown_sequence > 0) {
-        FluoroscopyControls fluoro;
-        fluoro.yaw_rad = controls.fluoro_yaw_rad;
-        fluoro.pitch_rad = controls.fluoro_pitch_rad;
-        fluoro.zoom = controls.fluoro_zoom;
-        fluoro.damage_display = controls.damage_display;
-        const cv::Mat endoscope = views.Endoscope(scene, ToRenderMode(controls.view_mode));
-        const cv::Mat fluoroscopy =
-            controls.fluoroscopy_visible ? views.Fluoroscopy(scene, fluoro) : cv::Mat();
-        windows.Show(endoscope, fluoroscopy, ui::DrawControlPanel(panel, controls));
-      }
-      windows.Poll(kPollMs, panel, &controls);
-      enforce_aids(&controls);
-      if (controls.repeat_requested && choices != nullptr &&
-          (controls.case_choice != choices->current_case ||
-           controls.scope_choice != choices->current_scope)) {
-        // Another case or scope: this run ends, the caller starts that one.
-        next_case = controls.case_choice;
-        next_scope = controls.scope_choice;
-        break;
-      }
-      if (controls.repeat_requested) {
-        // The hand stays where it is; the new session maps the model onto it.
-        controls.repeat_requested = false;
-        session.RequestRepeat();
-        if (snapshot.fault != haptics::SafetyFault::kNone) loop.RequestRearm();
-      }
-      hand.Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
-      model_controls.Store(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
-                                         ToTrainingMode(controls.view_mode),
-                                         controls.fluoroscopy_visible});
-    }
-  } catch (...) {
-    stop_all();
-    throw;
-  }
-  stop_all();
-  InteractiveResult result = session.Finish();
-  result.next_case = next_case;
-  result.next_scope = next_scope;
-  result.device_report =
-      DeviceReportLine(simulated ? "sim" : "can:" + bus_name, bus_name, driver.counters(),
-                       *session.source(), cycle.safety().trips(), cycle.safety().fault());
-  const haptics::LoopStats& stats = loop.stats();
-  char timing[160];
-  std::snprintf(timing, sizeof(timing),
-                " loop_cycles=%llu overruns=%llu p99_period_error_us=%.0f",
-                static_cast<unsigned long long>(stats.cycles),
-                static_cast<unsigned long long>(stats.overruns),
-                static_cast<double>(stats.period_error.PercentileNs(0.99)) / 1000.0);
-  result.device_report += timing;
+  InteractiveRig rig(std::move(device), run.params.dt_s, &hand);
+  CoupledLoop loop(run, colon_case, time_limit_s, &rig);
+  const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
+                                            &window, &views, &loop, &hand);
+  loop.Stop();
+  InteractiveResult result = loop.Finish();
+  result.next_case = exit.next_case;
+  result.next_scope = exit.next_scope;
   return result;
 }
 

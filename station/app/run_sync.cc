@@ -4,6 +4,7 @@
 #include <ostream>
 #include <thread>
 
+#include "patient_db/case_format.h"
 #include "station/sync/uploader.h"
 
 namespace ves::station {
@@ -55,6 +56,18 @@ std::optional<ObtainedCase> ObtainCase(const std::optional<sync::ServerEndpoint>
   obtained.entry = *entry;
   obtained.colon_case = cache.Load(entry->sha256_hex);  // verified on read
   obtained.from_server = from_server;
+  return obtained;
+}
+
+bool IsCaseFileArgument(const std::string& arg) {
+  return patient_db::CaseFileKindOf(arg).has_value();
+}
+
+ObtainedCase ObtainCaseFile(const std::filesystem::path& path, sync::CaseCache& cache,
+                            const patient_db::ImportOptions& import) {
+  ObtainedCase obtained;
+  obtained.colon_case = patient_db::LoadCaseFile(path, import);
+  obtained.entry = cache.Put(obtained.colon_case);
   return obtained;
 }
 

@@ -5,6 +5,9 @@
 #include <optional>
 #include <string>
 
+#include <filesystem>
+
+#include "patient_db/case_import.h"
 #include "station/sync/case_cache.h"
 #include "station/sync/outbox.h"
 #include "station/sync/server_client.h"
@@ -31,6 +34,17 @@ struct ObtainedCase {
 std::optional<ObtainedCase> ObtainCase(const std::optional<sync::ServerEndpoint>& endpoint,
                                        const std::string& case_id, sync::CaseCache& cache,
                                        std::ostream& log);
+
+// `--case ARG` of run and sim: a path with a case file's extension
+// (.textproto, .vescase, .csv, .mrk.json: patient_db::CaseFileKindOf) is a
+// case file, anything else a case id.
+bool IsCaseFileArgument(const std::string& arg);
+
+// A case file (any format patient_db::LoadCaseFile reads, with `import` for
+// CSV and markups) loaded, validated and put into the offline cache, so the
+// session records it like a cached case. Throws patient_db::CaseError.
+ObtainedCase ObtainCaseFile(const std::filesystem::path& path, sync::CaseCache& cache,
+                            const patient_db::ImportOptions& import = {});
 
 struct DeliveryReport {
   int acknowledged{0};

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "station/render/fluoroscopy_labels.h"
 #include "station/render/mucosa_texture.h"
 
 namespace ves::station {
@@ -43,8 +44,17 @@ SessionViews::SessionViews(const model::ModelParams& params, const ves::v1::Colo
 
 SessionViews::~SessionViews() = default;
 
-cv::Mat SessionViews::Endoscope(const render::SceneGeometry& scene, render::EndoscopeMode mode) {
-  endoscope_->set_mode(mode);
+render::EndoscopeMode ToEndoscopeMode(training::ViewMode mode) {
+  switch (mode) {
+    case training::ViewMode::kWireframe: return render::EndoscopeMode::kWireframe;
+    case training::ViewMode::kFlat: return render::EndoscopeMode::kPolygon;
+    case training::ViewMode::kTextured: break;
+  }
+  return render::EndoscopeMode::kTexture;
+}
+
+cv::Mat SessionViews::Endoscope(const render::SceneGeometry& scene, training::ViewMode mode) {
+  endoscope_->set_mode(ToEndoscopeMode(mode));
   return endoscope_->Render(scene).image;
 }
 
@@ -54,8 +64,12 @@ cv::Mat SessionViews::Fluoroscopy(const render::SceneGeometry& scene,
   camera.yaw_rad = controls.yaw_rad;
   camera.pitch_rad = controls.pitch_rad;
   camera.zoom = controls.zoom;
+  // Enlarging looks at the scope's tip, not at the middle of the colon.
+  camera = render::CentreZoomOnTip(camera, scene.X_WTip.translation());
   fluoroscopy_->options().damage_display = controls.damage_display;
-  return fluoroscopy_->Render(scene, camera);
+  cv::Mat image = fluoroscopy_->Render(scene, camera);
+  render::DrawFluoroscopyLabels(render::CalcFluoroscopyLabels(camera, image.size()), &image);
+  return image;
 }
 
 }  // namespace ves::station

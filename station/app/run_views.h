@@ -9,6 +9,7 @@
 #include "station/render/fluoroscopy_view.h"
 #include "station/render/gl_context.h"
 #include "station/render/scene_geometry.h"
+#include "station/training/observation.h"
 #include "ves/v1/case.pb.h"
 
 // The two views of a running session (paper §4.2, §4.3), offscreen, for the
@@ -30,7 +31,7 @@ class SessionViews {
                int width = 640, int height = 480);
   ~SessionViews();
 
-  cv::Mat Endoscope(const render::SceneGeometry& scene, render::EndoscopeMode mode);
+  cv::Mat Endoscope(const render::SceneGeometry& scene, training::ViewMode mode);
   cv::Mat Fluoroscopy(const render::SceneGeometry& scene, const FluoroscopyControls& controls);
   const std::string& renderer() const { return context_->renderer(); }
 
@@ -40,6 +41,10 @@ class SessionViews {
   std::unique_ptr<render::FluoroscopyView> fluoroscopy_;
   render::FluoroscopyCamera base_camera_;
 };
+
+// The renderer's mode for the view mode a session records (and the UI
+// sets): the only translation between the two.
+render::EndoscopeMode ToEndoscopeMode(training::ViewMode mode);
 
 // The C-arm framing the whole colon at rest, centred on its bounding box.
 render::FluoroscopyCamera FrameColon(const model::ModelParams& params, double aspect);

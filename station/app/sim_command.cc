@@ -15,10 +15,13 @@
 #include "patient_db/case_format.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
+#include "station/app/run_sync.h"
 #include "station/app/scope_file.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
 #include "station/training/case_run.h"
+#include "station/sync/case_cache.h"
+#include "station/sync/station_paths.h"
 #include "station/training/session_file.h"
 
 namespace ves::station {
@@ -33,11 +36,17 @@ constexpr char kUsage[] =
     "usage: ves-station sim --case FILE [--scope FILE] (--push-force-N F | --insert-speed-mm-s V)\n"
     "                       --seconds T [--segments N] [--links n] [--stiff-colon] [--dt-ms DT]\n"
     "                       --csv OUT\n"
-    "   or: ves-station sim --case FILE --operator novice|expert --seconds T\n"
-    "                       [--session-out FILE.session] [--csv OUT] [--segments N] ...\n\n"
+    "   or: ves-station sim --case FILE|ID --operator novice|expert --seconds T\n"
+    "                       [--session-out FILE.session [--trainee ID] [--station-id S]]\n"
+    "                       [--csv OUT] [--segments N] [--data-dir DIR] ...\n\n"
+    "--case: a case file (.textproto, .vescase, .csv, .mrk.json) or the id of a case in the\n"
+    "station's offline cache. A --session-out file can be queued for upload with\n"
+    "`ves-station sync --add FILE.session` (it needs --trainee).\n"
     "Runs the endoscope-colon model (paper §3) on a case and writes one row per 10 ms:\n"
     "t_s,inserted_m,tip_arc_m,base_force_N,base_torque_Nm,peak_stretch_m,peak_stretch_arc_m,"
-    "peak_wall_force_N";
+    "peak_wall_force_N. With --operator: one summary line (docs/scoring.md).\n"
+    "Exit status (as run): 0 the session ran to its end (any outcome), 2 bad arguments/input,\n"
+    "1 failure (the model diverged, an output could not be written).";
 
 // Everything the run needs, parsed and checked; more driving modes (a
 // scripted operator) slot in as further fields and a branch in InputAt.
@@ -54,7 +63,24 @@ struct SimOptions {
   std::string csv_path;
   std::string operator_kind;  // scripted operator (docs/scoring.md); empty: push/speed
   std::string session_out;
+  std::string trainee_id;     // written into the session file (for `sync --add`)
+  std::string station_id;
+  std::string data_dir;       // the offline cache, for --case ID
 };
+
+// --case FILE, or the newest cached version of --case ID. Throws CaseError or
+// std::runtime_error (not cached).
+ves::v1::ColonCase LoadSimCase(const SimOptions& o) {
+  if (IsCaseFileArgument(o.case_path)) return patient_db::LoadCaseFile(o.case_path);
+  const sync::CaseCache cache(sync::ResolveStationPaths(o.data_dir).cases());
+  const auto entry = cache.FindLatest(o.case_path);
+  if (!entry) {
+    throw std::runtime_error("--case '" + o.case_path +
+                             "' is neither a case file (.textproto, .vescase, .csv, .mrk.json) "
+                             "nor a case in the offline cache " + cache.dir().string());
+  }
+  return cache.Load(entry->sha256_hex);
+}
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -77,8 +103,13 @@ SimOptions ParseSimOptions(const po::variables_map& vm) {
           "--operator drives the scope itself: drop --push-force-N/--insert-speed-mm-s");
     }
     if (vm.count("session-out")) o.session_out = vm["session-out"].as<std::string>();
-  } else if (vm.count("session-out")) {
-    throw UsageError("--session-out needs --operator");
+    if (vm.count("trainee")) o.trainee_id = vm["trainee"].as<std::string>();
+    if (vm.count("station-id")) o.station_id = vm["station-id"].as<std::string>();
+    if ((vm.count("trainee") || vm.count("station-id")) && o.session_out.empty()) {
+      throw UsageError("--trainee and --station-id go into the session file: give --session-out");
+    }
+  } else if (vm.count("session-out") || vm.count("trainee") || vm.count("station-id")) {
+    throw UsageError("--session-out, --trainee and --station-id need --operator");
   } else if (vm.count("push-force-N") == vm.count("insert-speed-mm-s")) {
     throw UsageError("give exactly one of --push-force-N F and --insert-speed-mm-s V");
   }
@@ -117,11 +148,12 @@ SimOptions ParseSimOptions(const po::variables_map& vm) {
   }
   o.dt_s = dt_ms * 1e-3;
   if (vm.count("csv")) o.csv_path = vm["csv"].as<std::string>();
+  o.data_dir = vm["data-dir"].as<std::string>();
   return o;
 }
 
 model::ModelParams BuildParams(const SimOptions& o) {
-  const ves::v1::ColonCase colon_case = patient_db::LoadCaseFile(o.case_path);
+  const ves::v1::ColonCase colon_case = LoadSimCase(o);
   ves::v1::EndoscopeSpec scope =
       o.scope_path.empty() ? training::DefaultEndoscopeSpec() : ReadScopeFile(o.scope_path);
   if (o.links) scope.set_link_count(static_cast<uint32_t>(*o.links));
@@ -185,7 +217,7 @@ int RunOperatorSim(const SimOptions& o) {
   ves::v1::EndoscopeSpec scope;
   training::CaseModelOptions options;
   try {
-    colon_case = patient_db::LoadCaseFile(o.case_path);
+    colon_case = LoadSimCase(o);
     scope = o.scope_path.empty() ? training::DefaultEndoscopeSpec() : ReadScopeFile(o.scope_path);
     if (o.links) scope.set_link_count(static_cast<uint32_t>(*o.links));
     options.segments = o.segments;
@@ -219,6 +251,9 @@ int RunOperatorSim(const SimOptions& o) {
   const training::RunResult result = training::RunScriptedCase(
       colon_case, scope, options, o.operator_kind, o.seconds, now_ms, &record, on_step, o.dt_s);
   if (!o.session_out.empty()) {
+    record.set_trainee_id(o.trainee_id);
+    record.set_station_id(o.station_id);
+    record.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(colon_case));
     std::ofstream out(o.session_out, std::ios::binary);
     out << training::EncodeSessionFile(record);
     if (!out.flush()) {
@@ -227,6 +262,11 @@ int RunOperatorSim(const SimOptions& o) {
     }
   }
   std::cout << training::SummaryLine(result) << "\n";
+  // As `run`: a session that ran to its end is a success, whatever its outcome.
+  if (result.diverged) {
+    std::cerr << kName << ": the model diverged: the session did not run to its end\n";
+    return 1;
+  }
   return csv.is_open() && !csv.good() ? 1 : 0;
 }
 
@@ -235,7 +275,8 @@ int RunOperatorSim(const SimOptions& o) {
 int RunSimCommand(const CommandArgs& args) {
   po::options_description desc("options");
   desc.add_options()("help,h", "show this help")(
-      "case", po::value<std::string>(), "colon case file (.textproto, .vescase, ...)")(
+      "case", po::value<std::string>(),
+      "colon case file (.textproto, .vescase, .csv, .mrk.json) or cached case id")(
       "scope", po::value<std::string>(), "EndoscopeSpec textproto (default: adult colonoscope)")(
       "push-force-N", po::value<double>(), "constant push force at the base, N")(
       "insert-speed-mm-s", po::value<double>(), "constant insertion speed, mm/s")(
@@ -246,7 +287,11 @@ int RunSimCommand(const CommandArgs& args) {
       "dt-ms", po::value<double>()->default_value(1.0), "time step, ms")(
       "csv", po::value<std::string>(), "output CSV path")(
       "operator", po::value<std::string>(), "scripted operator: novice or expert")(
-      "session-out", po::value<std::string>(), "with --operator: write the session file here");
+      "session-out", po::value<std::string>(), "with --operator: write the session file here")(
+      "trainee", po::value<std::string>(), "with --session-out: the trainee the session is for")(
+      "station-id", po::value<std::string>(), "with --session-out: this station's name")(
+      "data-dir", po::value<std::string>()->default_value(""),
+      "station data folder, for --case ID (default $VES_STATION_DIR or ~/.ves-station)");
   po::variables_map vm;
   if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   SimOptions options;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,7 @@
 #include "station/app/run_views.h"
 #include "station/model/model.h"
 #include "station/render/endoscope_view.h"
+#include "station/render/fluoroscopy_labels.h"
 #include "station/render/fluoroscopy_view.h"
 #include "station/render/model_scene.h"
 #include "station/render/mucosa_texture.h"
@@ -32,10 +34,14 @@ constexpr double kSettle_s = 0.5;  // knobs turned and the model settled after i
 
 constexpr char kUsage[] =
     "usage: ves-station snapshot --case FILE --insert-mm L [--knob-ud DEG --knob-lr DEG]\n"
+    "                            [--c-arm-deg A [--tilt-deg T]] [--zoom Z]\n"
     "                            [--width W --height H] [--segments N] --out DIR\n\n"
     "Inserts the scope L mm with the model (position-driven), turns the knobs, and writes\n"
     "endoscope_wireframe.png, endoscope_polygon.png, endoscope_texture.png,\n"
-    "fluoroscopy_ap.png and fluoroscopy_lateral.png into DIR.";
+    "fluoroscopy_ap.png and fluoroscopy_lateral.png into DIR; with --c-arm-deg also\n"
+    "fluoroscopy_c-arm.png from that C-arm angle (0 AP, 90 lateral). --zoom enlarges every\n"
+    "fluoroscopy image around the scope's tip. Each carries its view (AP/LAT/OBL), the\n"
+    "patient's side at its edges (R/L, A/P) and a scale bar.";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -50,6 +56,9 @@ struct SnapshotOptions {
   int width{640};
   int height{480};
   int segments{150};
+  std::optional<double> c_arm_rad;
+  double tilt_rad{0.0};
+  double zoom{1.0};
   std::filesystem::path out_dir;
 };
 
@@ -82,6 +91,12 @@ SnapshotOptions ParseOptions(const po::variables_map& vm) {
   if (o.segments < 3 || o.segments > 2000) {
     throw UsageError("--segments " + std::to_string(o.segments) + " must be in [3, 2000]");
   }
+  if (vm.count("c-arm-deg")) o.c_arm_rad = Checked(vm, "c-arm-deg", -180.0, 180.0) * kDegToRad;
+  o.tilt_rad = Checked(vm, "tilt-deg", -90.0, 90.0) * kDegToRad;
+  if (!vm["tilt-deg"].defaulted() && !o.c_arm_rad) {
+    throw UsageError("--tilt-deg needs --c-arm-deg");
+  }
+  o.zoom = Checked(vm, "zoom", 0.25, 8.0);
   o.out_dir = vm["out"].as<std::string>();
   return o;
 }
@@ -156,10 +171,21 @@ int RunSnapshot(const SnapshotOptions& o) {
     fluoroscopy_options.height = o.height;
     fluoroscopy_options.damage_display = true;
     render::FluoroscopyView fluoroscopy(&context, fluoroscopy_options);
-    render::FluoroscopyCamera camera = FrameColon(params, static_cast<double>(o.width) / o.height);
-    Write(o.out_dir / "fluoroscopy_ap.png", fluoroscopy.Render(scene, camera));
-    camera.yaw_rad = 90.0 * kDegToRad;
-    Write(o.out_dir / "fluoroscopy_lateral.png", fluoroscopy.Render(scene, camera));
+    render::FluoroscopyCamera framing =
+        FrameColon(params, static_cast<double>(o.width) / o.height);
+    framing.zoom = o.zoom;
+    const auto x_ray = [&](const char* file, double yaw_rad, double tilt_rad) {
+      render::FluoroscopyCamera camera = framing;
+      camera.yaw_rad = yaw_rad;
+      camera.pitch_rad = tilt_rad;
+      camera = render::CentreZoomOnTip(camera, scene.X_WTip.translation());
+      cv::Mat image = fluoroscopy.Render(scene, camera);
+      render::DrawFluoroscopyLabels(render::CalcFluoroscopyLabels(camera, image.size()), &image);
+      Write(o.out_dir / file, image);
+    };
+    x_ray("fluoroscopy_ap.png", 0.0, 0.0);
+    x_ray("fluoroscopy_lateral.png", 90.0 * kDegToRad, 0.0);
+    if (o.c_arm_rad) x_ray("fluoroscopy_c-arm.png", *o.c_arm_rad, o.tilt_rad);
     std::cout << "inserted_m=" << state.inserted_m << " tip_arc_m=" << state.tip_arc_m
               << " renderer=\"" << context.renderer() << "\" out=" << o.out_dir.string() << "\n";
   } catch (const std::exception& e) {  // RenderError (no EGL/GLES), write failures
@@ -182,6 +208,12 @@ int RunSnapshotCommand(const CommandArgs& args) {
       "width", po::value<int>()->default_value(640), "image width, px")(
       "height", po::value<int>()->default_value(480), "image height, px")(
       "segments", po::value<int>()->default_value(150), "colon segment points N")(
+      "c-arm-deg", po::value<double>(),
+      "C-arm angle about the patient's long axis, degrees (0 AP, 90 lateral): adds "
+      "fluoroscopy_c-arm.png")(
+      "tilt-deg", po::value<double>()->default_value(0.0), "with --c-arm-deg: tilt, degrees")(
+      "zoom", po::value<double>()->default_value(1.0),
+      "fluoroscopy enlargement, 0.25..8, centred on the scope's tip")(
       "out", po::value<std::string>(), "output directory (created)");
   po::variables_map vm;
   if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;

@@ -29,6 +29,10 @@ struct DeviceState {
   bool error_passive{false};     // seen since the last re-arm (sticky)
   bool link_down{false};         // the transport failed (closed / read error)
   bool device_emergency{false};  // the device sent an EMCY (sticky until re-arm)
+  // The device sent EMCY "heartbeat lost": it cut its motors because the
+  // station's heartbeat stopped (sticky until the station sends NMT start).
+  bool device_missed_heartbeat{false};
+  bool motors_enabled{false};  // TPDO2 status bit 1: the device drives its motors
   bool operator==(const DeviceState&) const = default;
 };
 

@@ -54,6 +54,7 @@ HapticCycle::HapticCycle(HapticDevice* device, BaseResponseSource* source, Cycle
 }
 
 const CycleOutput& HapticCycle::Run(double now_s) {
+  if (!start_s_) start_s_ = now_s;
   device_->Read(now_s, &device_state_);
   const double dt_s = options_.period_s;
   const bool coupled = options_.control.mode == ControlMode::kCoupled;
@@ -66,6 +67,14 @@ const CycleOutput& HapticCycle::Run(double now_s) {
       !AllFinite(device_state_) || (coupled && !(std::isfinite(output_.base.thrust_force_N) &&
                                                  std::isfinite(output_.base.roll_torque_Nm)));
   safety_.Check(device_state_, now_s, non_finite, model_count);
+  if (safety_.recoveries() != seen_recoveries_) {
+    // A transient fault cleared: track from where the scope is now, not
+    // from where the targets were when the output stopped.
+    seen_recoveries_ = safety_.recoveries();
+    controller_ = CalcInitialControllerState(device_state_);
+    spdlog::warn("haptics: bus healthy again at t={:.3f} s; output fades in over {:.1f} s",
+                 now_s - *start_s_, safety_.limits().fade_in_s);
+  }
 
   MotorCommand command{};  // powered = false: 0 V
   if (!safety_.safe()) {
@@ -86,20 +95,39 @@ const CycleOutput& HapticCycle::Run(double now_s) {
     if (bad_command) {
       safety_.Trip(SafetyFault::kNonFinite);
       command = MotorCommand{};
+    } else {
+      command.thrust_force_N *= safety_.output_scale();
+      command.roll_torque_Nm *= safety_.output_scale();
     }
   }
   output_.fault = safety_.fault();
+  output_.output_scale = safety_.output_scale();
   output_.command = command;
-  if (safety_.trips() != reported_trips_) {
+  const double t_s = now_s - *start_s_;
+  if (safety_.hard_faults() != reported_hard_) {
     // Entering the safe state: EMCY on the bus and one log line.
-    reported_trips_ = safety_.trips();
+    reported_hard_ = safety_.hard_faults();
     device_->SendEmergency(now_s, ToEmcyCode(safety_.fault()));
-    spdlog::error("haptics: safe state at t={:.6f} s: {} (zero output until re-arm)", now_s,
+    spdlog::error("haptics: safe state at t={:.3f} s: {} (zero output until re-arm)", t_s,
                   ToString(safety_.fault()));
+  } else if (safety_.transient_faults() != reported_transient_) {
+    reported_transient_ = safety_.transient_faults();
+    device_->SendEmergency(now_s, ToEmcyCode(safety_.fault()));
+    spdlog::warn("haptics: transient fault at t={:.3f} s: {} (output held at zero until the bus "
+                 "is healthy)",
+                 t_s, ToString(safety_.fault()));
+  }
+  if (IsTransient(safety_.fault()) &&
+      (device_state_.device_missed_heartbeat || !device_state_.motors_enabled ||
+       device_state_.device_nmt_state != NmtState::kOperational) &&
+      now_s - last_enable_s_ >= kEnableRetry_s) {
+    enable_pending_ = true;  // a device that cut its motors waits for NMT start
+    device_state_.device_missed_heartbeat = false;
   }
   if (enable_pending_) {
     device_->Enable(now_s);  // before this period's RPDO and SYNC
     enable_pending_ = false;
+    last_enable_s_ = now_s;
   }
   device_->Write(now_s, command);
   return output_;

@@ -6,7 +6,13 @@
 // both call Run() once per period, so tests exercise exactly the loop's code.
 // Run() never throws or allocates; the one log line on a fault transition is
 // the exception that proves the rule (it happens once per fault).
+// In a transient fault (SafetyMonitor) the cycle sends NMT start every
+// kEnableRetry_s while the device does not drive its motors, so a device
+// that cut them (it lost the station's heartbeat during a stall) comes back
+// without a re-arm; when the fault clears, the controller's targets are put
+// on the measured state and the command fades in.
 #include <cstdint>
+#include <optional>
 
 #include "station/haptics/base_response.h"
 #include "station/haptics/controllers.h"
@@ -31,6 +37,7 @@ struct CycleOptions {
 struct CycleOutput {
   MotorCommand command{};  // what was written this period
   SafetyFault fault{SafetyFault::kNotArmed};
+  double output_scale{0.0};  // share of the controller's command sent (fade-in after a transient)
   BaseResponse base{};  // coupled mode: the model response used
   bool operator==(const CycleOutput&) const = default;
 };
@@ -43,6 +50,8 @@ class HapticCycle {
  public:
   // `source` is needed for the coupled mode only (may be null otherwise).
   HapticCycle(HapticDevice* device, BaseResponseSource* source, CycleOptions options);
+
+  static constexpr double kEnableRetry_s = 0.020;
 
   const CycleOutput& Run(double now_s);
   // Leaves the safe state: clears the latched fault and sticky bus flags,
@@ -66,8 +75,12 @@ class HapticCycle {
   DeviceState device_state_{};
   ControllerState controller_{};
   CycleOutput output_{};
-  std::uint64_t reported_trips_{0};
+  std::uint64_t reported_hard_{0};
+  std::uint64_t reported_transient_{0};
+  std::uint64_t seen_recoveries_{0};
   bool enable_pending_{false};
+  double last_enable_s_{kNever_s};
+  std::optional<double> start_s_;  // the first period: log times are relative to it
 };
 
 }  // namespace ves::haptics

@@ -45,6 +45,7 @@ HapticSnapshot MakeSnapshot(std::uint64_t cycle, double t_s, const DeviceState& 
   snapshot.base_thrust_force_N = output.base.thrust_force_N;
   snapshot.base_roll_torque_Nm = output.base.roll_torque_Nm;
   snapshot.fault = output.fault;
+  snapshot.output_scale = output.output_scale;
   return snapshot;
 }
 

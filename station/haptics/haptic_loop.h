@@ -35,6 +35,7 @@ struct HapticSnapshot {
   double base_thrust_force_N{0.0};
   double base_roll_torque_Nm{0.0};
   SafetyFault fault{SafetyFault::kNotArmed};
+  double output_scale{0.0};  // 1: full output; below 1: fading in after a transient fault
 };
 
 HapticSnapshot MakeSnapshot(std::uint64_t cycle, double t_s, const DeviceState& device,

@@ -22,9 +22,8 @@ ModelBaseResponse::ModelBaseResponse(model::ModelParams params, double insertion
 }
 
 BaseResponse ModelBaseResponse::Update(double insertion_m, double roll_rad, double /*dt_s*/) {
-  // Virtual coupling: F_c = k_c·(x_device − x_model) pushes the model's base.
-  const double coupling_force_N =
-      coupling_stiffness_N_per_m_ * (insertion_m + insertion_offset_m_ - state_.inserted_m);
+  const double coupling_force_N = CalcCouplingForce_N(
+      coupling_stiffness_N_per_m_, insertion_m, insertion_offset_m_, state_.inserted_m);
   model::StepInput input;
   input.thrust_mode = model::ThrustMode::kForce;
   input.push_force_N = coupling_force_N;

@@ -1,6 +1,7 @@
 #include "station/haptics/sim_rig.h"
 
 #include <chrono>
+#include <stdexcept>
 
 #include "station/haptics/realtime.h"
 
@@ -39,6 +40,14 @@ const CycleOutput& SimulatedRig::Step() {
   return output;
 }
 
+void SimulatedRig::StallStation(double seconds) {
+  const double end_s = now_s_ + seconds;
+  while (now_s_ < end_s) {
+    device_->Service(now_s_);
+    now_s_ += options_.cycle.period_s;
+  }
+}
+
 SimulatedDeviceThread::SimulatedDeviceThread(SimulatedBallDrive* device, bool realtime,
                                              int realtime_priority)
     : device_(device) {
@@ -57,9 +66,22 @@ void SimulatedDeviceThread::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-bool BringUpDevice(Ves4Device* driver, DeviceState* state, double timeout_s) {
+InlineSimulatedDevice::InlineSimulatedDevice(Ves4Device* driver, SimulatedBallDrive* device)
+    : driver_(driver), device_(device) {
+  if (driver_ == nullptr || device_ == nullptr) {
+    throw std::invalid_argument("InlineSimulatedDevice needs a driver and a device");
+  }
+}
+
+void InlineSimulatedDevice::Write(double now_s, const MotorCommand& command) {
+  driver_->Write(now_s, command);
+  if (before_service_) before_service_(now_s, device_);
+  device_->Service(now_s);
+}
+
+bool BringUpDevice(HapticDevice* driver, DeviceState* state, double timeout_s) {
   const double start_s = MonotonicSeconds();
-  driver->SendNmt(start_s, NmtCommandSpecifier::kStart);
+  driver->Enable(start_s);
   // Unpowered SYNCs so the device answers with PDOs once operational.
   while (MonotonicSeconds() - start_s < timeout_s) {
     const double now_s = MonotonicSeconds();

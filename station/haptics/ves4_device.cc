@@ -77,6 +77,7 @@ void Ves4Device::Handle(double now_s, const can_frame& frame, DeviceState* state
       const SensorSample sample = *DecodeSensorFrame(frame);
       state->force_N = sample.axial_force_N;
       state->torque_Nm = sample.axial_torque_Nm;
+      state->motors_enabled = (sample.status & kStatusMotorsEnabled) != 0;
       state->last_sensor_time_s = now_s;
       if (last_sensor_counter_ != 0) {
         // TPDO2 echoes the SYNC counter: a gap is that many lost sensor PDOs.
@@ -103,7 +104,11 @@ void Ves4Device::Handle(double now_s, const can_frame& frame, DeviceState* state
       if (emcy.node_id != kHostNodeId) {
         ++counters_.emcy_received;
         counters_.last_emcy_code = static_cast<std::uint16_t>(emcy.code);
-        if (emcy.code != EmcyCode::kNoError) state->device_emergency = true;
+        if (emcy.code == EmcyCode::kHeartbeatLost) {
+          state->device_missed_heartbeat = true;  // transient: NMT start brings it back
+        } else if (emcy.code != EmcyCode::kNoError) {
+          state->device_emergency = true;
+        }
       }
       break;
     }
@@ -163,6 +168,7 @@ void Ves4Device::ClearFaultFlags(DeviceState* state) {
   state->error_passive = false;
   state->link_down = false;
   state->device_emergency = false;
+  state->device_missed_heartbeat = false;
 }
 
 void Ves4Device::SendNmt(double now_s, NmtCommandSpecifier command) {

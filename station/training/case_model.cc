@@ -1,5 +1,8 @@
 #include "station/training/case_model.h"
 
+#include <algorithm>
+#include <cctype>
+
 #include <stdexcept>
 
 namespace ves::training {
@@ -29,6 +32,20 @@ m::TissueParams TissueFromProto(const ves::v1::TissueParams& t) {
 double Or(double value, double fallback) { return value != 0.0 ? value : fallback; }
 
 }  // namespace
+
+std::string RegionNameAt(const m::ColonSpec& colon, double arc_m) {
+  if (colon.points.empty()) return "unspecified";
+  // Points are in arc order: the last one at or before arc_m.
+  const auto after = std::upper_bound(
+      colon.points.begin(), colon.points.end(), arc_m,
+      [](double arc, const m::ColonPoint& point) { return arc < point.arc_m; });
+  const m::ColonPoint& point = after == colon.points.begin() ? colon.points.front() : *(after - 1);
+  // The proto's enum names, REGION_SPLENIC_FLEXURE -> "splenic-flexure".
+  std::string name = ves::v1::Region_Name(static_cast<ves::v1::Region>(point.region));
+  if (name.rfind("REGION_", 0) == 0) name.erase(0, 7);
+  for (char& c : name) c = c == '_' ? '-' : static_cast<char>(std::tolower(c));
+  return name.empty() ? "unspecified" : name;
+}
 
 m::ColonSpec ColonSpecFromCase(const ves::v1::ColonCase& colon_case,
                                const CaseModelOptions& options) {

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <string>
+
 #include "station/model/model.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/endoscope.pb.h"
@@ -21,6 +23,11 @@ ves::model::ColonSpec ColonSpecFromCase(const ves::v1::ColonCase& colon_case,
 // A field left at 0 takes the model's default (station/model/endoscope.h), so a
 // scope file may give only what differs. Throws std::invalid_argument.
 ves::model::EndoscopeParams EndoscopeFromSpec(const ves::v1::EndoscopeSpec& spec);
+
+// The region of the colon at arc length `arc_m` (the segment point at or
+// before it) as the case format names it: "rectum", "sigmoid",
+// "splenic-flexure", ...; "unspecified" for an empty colon.
+std::string RegionNameAt(const ves::model::ColonSpec& colon, double arc_m);
 
 // The default adult colonoscope as a spec (docs/model.md lists the sources).
 ves::v1::EndoscopeSpec DefaultEndoscopeSpec();

@@ -91,6 +91,7 @@ void MetricsAccumulator::Add(const StepObservation& o) {
 
   if (!cecum_time_s_ && o.tip_arc_m >= th.cecum_arc_m) {
     cecum_time_s_ = o.t_s;
+    cecum_inserted_m_ = o.inserted_m;
     toggles_.push_back({.t_s = o.t_s,
                         .kind = EventKind::kCecumReached,
                         .arc_m = o.tip_arc_m,
@@ -128,6 +129,7 @@ Metrics MetricsAccumulator::Result() const {
   m.duration_s = t_s_;
   m.completed = cecum_time_s_.has_value();
   m.time_to_cecum_s = cecum_time_s_.value_or(0.0);
+  m.inserted_at_cecum_m = cecum_time_s_ ? cecum_inserted_m_ : 0.0;
   m.peak_insertion_force_N = peak_force_N_;
   m.mean_insertion_force_N = running_s_ > 0.0 ? force_integral_N_s_ / running_s_ : 0.0;
   m.excessive_force_episodes = static_cast<std::uint32_t>(force.episodes().size());

@@ -18,6 +18,7 @@ struct Metrics {
   double duration_s{0.0};
   bool completed{false};
   double time_to_cecum_s{0.0};  // 0 when not completed
+  double inserted_at_cecum_m{0.0};  // inserted length at that moment; 0 when not completed
   double peak_insertion_force_N{0.0};
   double mean_insertion_force_N{0.0};
   std::uint32_t excessive_force_episodes{0};
@@ -108,6 +109,7 @@ class MetricsAccumulator {
   double t_s_{0.0};
   double running_s_{0.0};
   std::optional<double> cecum_time_s_;
+  double cecum_inserted_m_{0.0};
   double peak_force_N_{0.0};
   double force_integral_N_s_{0.0};
   // The peak is taken of the force averaged over kForceWindow_s (what a hand

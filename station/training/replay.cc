@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "station/training/case_model.h"
 #include "station/training/scripted_operator.h"
 #include "station/training/uuid.h"
 
@@ -18,6 +19,7 @@ RunResult ResultOf(const SessionRunner& runner) {
   r.score = s.score();
   r.steps = s.steps();
   r.diverged = runner.diverged();
+  r.deepest_region = RegionNameAt(runner.params().colon, r.metrics.max_tip_arc_m);
   return r;
 }
 
@@ -83,12 +85,21 @@ RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
 }
 
 std::string SummaryLine(const RunResult& r) {
+  const Metrics& m = r.metrics;
+  char time_to_cecum[32] = "-";
+  char inserted_at_cecum[32] = "-";
+  if (m.completed) {
+    std::snprintf(time_to_cecum, sizeof(time_to_cecum), "%.1f", m.time_to_cecum_s);
+    std::snprintf(inserted_at_cecum, sizeof(inserted_at_cecum), "%.3f", m.inserted_at_cecum_m);
+  }
   char line[512];
   std::snprintf(line, sizeof(line),
-                "outcome=%s time_to_cecum_s=%.3f pain_s=%.3f loop_s=%.3f peak_force_N=%.3f "
-                "xray_s=%.3f score=%.1f",
-                OutcomeName(r.outcome), r.metrics.time_to_cecum_s, r.metrics.pain_s,
-                r.metrics.loop_s, r.metrics.peak_insertion_force_N, r.metrics.xray_s, r.score);
+                "outcome=%s time_to_cecum_s=%s inserted_at_cecum_m=%s deepest_tip_arc_m=%.3f "
+                "deepest_region=%s pain_s=%.1f loop_s=%.1f peak_force_N=%.2f xray_s=%.1f "
+                "score=%.1f/100",
+                OutcomeName(r.outcome), time_to_cecum, inserted_at_cecum, m.max_tip_arc_m,
+                r.deepest_region.empty() ? "-" : r.deepest_region.c_str(), m.pain_s, m.loop_s,
+                m.peak_insertion_force_N, m.xray_s, r.score);
   return line;
 }
 

@@ -30,6 +30,7 @@ struct RunResult {
   double score{0.0};
   std::uint64_t steps{0};
   bool diverged{false};
+  std::string deepest_region;  // the region at metrics.max_tip_arc_m ("sigmoid", ...)
 
   bool operator==(const RunResult&) const = default;
 };
@@ -57,6 +58,10 @@ RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig con
 RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
                  const v1::InputLog& log, const StepCallback& on_step = {});
 
+// One line of key=value pairs for people and scripts, the same from `run`,
+// `sim --operator` and `replay` (docs/scoring.md): what did not happen is
+// `-`, times to 0.1 s, lengths to 1 mm, forces to 0.01 N, the score with its
+// scale (`score=34.2/100`).
 std::string SummaryLine(const RunResult& result);
 
 }  // namespace ves::training

@@ -130,6 +130,7 @@ v1::SessionMetrics ToProto(const Metrics& m) {
   p.set_tip_path_m(m.tip_path_m);
   p.set_max_insertion_m(m.max_insertion_m);
   p.set_max_tip_arc_m(m.max_tip_arc_m);
+  p.set_inserted_at_cecum_m(m.inserted_at_cecum_m);
   p.set_damage_events(m.damage_events);
   p.set_damage_impulse_n_s(m.damage_impulse_N_s);
   return p;
@@ -154,6 +155,7 @@ Metrics FromProto(const v1::SessionMetrics& p) {
   m.tip_path_m = p.tip_path_m();
   m.max_insertion_m = p.max_insertion_m();
   m.max_tip_arc_m = p.max_tip_arc_m();
+  m.inserted_at_cecum_m = p.inserted_at_cecum_m();
   m.damage_events = p.damage_events();
   m.damage_impulse_N_s = p.damage_impulse_n_s();
   return m;

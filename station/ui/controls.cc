@@ -50,8 +50,8 @@ bool ApplyKey(int key, const KeyboardHand& hand, ControlState* state) {
       state->knob_left_right_rad = 0.0;
       return true;
     case '1': state->view_mode = ViewMode::kWireframe; return true;
-    case '2': state->view_mode = ViewMode::kPolygon; return true;
-    case '3': state->view_mode = ViewMode::kTexture; return true;
+    case '2': state->view_mode = ViewMode::kFlat; return true;
+    case '3': state->view_mode = ViewMode::kTextured; return true;
     case 'v':
       state->view_mode = static_cast<ViewMode>((static_cast<int>(state->view_mode) + 1) % 3);
       return true;

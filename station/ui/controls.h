@@ -3,15 +3,19 @@
 #include <optional>
 #include <string>
 
+#include "station/training/observation.h"
+
 namespace ves::ui {
 
-enum class ViewMode { kWireframe, kPolygon, kTexture };
+// The endoscope view mode is the one the session records
+// (training::ViewMode: wire-frame, flat polygons, texture): no other.
+using training::ViewMode;
 
 // What the trainee asked for through keys, mouse and the control panel
 // (paper §4.4). Without hardware (`--device sim`) the keyboard also moves the
 // simulated hand: targets the simulated hand follows.
 struct ControlState {
-  ViewMode view_mode{ViewMode::kTexture};
+  ViewMode view_mode{ViewMode::kTextured};
   bool fluoroscopy_visible{false};
   bool damage_display{false};
   bool repeat_requested{false};   // consumed by the app when it restarts the session

@@ -91,16 +91,40 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   std::mt19937_64 rng(3);
   const std::string uuid = NewUuid(rng);
   ves::v1::UploadSessionResponse r;
+  ves::v1::SessionRecord record = MakeRecord(uuid, "alice", 7);
+  record.mutable_metrics()->set_max_tip_arc_m(1.23456);
+  *record.mutable_replay_setup()->mutable_colon_case() = SampleCase();
   ASSERT_TRUE(UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")),
-                            MakeRecord(uuid, "alice", 7), &r)
+                            record, &r)
                   .ok());
   AdminRun scores = Admin(dir, "scores --trainee alice" + remote);
   ASSERT_EQ(scores.exit_status, 0) << scores.err;
   EXPECT_EQ(Lines(scores.out), 2);  // header and one session
-  EXPECT_NE(scores.out.find("standard-adult"), std::string::npos);
-  EXPECT_NE(scores.out.find("57.0"), std::string::npos);  // score 50 + 7
+  // A line names the session (for `session show`), trainee, operator, case,
+  // outcome, depth, time to the cecum and the score on its scale.
+  const std::string row = scores.out.substr(scores.out.find('\n') + 1);
+  for (const std::string& cell : {uuid, std::string("alice"), std::string("human"),
+                                  std::string("standard-adult v1"), std::string("cecum_reached"),
+                                  std::string("1.23"), std::string("207.0"),
+                                  std::string("57.0/100")}) {
+    EXPECT_NE(row.find(cell), std::string::npos) << cell << " missing in\n" << scores.out;
+  }
+  EXPECT_NE(scores.out.find("depth (m)"), std::string::npos) << scores.out;
+  // session show: a summary people read (metrics, times in UTC, no case
+  // centreline, no input log bytes); --raw: the record itself.
   AdminRun show = Admin(dir, "session show " + uuid + remote);
-  EXPECT_NE(show.out.find(uuid), std::string::npos);
+  ASSERT_EQ(show.exit_status, 0) << show.err;
+  EXPECT_NE(show.out.find("session " + uuid), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("2023-11-14 22:20:20 UTC"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("time_to_cecum_s          207.0"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("deepest_tip_arc_m        1.235"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("57.0 / 100"), std::string::npos) << show.out;
+  EXPECT_EQ(show.out.find("centerline"), std::string::npos) << show.out;
+  EXPECT_LT(Lines(show.out), 60) << show.out;
+  AdminRun raw = Admin(dir, "session show " + uuid + " --raw" + remote);
+  ASSERT_EQ(raw.exit_status, 0) << raw.err;
+  EXPECT_NE(raw.out.find("centerline"), std::string::npos);
+  EXPECT_NE(raw.out.find("uuid: \"" + uuid + "\""), std::string::npos);
   AdminRun token = Admin(dir, "token create --role station" + remote);
   EXPECT_EQ(token.out.size(), 65u);
   // Reads are audited through the group commit, a moment after the answer.

@@ -172,6 +172,105 @@ TEST(CaseImportMarkups, NoRadiusIsAnError) {
   EXPECT_EQ(LoadCaseFile(dir / "colon.mrk.json", options).centerline_size(), 4);
 }
 
+// What 3D Slicer's Extract Centerline writes: the curve carries a "Radius"
+// measurement with one value per control point.
+std::string CurveWithRadius(const std::string& values, const std::string& extra_markups = "") {
+  return R"({"markups": [{"type": "Curve", "coordinateSystem": "LPS", "coordinateUnits": "mm",
+  "controlPoints": [)" + std::string(kPoints) + R"(],
+  "measurements": [{"name": "length", "enabled": true, "value": 127.3, "units": "mm"},
+                   {"name": "Radius", "enabled": true, "units": "mm",
+                    "controlPointValues": [)" + values + "]}]}" + extra_markups + "]}";
+}
+
+// A point list of region landmarks (Slicer's "Fiducial" markup): each label
+// names the region that begins there.
+std::string Landmarks(const std::string& points) {
+  return R"({"type": "Fiducial", "coordinateSystem": "LPS", "coordinateUnits": "mm",
+  "controlPoints": [)" + points + "]}";
+}
+
+// The curve's segments are 42.43 mm long (10, 10, 40 mm steps).
+const double kSegment_m = std::sqrt(0.010 * 0.010 + 0.010 * 0.010 + 0.040 * 0.040);
+
+TEST(CaseImportMarkups, TheCurvesRadiusMeasurementGivesTheRadiiWithoutASidecar) {
+  ImportOptions options;
+  options.region = ves::v1::REGION_RECTUM;
+  const auto c = ImportSlicerMarkups(CurveWithRadius("20, 21, 17.5, 16"), std::nullopt,
+                                     "colon.mrk.json", options);
+  ASSERT_EQ(c.radius_profile_size(), 4);
+  EXPECT_NEAR(c.radius_profile(0).radius_m(), 0.020, 1e-12);
+  EXPECT_NEAR(c.radius_profile(2).radius_m(), 0.0175, 1e-12);
+  EXPECT_NEAR(c.radius_profile(3).arc_m(), 3 * kSegment_m, kPositionTolerance_m);
+}
+
+TEST(CaseImportMarkups, ARadiusMeasurementWithTheWrongCountIsRefused) {
+  ImportOptions options;
+  options.region = ves::v1::REGION_RECTUM;
+  try {
+    ImportSlicerMarkups(CurveWithRadius("20, 21, 17"), std::nullopt, "colon.mrk.json", options);
+    FAIL() << "three radii for four points accepted";
+  } catch (const CaseError& e) {
+    EXPECT_TRUE(HasProblem(e.problems(), "markups[0].measurements[1].controlPointValues"))
+        << e.what();
+  }
+}
+
+TEST(CaseImportMarkups, LandmarksStartTheirRegionsWhereTheyProjectOntoTheCurve) {
+  // "sigmoid" halfway along the second segment, 4 mm off the curve (across
+  // its direction): the sigmoid begins at 1.5 segments; "descending" at the
+  // third point. The rectum covers the curve from the anus.
+  const std::string landmarks = Landmarks(
+      R"({"label": "rectum", "position": [1.0, 2.0, 3.0]},)"
+      R"({"label": "Sigmoid", "position": [19.0, 14.0, 63.0]},)"
+      R"({"label": "descending", "position": [21.0, 22.0, 83.0]})");
+  const auto c = ImportSlicerMarkups(CurveWithRadius("20, 21, 17.5, 16", ", " + landmarks),
+                                     std::nullopt, "colon.mrk.json");
+  ASSERT_EQ(c.regions_size(), 3);
+  EXPECT_EQ(c.regions(0).region(), ves::v1::REGION_RECTUM);
+  EXPECT_EQ(c.regions(0).start_arc_m(), 0.0);
+  EXPECT_EQ(c.regions(1).region(), ves::v1::REGION_SIGMOID);
+  EXPECT_NEAR(c.regions(1).start_arc_m(), 1.5 * kSegment_m, 1e-9);
+  EXPECT_NEAR(c.regions(0).end_arc_m(), 1.5 * kSegment_m, 1e-9);
+  EXPECT_EQ(c.regions(2).region(), ves::v1::REGION_DESCENDING);
+  EXPECT_NEAR(c.regions(2).start_arc_m(), 2.0 * kSegment_m, 1e-9);
+  EXPECT_NEAR(c.regions(2).end_arc_m(), 3.0 * kSegment_m, 1e-9);
+  // Each region gets its default tissue: the sigmoid is mobile.
+  EXPECT_EQ(c.regions(1).tissue().suspension_stiffness_n_per_m2(),
+            DefaultTissue(ves::v1::REGION_SIGMOID).suspension_stiffness_n_per_m2());
+}
+
+TEST(CaseImportMarkups, ALandmarksFileNextToTheCurveImportsInOneCommand) {
+  // As Slicer saves them: the curve (with its Radius measurement) and the
+  // landmarks point list as two files; the landmarks in any order.
+  ScratchDir dir;
+  WriteText(dir / "patient.mrk.json", CurveWithRadius("20, 21, 17.5, 16"));
+  WriteText(dir / "patient.regions.mrk.json",
+            R"({"markups": [)" +
+                Landmarks(R"({"label": "sigmoid", "position": [11.0, 12.0, 43.0]},)"
+                          R"({"label": "rectum", "position": [1.0, 2.0, 3.0]})") +
+                "]}");
+  const auto c = LoadCaseFile(dir / "patient.mrk.json");
+  ASSERT_EQ(c.regions_size(), 2);
+  EXPECT_EQ(c.regions(0).region(), ves::v1::REGION_RECTUM);
+  EXPECT_EQ(c.regions(1).region(), ves::v1::REGION_SIGMOID);
+  EXPECT_NEAR(c.regions(1).start_arc_m(), kSegment_m, 1e-9);
+  EXPECT_EQ(c.id(), "patient");
+}
+
+TEST(CaseImportMarkups, ALandmarkThatNamesNoRegionIsRefused) {
+  const std::string landmarks = Landmarks(
+      R"({"label": "rectum", "position": [1.0, 2.0, 3.0]},)"
+      R"({"label": "liver", "position": [11.0, 12.0, 43.0]})");
+  try {
+    ImportSlicerMarkups(CurveWithRadius("20, 21, 17.5, 16", ", " + landmarks), std::nullopt,
+                        "colon.mrk.json");
+    FAIL() << "a landmark labelled 'liver' accepted";
+  } catch (const CaseError& e) {
+    EXPECT_TRUE(HasProblem(e.problems(), "markups[1].controlPoints.label", 1)) << e.what();
+    EXPECT_NE(std::string(e.what()).find("liver"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CaseImportMarkups, SidecarRowCountMustMatch) {
   try {
     ImportSlicerMarkups(Markups("LPS", kPoints), std::string("radius_mm\n20\n20\n"), "a.mrk.json");

@@ -61,6 +61,8 @@ class StoreContract : public ::testing::TestWithParam<Backend> {
     r.time_to_cecum_s = 120.5;
     r.pain_s = 3.25;
     r.score = 77.5;
+    r.operator_kind = "novice";
+    r.max_tip_arc_m = 0.8125;
     r.body = body;
     r.body_sha256_hex = "hash-of-" + body;
     r.stored_unix_ms = 5000 + start;
@@ -215,6 +217,9 @@ TEST_P(StoreContract, SessionsSurviveReopenWithBodyAndOrder) {
   ASSERT_EQ(list.value.size(), 2u);
   EXPECT_EQ(list.value[0].uuid, "u2");  // oldest first
   EXPECT_TRUE(list.value[0].body.empty());
+  // The listing carries who operated and how deep the tip got.
+  EXPECT_EQ(list.value[1].operator_kind, "novice");
+  EXPECT_EQ(list.value[1].max_tip_arc_m, 0.8125);
   EXPECT_EQ(store_->ListSessions("t1", "other-case").value.size(), 0u);
   EXPECT_EQ(store_->GetSession("nope").status.code, StoreCode::kNotFound);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 using StationRun = StationFixture;
 
 bool ExitedWithSessionOutcome(const ProcessResult& r) {
-  return r.exit_code == 0 || r.exit_code == 3;  // cecum reached / timed out or aborted
+  return r.exit_code == 0;  // cecum reached / timed out or aborted
 }
 
 TEST_F(StationRun, TwoHeadlessStationsUploadAndTheSupervisorSeesBothSessions) {
@@ -145,7 +146,7 @@ TEST_F(StationRun, TheHeadlessSessionRunsThroughTheSimulatedDeviceAndReplaysExac
   EXPECT_GE(NumberAfter(device, "frames_received"), 2.0 * periods) << device;
   EXPECT_EQ(NumberAfter(device, "lost_frames"), 0.0) << device;
   EXPECT_EQ(NumberAfter(device, "malformed_frames"), 0.0) << device;
-  EXPECT_EQ(NumberAfter(device, "safe_state_trips"), 0.0) << device;
+  EXPECT_EQ(NumberAfter(device, "hard_faults"), 0.0) << device;
   // The novice pushes 6 N: the scope goes in, measured by the insertion encoder.
   EXPECT_GT(NumberAfter(device, "encoder_travel_m"), 0.05) << device;
 
@@ -175,6 +176,77 @@ TEST_F(StationRun, HeadlessRunsThroughTheDeviceAreDeterministic) {
   ASSERT_FALSE(device.empty());
   EXPECT_EQ(device, ReadFile(dir_ / "out-2" / "device.txt"));
   EXPECT_EQ(ReadFile(dir_ / "out-1" / "summary.txt"), ReadFile(dir_ / "out-2" / "summary.txt"));
+}
+
+// Cases and sessions move the obvious way: import-case takes every format
+// `ves-admin case convert` reads; run and sim take a case file or a cached
+// id; a session written by `sim --session-out` is queued with
+// `sync --add` and reaches the server.
+TEST_F(StationRun, CasesAndSessionsMoveTheObviousWay) {
+  const fs::path data = dir_ / "station";
+  const std::string data_dir = data.string();
+  // A centerline CSV and a 3D Slicer curve with its Radius measurement and
+  // a landmarks file next to it.
+  {
+    std::ofstream csv(dir_ / "straight.csv");
+    csv << "x_mm,y_mm,z_mm,radius_mm,region\n0,0,0,15,rectum\n0,0,40,15,rectum\n"
+           "0,0,80,15,sigmoid\n0,0,120,15,sigmoid\n0,0,160,15,sigmoid\n";
+    std::ofstream curve(dir_ / "patient-3.mrk.json");
+    curve << R"({"markups": [{"type": "Curve", "coordinateSystem": "RAS", "controlPoints": [
+        {"position": [0, 0, 0]}, {"position": [0, 0, 40]}, {"position": [0, 0, 80]},
+        {"position": [0, 0, 120]}],
+        "measurements": [{"name": "Radius", "units": "mm",
+                          "controlPointValues": [14, 15, 16, 17]}]}]})";
+    std::ofstream landmarks(dir_ / "patient-3.regions.mrk.json");
+    landmarks << R"({"markups": [{"type": "Fiducial", "coordinateSystem": "RAS",
+        "controlPoints": [{"label": "rectum", "position": [0, 0, 0]},
+                          {"label": "sigmoid", "position": [5, 0, 60]}]}]})";
+  }
+  const ProcessResult imported =
+      Station({"import-case", kCaseFile, (dir_ / "straight.csv").string(),
+               (dir_ / "patient-3.mrk.json").string(), "--data-dir", data_dir});
+  ASSERT_EQ(imported.exit_code, 0) << imported.out << imported.err;
+  for (const char* id : {"imported standard-adult v1", "imported straight v1",
+                         "imported patient-3 v1"}) {
+    EXPECT_NE(imported.out.find(id), std::string::npos) << imported.out;
+  }
+  EXPECT_NE(Station({"status", "--data-dir", data_dir}).out.find("cached cases: 3"),
+            std::string::npos);
+  const ProcessResult bad = Station({"import-case", (dir_ / "nothing.csv").string(),
+                                     "--data-dir", data_dir});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("nothing.csv"), std::string::npos) << bad.err;
+
+  // run --case FILE: read, put into a fresh cache and run (no server).
+  const fs::path other = dir_ / "station-2";
+  auto run_file = RunArgs("novice", other, dir_ / "out", /*with_server=*/false);
+  std::replace(run_file.begin(), run_file.end(), std::string("standard-adult"),
+               (fs::path(VES_SOURCE_DIR) / "patient_db/cases/paper-sigmoid.textproto").string());
+  const ProcessResult ran = Station(run_file);
+  ASSERT_EQ(ran.exit_code, 0) << ran.out << ran.err;
+  EXPECT_NE(ran.out.find("case paper-sigmoid v1"), std::string::npos) << ran.out;
+  EXPECT_NE(ran.out.find("now in the offline cache"), std::string::npos) << ran.out;
+
+  // sim --case ID from the cache, its session queued and uploaded.
+  const fs::path session = dir_ / "sim.session";
+  const ProcessResult sim =
+      Station({"sim", "--case", "standard-adult", "--data-dir", data_dir, "--operator", "novice",
+               "--seconds", "2", "--session-out", session.string(), "--trainee", kTrainee,
+               "--station-id", "sim-bench"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  const ProcessResult unknown = Station({"sim", "--case", "no-such-case", "--data-dir", data_dir,
+                                         "--operator", "novice", "--seconds", "2"});
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("no-such-case"), std::string::npos) << unknown.err;
+  const ProcessResult queued = Station({"sync", "--add", session.string(), "--data-dir", data_dir});
+  ASSERT_EQ(queued.exit_code, 0) << queued.out << queued.err;
+  EXPECT_EQ(PendingUploads(Station({"status", "--data-dir", data_dir}).out), 1);
+  const std::string uuid = queued.out.substr(8, 36);  // "session UUID (trainee ..."
+  const ProcessResult synced = Station({"sync", "--server", address_, "--token", station_token_,
+                                        "--data-dir", data_dir});
+  ASSERT_EQ(synced.exit_code, 0) << synced.out << synced.err;
+  EXPECT_NE(synced.out.find("uploaded 1 session(s)"), std::string::npos) << synced.out;
+  EXPECT_TRUE(SessionOnServer(uuid)) << uuid;
 }
 
 TEST_F(StationRun, HeadlessWithoutAnOperatorIsAUsageError) {

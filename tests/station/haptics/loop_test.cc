@@ -138,5 +138,65 @@ TEST(HapticLoop, RunsOnTheWallClockWithTheDeviceOnItsOwnThread) {
   EXPECT_GT(driver.counters().frames_received, 100u);
 }
 
+// A model source that stalls the loop thread (sleeps in Update) when asked.
+class StallingSource final : public BaseResponseSource {
+ public:
+  BaseResponse Update(double, double, double) override {
+    const int stall_ms = stall_ms_.exchange(0);
+    if (stall_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(stall_ms));
+    return BaseResponse{0.0, 0.0, ++count_};
+  }
+  void StallOnce(int ms) { stall_ms_.store(ms); }
+  bool pending() const { return stall_ms_.load() != 0; }
+
+ private:
+  std::atomic<int> stall_ms_{0};
+  std::uint64_t count_{0};
+};
+
+// The loop thread stops for 20-50 ms while the device thread runs on: the
+// device misses the station's heartbeat and cuts its motors. Each stall is a
+// transient fault at most; the output comes back without a re-arm. Both
+// threads ask for SCHED_FIFO (as the station does): the device thread
+// stands for hardware that always answers, and a device starved by the OS
+// for 100 ms is a long silence, rightly a hard fault (seen under a loaded
+// `ctest -j2` with normal scheduling).
+TEST(HapticLoop, StallsOfTheLoopThreadEndWithoutAFaultThatNeedsARearm) {
+  auto [host, bus_device] = CanBus::CreateSocketPair();
+  SimulatedBallDriveOptions device_options;
+  Ves4Device driver(std::move(host), device_options.params);
+  SimulatedBallDrive device(std::move(bus_device), device_options);
+  SimulatedDeviceThread device_thread(&device, /*realtime=*/true);
+  DeviceState state;
+  ASSERT_TRUE(BringUpDevice(&driver, &state, 2.0));
+  StallingSource source;
+  CycleOptions cycle_options;
+  cycle_options.control.mode = ControlMode::kCoupled;
+  HapticCycle cycle(&driver, &source, cycle_options);
+  cycle.SetInitialDeviceState(state);
+  HapticLoop loop(&cycle, LoopOptions{.realtime = true});
+  loop.Start();
+  ASSERT_TRUE(loop.ArmAfter(20, 5.0));
+  for (int stall_ms : {20, 30, 50, 30, 40}) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    source.StallOnce(stall_ms);
+    while (source.pending()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  // Time to recover from the last one: healthy for 50 ms, then a 0.3 s fade.
+  HapticSnapshot latest;
+  for (int i = 0; i < 300; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    loop.latest().Load(&latest);
+    if (latest.fault == SafetyFault::kNone && latest.output_scale == 1.0) break;
+  }
+  loop.Stop();
+  device_thread.Stop();
+  EXPECT_EQ(cycle.safety().hard_faults(), 0u) << ToString(cycle.safety().fault());
+  EXPECT_EQ(latest.fault, SafetyFault::kNone) << ToString(latest.fault);
+  EXPECT_EQ(latest.output_scale, 1.0);
+  EXPECT_GE(cycle.safety().stalls(), 5u);
+  EXPECT_EQ(cycle.safety().recoveries(), cycle.safety().transient_faults());
+}
+
 }  // namespace
 }  // namespace ves::haptics

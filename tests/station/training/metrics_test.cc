@@ -1,5 +1,7 @@
 #include "station/training/metrics.h"
 
+#include "station/training/session.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -64,10 +66,31 @@ TEST(Metrics, TimeToCecumIsTheFirstStepWhoseTipArcReachesTheCecum) {
 
 TEST(Metrics, NotReachingTheCecumLeavesTimeToCecumZero) {
   auto steps = Steps(4);
-  for (auto& s : steps) s.tip_arc_m = 0.9;
+  for (auto& s : steps) {
+    s.tip_arc_m = 0.9;
+    s.inserted_m = 1.25;
+  }
   const Metrics m = Accumulate(steps).Result();
   EXPECT_FALSE(m.completed);
   EXPECT_EQ(m.time_to_cecum_s, 0.0);
+  EXPECT_EQ(m.inserted_at_cecum_m, 0.0);
+}
+
+TEST(Metrics, InsertedLengthAtTheCecumIsTakenWhenItIsFirstReached) {
+  // The scope is pushed in 1/4 m a step and the tip reaches the cecum (1 m)
+  // at step 6 with 1.75 m inserted (a loop); later steps push further and
+  // pull back, which must not change the figure.
+  auto steps = Steps(10);
+  for (int i = 0; i < 10; ++i) {
+    steps[i].inserted_m = 0.25 * (i + 1);
+    steps[i].tip_arc_m = i < 6 ? 0.125 * (i + 1) : 1.0 + 0.0625 * (i % 2);
+  }
+  steps[9].inserted_m = 1.0;  // withdrawn (the loop reduced)
+  const Metrics m = Accumulate(steps).Result();
+  ASSERT_TRUE(m.completed);
+  EXPECT_EQ(m.time_to_cecum_s, 7 * kDt_s);
+  EXPECT_EQ(m.inserted_at_cecum_m, 1.75);
+  EXPECT_EQ(FromProto(ToProto(m)).inserted_at_cecum_m, 1.75);
 }
 
 TEST(Metrics, PeakAndMeanInsertionForceUseTheMagnitude) {

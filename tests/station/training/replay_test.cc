@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "station/training/case_model.h"
 #include "station/training/session_file.h"
 
 namespace ves::training {
@@ -60,6 +61,41 @@ TEST(Replay, ReproducesAScriptedSessionExactly) {
     EXPECT_EQ(SummaryLine(replayed), SummaryLine(live));
     EXPECT_EQ(FromProto(record.metrics()), replayed.metrics);
   }
+}
+
+TEST(SummaryLine, SaysWhatDidNotHappenWithADashAndGivesTheScoresScale) {
+  RunResult r;
+  r.outcome = Outcome::kTimedOut;
+  r.metrics.max_tip_arc_m = 0.81234;
+  r.metrics.pain_s = 12.345;
+  r.metrics.peak_insertion_force_N = 3.14159;
+  r.metrics.xray_s = 0.04;
+  r.score = 34.25;
+  r.deepest_region = "sigmoid";
+  EXPECT_EQ(SummaryLine(r),
+            "outcome=timed_out time_to_cecum_s=- inserted_at_cecum_m=- deepest_tip_arc_m=0.812 "
+            "deepest_region=sigmoid pain_s=12.3 loop_s=0.0 peak_force_N=3.14 xray_s=0.0 "
+            "score=34.2/100");
+  r.outcome = Outcome::kCecumReached;
+  r.metrics.completed = true;
+  r.metrics.time_to_cecum_s = 212.46;
+  r.metrics.inserted_at_cecum_m = 1.0514;
+  r.metrics.max_tip_arc_m = 1.45;
+  r.deepest_region = "cecum";
+  const std::string line = SummaryLine(r);
+  EXPECT_NE(line.find("time_to_cecum_s=212.5 inserted_at_cecum_m=1.051 deepest_tip_arc_m=1.450 "
+                      "deepest_region=cecum"),
+            std::string::npos)
+      << line;
+}
+
+TEST(Replay, TheDeepestRegionComesFromTheColon) {
+  const auto params = TubeParams();
+  v1::SessionRecord record;
+  const RunResult live = RunScriptedSession(params, Config(params, 0.5), "novice", 0, &record);
+  EXPECT_EQ(live.deepest_region, RegionNameAt(params.colon, live.metrics.max_tip_arc_m));
+  EXPECT_EQ(RegionNameAt(params.colon, params.colon.points.back().arc_m + 1.0), "cecum");
+  EXPECT_EQ(RegionNameAt(params.colon, 0.0), "unspecified");  // the tube's other points
 }
 
 TEST(Replay, ALogEndingEarlyReplaysAsAborted) {

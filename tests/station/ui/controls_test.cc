@@ -54,7 +54,7 @@ TEST(ApplyKey, ViewModeFluoroscopyDamageRepeatAndQuit) {
   ApplyKey('1', hand, &state);
   EXPECT_EQ(state.view_mode, ViewMode::kWireframe);
   ApplyKey('v', hand, &state);
-  EXPECT_EQ(state.view_mode, ViewMode::kPolygon);
+  EXPECT_EQ(state.view_mode, ViewMode::kFlat);
   ApplyKey('v', hand, &state);
   ApplyKey('v', hand, &state);
   EXPECT_EQ(state.view_mode, ViewMode::kWireframe);  // cycles

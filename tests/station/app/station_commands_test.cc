@@ -1,0 +1,138 @@
+// ves-station subcommands that need no server, as processes:
+//  - `haptic-check` stopped (SIGSTOP) for 30 ms five times while it runs the
+//    spring mode on the wall clock: a stall of the station's own process is
+//    not silence of the device, so the run ends with no hard fault and still
+//    draws the spring line of the paper's Fig. 6;
+//  - `sim --operator` and `replay` of its session file print the same
+//    summary line, byte for byte;
+//  - help texts print their defaults as written, not as binary fractions.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/station/app/child_process.h"
+
+namespace ves::station::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using std::chrono::milliseconds;
+
+const std::string kStationBin = VES_BINARY_DIR "/station/app/ves-station";
+
+// The number after "KEY=" in `text` (NaN when absent).
+double NumberAfter(const std::string& text, const std::string& key) {
+  const size_t at = text.find(key + "=");
+  if (at == std::string::npos) return std::nan("");
+  return std::atof(text.c_str() + at + key.size() + 1);
+}
+
+// The summary line of one axis ("mode=spring axis=thrust ...").
+std::string AxisLine(const std::string& out, const std::string& axis) {
+  const size_t at = out.find("axis=" + axis);
+  if (at == std::string::npos) return "";
+  return out.substr(at, out.find('\n', at) - at);
+}
+
+TEST(HapticCheck, StoppingTheProcessFiveTimesFor30MsIsNoFaultAndKeepsTheSpringLine) {
+  const fs::path dir = MakeTempDir("haptic-check");
+  ChildProcess check({kStationBin, "haptic-check", "--device", "sim", "--mode", "spring",
+                      "--profile", "sine:20:0.25", "--seconds", "4", "--csv",
+                      (dir / "run.csv").string()},
+                     dir / "check");
+  std::this_thread::sleep_for(milliseconds(800));  // past bring-up and arming
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_TRUE(check.Running());
+    ASSERT_EQ(::kill(check.pid(), SIGSTOP), 0);
+    std::this_thread::sleep_for(milliseconds(30));
+    ASSERT_EQ(::kill(check.pid(), SIGCONT), 0);
+    std::this_thread::sleep_for(milliseconds(400));
+  }
+  const ProcessResult result = check.Wait(std::chrono::seconds(60));
+  ASSERT_EQ(result.exit_code, 0) << result.out << result.err;
+  EXPECT_EQ(NumberAfter(result.err, "hard_faults"), 0.0) << result.err;
+  EXPECT_GE(NumberAfter(result.err, "station_stalls"), 5.0) << result.err;
+  const std::string thrust = AxisLine(result.out, "thrust");
+  const std::string roll = AxisLine(result.out, "roll");
+  EXPECT_NEAR(NumberAfter(thrust, "slope_N_per_m"), 100.0, 5.0) << result.out;
+  EXPECT_GE(NumberAfter(thrust, "r2"), 0.99) << result.out;
+  EXPECT_NEAR(NumberAfter(roll, "slope_Nm_per_rad"), 0.05, 0.0025) << result.out;
+  EXPECT_GE(NumberAfter(roll, "r2"), 0.99) << result.out;
+  fs::remove_all(dir);
+}
+
+TEST(SimAndReplay, ReplayPrintsTheSimsSummaryByteForByte) {
+  const fs::path dir = MakeTempDir("sim-replay");
+  const fs::path session = dir / "novice.session";
+  const ProcessResult sim = RunProgram(
+      {kStationBin, "sim", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+       "--operator", "novice", "--seconds", "3", "--session-out", session.string()},
+      dir / "sim");
+  // A session that ran to its end is a success, whatever its outcome.
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  ASSERT_EQ(sim.out.rfind("outcome=", 0), 0u) << sim.out;
+  // Three seconds do not reach the cecum: what did not happen is "-".
+  EXPECT_NE(sim.out.find(" time_to_cecum_s=- inserted_at_cecum_m=- deepest_tip_arc_m="),
+            std::string::npos)
+      << sim.out;
+  EXPECT_NE(sim.out.find(" deepest_region="), std::string::npos) << sim.out;
+  EXPECT_NE(sim.out.find("/100\n"), std::string::npos) << sim.out;
+  const ProcessResult replay = RunProgram({kStationBin, "replay", session.string()}, dir / "replay");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_EQ(replay.out, sim.out);
+  fs::remove_all(dir);
+}
+
+TEST(Snapshot, TheCarmAngleAndZoomGiveAnotherImageAndBadValuesAreRefused) {
+  const fs::path dir = MakeTempDir("snapshot");
+  const std::vector<std::string> base = {
+      kStationBin, "snapshot", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+      "--insert-mm", "200", "--width", "160", "--height", "120", "--segments", "60"};
+  auto with = [&](std::vector<std::string> extra, const fs::path& out) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    args.insert(args.end(), {"--out", out.string()});
+    return RunProgram(args, out.string() + "-log");
+  };
+  const ProcessResult plain = with({}, dir / "plain");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_FALSE(fs::exists(dir / "plain" / "fluoroscopy_c-arm.png"));
+  const ProcessResult turned = with({"--c-arm-deg", "35", "--zoom", "2"}, dir / "turned");
+  ASSERT_EQ(turned.exit_code, 0) << turned.err;
+  ASSERT_TRUE(fs::exists(dir / "turned" / "fluoroscopy_c-arm.png"));
+  // Zoom 2 around the tip: the AP image is another one.
+  EXPECT_NE(ReadFile(dir / "plain" / "fluoroscopy_ap.png"),
+            ReadFile(dir / "turned" / "fluoroscopy_ap.png"));
+  const ProcessResult far = with({"--zoom", "20"}, dir / "far");
+  EXPECT_EQ(far.exit_code, 2);
+  EXPECT_NE(far.err.find("--zoom"), std::string::npos) << far.err;
+  const ProcessResult tilt = with({"--tilt-deg", "10"}, dir / "tilt");
+  EXPECT_EQ(tilt.exit_code, 2);
+  EXPECT_NE(tilt.err.find("--c-arm-deg"), std::string::npos) << tilt.err;
+  fs::remove_all(dir);
+}
+
+TEST(Help, DefaultsAreRoundedAsWritten) {
+  const fs::path dir = MakeTempDir("help");
+  for (const char* command : {"run", "sim", "replay", "snapshot", "haptic-check", "import-case",
+                              "export-case", "status", "sync"}) {
+    const ProcessResult help = RunProgram({kStationBin, command, "--help"}, dir / command);
+    ASSERT_EQ(help.exit_code, 0) << command << help.err;
+    // "(=0.050000000000000003)" is 0.05 printed with all its binary digits.
+    for (size_t at = help.out.find("(="); at != std::string::npos; at = help.out.find("(=", at + 1)) {
+      const std::string value = help.out.substr(at + 2, help.out.find(')', at) - at - 2);
+      EXPECT_LT(value.size(), 12u) << command << ": default " << value;
+    }
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ves::station::testing
