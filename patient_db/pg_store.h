@@ -75,6 +75,7 @@ class PgStore final : public Store {
       const std::string& trainee_id) override;
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
+  StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
 
   int schema_version() const { return schema_version_; }
 

@@ -53,6 +53,7 @@ class SqliteStore final : public Store {
       const std::string& trainee_id) override;
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
+  StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
 
   // The schema version after migration.
   int schema_version() const { return schema_version_; }

@@ -163,6 +163,7 @@ struct LessonVerdictRow {
   int64_t session_start_unix_ms = 0;
   int64_t judged_unix_ms = 0;
   std::string detail;  // one line per criterion
+  bool rejected = false;  // refused unjudged (over a budget, an impossible log): final
   bool operator==(const LessonVerdictRow&) const = default;
 };
 
@@ -250,6 +251,12 @@ class Store {
   // trainee_id empty: everyone's.
   virtual StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(
       const std::string& trainee_id, int limit) = 0;
+  // Adds `delta` to the times judging of this lesson session started and
+  // returns the new count (durable before it returns); kNotFound when the
+  // session is not queued for judging. The judge counts a start before each
+  // replay and takes it back when it stops cleanly, so what remains counts
+  // replays that never finished (a crash).
+  virtual StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

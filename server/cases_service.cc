@@ -142,7 +142,6 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
                       "header.total_bytes = " + std::to_string(header_.total_bytes()) +
                           ": larger than the limit " + std::to_string(kMaxCaseUploadBytes));
       }
-      bytes_.reserve(header_.total_bytes());
       return Status::OK;
     }
     if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "chunk before the header");
@@ -152,12 +151,27 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
                         std::to_string(header_.total_bytes()));
     }
     bytes_ += request_.chunk();
+    if (!head_checked_) {
+      // The bundle's magic and length are checked with its first bytes, not
+      // after 256 MiB of something else have been buffered.
+      try {
+        patient_db::CheckCaseBundleHead(bytes_, header_.total_bytes(), Label());
+      } catch (const patient_db::CaseError& e) {
+        return Status(StatusCode::INVALID_ARGUMENT, patient_db::JoinProblems(e.problems()));
+      }
+      head_checked_ = bytes_.size() >= patient_db::kCaseBundleHeaderSize;
+      if (head_checked_) bytes_.reserve(header_.total_bytes());
+    }
     return Status::OK;
+  }
+
+  std::string Label() const {
+    return header_.file_label().empty() ? std::string("upload") : header_.file_label();
   }
 
   Status Complete() {
     if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "no header was sent");
-    const std::string label = header_.file_label().empty() ? "upload" : header_.file_label();
+    const std::string label = Label();
     if (bytes_.size() != header_.total_bytes()) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     label + ": received " + std::to_string(bytes_.size()) +
@@ -212,6 +226,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
   ves::v1::UploadCaseRequest request_;
   ves::v1::UploadCaseHeader header_;
   bool has_header_ = false;
+  bool head_checked_ = false;
   std::string bytes_;
   std::string target_ = "?";
 };

@@ -118,6 +118,7 @@ void ToProtoVerdict(const patient_db::LessonVerdictRow& v, ves::v1::LessonVerdic
   out->set_curriculum_id(v.curriculum_id);
   out->set_lesson_id(v.lesson_id);
   out->set_passed(v.passed);
+  out->set_rejected(v.rejected);
   out->set_score(v.score);
   size_t start = 0;
   while (start < v.detail.size()) {

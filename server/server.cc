@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "patient_db/net_address.h"
+
 namespace ves::server {
 namespace {
 
@@ -70,7 +72,7 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptio
           "refusing to serve without TLS: give --tls-cert and --tls-key, or "
           "--insecure-loopback with a loopback --listen address");
     }
-    if (!IsLoopbackListenAddress(o.listen)) {
+    if (!patient_db::IsLoopbackAddress(o.listen)) {
       throw std::invalid_argument("refusing plaintext on '" + o.listen +
                                   "': --insecure-loopback needs a loopback address such as "
                                   "127.0.0.1:50051");
@@ -97,7 +99,7 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
     : options_(std::move(options)), store_(std::move(store)) {
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
-  judge_ = std::make_unique<LessonJudge>(store_.get());
+  judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
   const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);

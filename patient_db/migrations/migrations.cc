@@ -128,6 +128,10 @@ CREATE TABLE lesson_verdicts (
 );
 CREATE INDEX lesson_verdicts_by_trainee ON lesson_verdicts(trainee_id, session_start_unix_ms);
 )sql"},
+      {3, "hardening: rejected lesson verdicts, judge starts", R"sql(
+ALTER TABLE lesson_verdicts ADD COLUMN rejected INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE lesson_sessions ADD COLUMN judge_starts INTEGER NOT NULL DEFAULT 0;
+)sql"},
   };
   return kMigrations;
 }

@@ -21,7 +21,8 @@ void AddRemoteOptions(po::options_description* options, ClientOptions* client, i
       "server", po::value(&client->address)->required(), "server address host:port")(
       "token", po::value(&client->token), "bearer token (default: $VES_TOKEN)")(
       "tls-ca", po::value(&client->tls_ca_file), "CA of the server certificate (PEM); "
-                                                "without it the connection is plaintext")(
+                                                "without it only a loopback --server is allowed "
+                                                "(plaintext)")(
       "tls-cert", po::value(&client->tls_cert_file), "client certificate (PEM)")(
       "tls-key", po::value(&client->tls_key_file), "client key (PEM)")(
       "deadline-s", po::value(deadline_s)->default_value(30), "deadline of each call, seconds");
@@ -45,6 +46,11 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
     return kExitUsage;
   }
   deadline_s = (*vm)["deadline-s"].as<int>();
+  if (deadline_s < 1 || deadline_s > 3600) {
+    std::cerr << "ves-admin " << name << ": --deadline-s " << deadline_s
+              << ": must be in 1..3600\n";
+    return kExitUsage;
+  }
   client->deadline = std::chrono::seconds(deadline_s);
   if (client->token.empty()) {
     const char* env = std::getenv("VES_TOKEN");
@@ -52,6 +58,12 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
   }
   if (client->token.empty()) {
     std::cerr << "ves-admin " << name << ": no token (give --token or set VES_TOKEN)\n";
+    return kExitUsage;
+  }
+  try {
+    ves::server::CheckClientOptions(*client);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "ves-admin " << name << ": " << e.what() << "\n";
     return kExitUsage;
   }
   return -1;

@@ -137,7 +137,8 @@ int RunStatusCommand(const CommandArgs& args) {
     for (const auto& verdict : verdicts) {
       std::cout << "  " << verdict.session_uuid() << "  trainee=" << verdict.trainee_id()
                 << "  lesson=" << verdict.lesson_id() << "  "
-                << (verdict.passed() ? "PASSED" : "FAILED") << "  score=" << verdict.score()
+                << (verdict.passed() ? "PASSED" : verdict.rejected() ? "REJECTED" : "FAILED")
+                << "  score=" << verdict.score()
                 << "\n";
     }
     for (const auto& problem : damaged_verdicts) std::cout << "  DAMAGED " << problem << "\n";

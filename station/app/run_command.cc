@@ -129,6 +129,11 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
     endpoint.token = vm["token"].as<std::string>();
     if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
     endpoint.deadline = std::chrono::seconds(10);
+    try {
+      sync::CheckEndpoint(endpoint);
+    } catch (const std::invalid_argument& error) {
+      throw UsageError(error.what());
+    }
     o.server = endpoint;
   } else if (vm.count("tls-ca")) {
     throw UsageError("--tls-ca needs --server");
@@ -596,7 +601,8 @@ int RunRunCommand(const CommandArgs& args) {
   desc.add_options()("help,h", "show this help")(
       "server", po::value<std::string>(), "server address host:port")(
       "token", po::value<std::string>(), "station bearer token")(
-      "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
+      "tls-ca", po::value<std::string>(),
+      "CA of the server certificate (PEM); none: plaintext, loopback --server only")(
       "trainee", po::value<std::string>(), "trainee id")(
       "case", po::value<std::string>(), "case id")(
       "lesson", po::value<std::string>(),
@@ -666,6 +672,7 @@ int RunSyncCommand(const CommandArgs& args) {
     if (attempts < 1 || attempts > 20) {
       throw UsageError("--attempts " + std::to_string(attempts) + " must be in [1, 20]");
     }
+    sync::CheckEndpoint(endpoint);
   } catch (const std::exception& e) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;

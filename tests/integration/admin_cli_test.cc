@@ -11,6 +11,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "patient_db/case_format.h"
+#include "tests/integration/plaintext_probe.h"
 #include "tests/integration/test_server.h"
 
 namespace ves::server::testing {
@@ -129,6 +130,48 @@ TEST(AdminCli, ErrorsAreOneLineWithNonZeroStatus) {
   AdminRun no_server = Admin(dir, "scores --trainee x --token t");
   EXPECT_EQ(no_server.exit_status, 2);
   EXPECT_NE(no_server.err.find("server"), std::string::npos);
+}
+
+TEST(AdminCli, RefusesToSendTheTokenInPlaintextOffLoopback) {
+  const auto dir = MakeTempDir("admin_plaintext");
+  ves::testing::NonLoopbackListener listener;
+  const std::string address = listener.address().empty() ? "192.0.2.1:50051" : listener.address();
+  for (const std::string command :
+       {"trainee list", "scores --trainee x", "audit", "case list", "curriculum list"}) {
+    AdminRun r = Admin(dir, command + " --server " + address + " --token secret --deadline-s 2");
+    EXPECT_EQ(r.exit_status, 2) << command << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("refusing to send the token in plaintext to '" + address + "'"),
+              std::string::npos)
+        << r.err;
+  }
+  if (!listener.address().empty()) {
+    EXPECT_EQ(listener.Connections(), 0);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(AdminCli, FlagErrorsAreOneLineAndExitStatus2NeverAnAbort) {
+  const auto dir = MakeTempDir("admin_flags");
+  const std::string remote = " --server 127.0.0.1:1 --token t";
+  for (const std::string& args : {
+           "trainee list" + remote + " --tls-ca /nonexistent.pem",
+           "trainee list" + remote + " --tls-cert /nonexistent.pem",
+           "trainee list" + remote + " --tls-ca /etc/hostname --tls-key /nonexistent.pem",
+           "case list" + remote + " --tls-ca /nonexistent.pem",
+           "scores --trainee x" + remote + " --deadline-s 0",
+           "scores --trainee x" + remote + " --deadline-s -5",
+           "audit" + remote + " --limit many",
+       }) {
+    AdminRun r = Admin(dir, args);
+    EXPECT_EQ(r.exit_status, 2) << args << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+    EXPECT_EQ(r.err.find("terminate called"), std::string::npos) << r.err;
+  }
+  AdminRun ca = Admin(dir, "trainee list" + remote + " --tls-ca /nonexistent.pem");
+  EXPECT_NE(ca.err.find("--tls-ca /nonexistent.pem: cannot read the file"), std::string::npos)
+      << ca.err;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

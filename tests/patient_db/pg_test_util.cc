@@ -107,6 +107,7 @@ class SkippedStore final : public Store {
                                                                    int) override {
     return {};
   }
+  StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
 
  private:
   static StoreStatus Skipped() {

@@ -1,0 +1,76 @@
+// ves-station's command line refuses what it must before anything starts:
+// plaintext off loopback, unreadable TLS files, bad ids (docs/station-run.md).
+// No server: each refusal is one line and exit status 2.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tests/integration/plaintext_probe.h"
+#include "tests/station/app/station_fixture.h"
+
+namespace ves::station::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+class StationCli : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = MakeTempDir("station-cli"); }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  ProcessResult Station(std::vector<std::string> args) {
+    args.insert(args.begin(), kStationBin);
+    args.insert(args.end(), {"--data-dir", (dir_ / "station").string()});
+    return RunProgram(args, dir_ / ("run-" + std::to_string(++runs_)), {},
+                      std::chrono::seconds(60));
+  }
+
+  static int Lines(const std::string& s) {
+    return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+  }
+
+  fs::path dir_;
+  int runs_{0};
+};
+
+TEST_F(StationCli, RunAndSyncRefusePlaintextOffLoopbackBeforeConnecting) {
+  ves::testing::NonLoopbackListener listener;
+  const std::string address = listener.address().empty() ? "192.0.2.1:50051" : listener.address();
+  const ProcessResult run =
+      Station({"run", "--trainee", kTrainee, "--case", "standard-adult", "--server", address,
+               "--token", "secret-token", "--headless", "--operator", "novice", "--out",
+               (dir_ / "out").string(), "--seconds", "1", "--upload-attempts", "1"});
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_EQ(Lines(run.err), 1) << run.err;
+  EXPECT_NE(run.err.find("refusing to send the token in plaintext to '" + address + "'"),
+            std::string::npos)
+      << run.err;
+  const ProcessResult sync =
+      Station({"sync", "--server", address, "--token", "secret-token", "--attempts", "1"});
+  EXPECT_EQ(sync.exit_code, 2) << sync.out << sync.err;
+  EXPECT_EQ(Lines(sync.err), 1) << sync.err;
+  EXPECT_NE(sync.err.find("--tls-ca"), std::string::npos) << sync.err;
+  if (!listener.address().empty()) {
+    EXPECT_EQ(listener.Connections(), 0);
+  }
+}
+
+TEST_F(StationCli, AnUnreadableCaFileIsOneLineAndExitStatus2) {
+  for (const std::string command : {"run", "sync"}) {
+    std::vector<std::string> args = {command, "--server", "ves.example.org:50051", "--token",
+                                     "t",     "--tls-ca", "/nonexistent.pem"};
+    if (command == "run") args.insert(args.end(), {"--trainee", kTrainee, "--case", "x"});
+    const ProcessResult r = Station(args);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_EQ(r.term_signal, 0) << command;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("--tls-ca /nonexistent.pem: cannot read the file"), std::string::npos)
+        << r.err;
+  }
+}
+
+}  // namespace
+}  // namespace ves::station::testing
