@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "patient_db/case_problem.h"
 #include "patient_db/case_regions.h"
 #include "patient_db/case_validate.h"
+#include "patient_db/limits.h"
 
 namespace ves::patient_db {
 namespace {
@@ -57,6 +59,18 @@ CsvTable ReadCsvTable(std::string_view text, const std::string& file,
                       std::vector<CaseProblem>& problems) {
   CsvTable table;
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM (spreadsheets)
+  // A binary file is one problem, said as such, not a header of garbage.
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if (byte < 0x20 && byte != '\t' && byte != '\r' && byte != '\n') {
+      char at[48];
+      std::snprintf(at, sizeof at, "byte 0x%02x at offset %zu", byte, i);
+      throw CaseError(file, "csv", -1, at, "not a text CSV file (a control byte: binary data?)");
+    }
+  }
+  if (!IsValidUtf8(text)) {
+    throw CaseError(file, "csv", -1, "", "not a text CSV file (not valid UTF-8: binary data?)");
+  }
   int line_number = 0;
   size_t start = 0;
   while (start <= text.size()) {
@@ -133,6 +147,17 @@ ves::v1::ColonCase BuildCase(const ImportedPoints& in, const std::string& file,
     problems.push_back({file, "region", -1, "",
                         "no region column: give the region of the whole centerline (--region)"});
   }
+  // Arcs, radius samples and region spans are derived from the points: a
+  // point that is not finite is reported once, here, instead of in each.
+  for (size_t i = 0; i < in.p_W_m.size(); ++i) {
+    const char* names[3] = {"centerline.x_m", "centerline.y_m", "centerline.z_m"};
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(in.p_W_m[i][k]) || std::abs(in.p_W_m[i][k]) > 1e6) {
+        problems.push_back({file, names[k], static_cast<int>(i), std::to_string(in.p_W_m[i][k]),
+                            "not a finite number in range"});
+      }
+    }
+  }
   if (!problems.empty()) throw CaseError(std::move(problems));
 
   ves::v1::ColonCase c;
@@ -185,9 +210,9 @@ void ReadRadiusAndRegion(const CsvTable& table, const std::map<std::string, int>
   for (const auto& row : table.rows) {
     if (columns.count("radius_mm")) {
       const auto r = ParseNumber(row.cells[columns.at("radius_mm")]);
-      if (!r) {
+      if (!r || !std::isfinite(*r)) {
         problems.push_back({file, "csv.radius_mm", row.line, row.cells[columns.at("radius_mm")],
-                            "not a number"});
+                            r ? "not a finite number" : "not a number"});
       }
       out.radius_m.push_back(r.value_or(0.0) * kMetresPerMillimetre);
     }
@@ -241,8 +266,14 @@ ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::str
     for (int k = 0; k < 3; ++k) {
       const std::string& cell = row.cells[columns.at(names[k])];
       const auto value = ParseNumber(cell);
-      if (!value) problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
-                                      "not a number"});
+      if (!value) {
+        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
+                            "not a number"});
+      } else if (!std::isfinite(*value)) {
+        // Said here, once: arcs, radii and regions derived from it would repeat it.
+        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
+                            "not a finite number"});
+      }
       p[k] = value.value_or(0.0) * kMetresPerMillimetre;
     }
     in.p_W_m.push_back(p);

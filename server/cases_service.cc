@@ -133,6 +133,8 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
 
  private:
   Status Take() {
+    const Status limits = CheckRequestLimits(request_);
+    if (!limits.ok()) return limits;
     if (request_.has_header()) {
       if (has_header_) return Status(StatusCode::INVALID_ARGUMENT, "a second header");
       header_ = request_.header();
@@ -238,11 +240,7 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
                                                   ves::v1::ListCasesResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
-  if (!a.ok()) {
-    reactor->Finish(ToGrpcStatus(a));
-    return reactor;
-  }
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus r = RequireRole(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list cases");
@@ -265,6 +263,8 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
 grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     grpc::CallbackServerContext* ctx, const ves::v1::DownloadCaseRequest* request) {
   using Error = ErrorReactor<grpc::ServerWriteReactor<ves::v1::CaseChunk>>;
+  const Status limits = CheckRequestLimits(*request);
+  if (!limits.ok()) return new Error(limits);
   Principal who;
   AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
   if (!a.ok()) return new Error(ToGrpcStatus(a));
@@ -279,9 +279,11 @@ grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     if (!row.ok()) return ToGrpcStatus(row.status);
     target = CaseTarget(row.value.case_id, row.value.version);
     if (!VisibleTo(row.value, who)) {
-      return Status(StatusCode::PERMISSION_DENIED, "case " + target +
-                                                       " is not shared with institution '" +
-                                                       who.institution + "'");
+      // As for a case that does not exist: its existence is not told.
+      const uint32_t version = request->version();
+      return Status(StatusCode::NOT_FOUND,
+                    "no case '" + request->case_id() + "'" +
+                        (version == 0 ? std::string() : " version " + std::to_string(version)));
     }
     if (request->offset() > row.value.size_bytes) {
       return Status(StatusCode::OUT_OF_RANGE,

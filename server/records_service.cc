@@ -2,9 +2,11 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
+#include <algorithm>
 #include <chrono>
 #include <map>
 
+#include "patient_db/limits.h"
 #include "server/services.h"
 #include "server/session_check.h"
 
@@ -67,15 +69,16 @@ patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
                                const std::string& target, const Status& result) {
   patient_db::AuditRow a;
   a.at_unix_ms = NowUnixMs();
+  // Bounded and printable whatever the request held (docs/server.md, "Limits").
   a.actor = who.token_id;
-  a.actor_label = who.label;
+  a.actor_label = patient_db::PrintableExcerpt(who.label, kMaxAuditTextBytes);
   a.role = patient_db::RoleName(who.role);
-  a.institution = who.institution;
+  a.institution = patient_db::PrintableExcerpt(who.institution, kMaxAuditTextBytes);
   a.action = action;
-  a.target = target;
+  a.target = patient_db::PrintableExcerpt(target, kMaxAuditTextBytes);
   a.result = result.ok() ? std::string("OK")
                           : std::string(StatusCodeName(result.error_code())) + ": " +
-                                result.error_message().substr(0, 200);
+                                patient_db::PrintableExcerpt(result.error_message(), 200);
   return a;
 }
 
@@ -86,8 +89,20 @@ void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
   reactor->Finish(status);
 }
 
+Status CheckRequestLimits(const google::protobuf::Message& request) {
+  const std::string problem = patient_db::CheckMessageLimits(request, "request");
+  if (problem.empty()) return Status::OK;
+  return Status(StatusCode::INVALID_ARGUMENT, problem);
+}
+
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, Principal* who) {
+           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who) {
+  // Bounded before anything looks at it: no store lookup, no audit row.
+  const Status limits = CheckRequestLimits(request);
+  if (!limits.ok()) {
+    reactor->Finish(limits);
+    return false;
+  }
   AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
   if (a.ok()) return true;
   reactor->Finish(ToGrpcStatus(a));
@@ -105,13 +120,7 @@ std::string DeterministicBytes(const google::protobuf::Message& m) {
   return out;
 }
 
-bool IsName(const std::string& s) {
-  if (s.empty() || s.size() > 128) return false;
-  for (char c : s) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return true;
-}
+bool IsName(const std::string& s) { return patient_db::IsPrintableId(s); }
 
 namespace {
 
@@ -139,6 +148,10 @@ void ToTrainee(const patient_db::TraineeRow& r, ves::v1::Trainee* t) {
   t->set_created_unix_ms(r.created_unix_ms);
 }
 
+Status HiddenTrainee(const std::string& id) {
+  return Status(StatusCode::NOT_FOUND, "no trainee '" + id + "'");
+}
+
 // Looks the trainee up and checks that `who` may read their records.
 Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std::string& id,
                        const std::string& what, patient_db::TraineeRow* trainee) {
@@ -147,8 +160,10 @@ Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std:
   if (!a.ok()) return ToGrpcStatus(a);
   auto found = deps.store->GetTrainee(id);
   if (!found.ok()) return ToGrpcStatus(found.status);
-  a = RequireTraineeReader(who, found.value, what);
-  if (!a.ok()) return ToGrpcStatus(a);
+  // Another institution's trainee (or, for a trainee, anyone else) answers
+  // as an absent one does: outside its institution a trainee id's existence
+  // is not told.
+  if (!RequireTraineeReader(who, found.value, what).ok()) return HiddenTrainee(id);
   *trainee = found.value;
   return Status::OK;
 }
@@ -171,12 +186,34 @@ patient_db::StoreResult<std::string> SessionsService::TraineeInstitution(
   return trainee.value.institution;
 }
 
+Status SessionsService::CheckRecordCase(const ves::v1::SessionRecord& rec,
+                                        const std::string& institution) {
+  const std::string named = "record.case_id = '" + rec.case_id() + "' version " +
+                            std::to_string(rec.case_version());
+  auto row = deps_.store->GetCase(rec.case_id(), rec.case_version());
+  if (!row.ok() && row.status.code != StoreCode::kNotFound) return ToGrpcStatus(row.status);
+  const bool visible = row.ok() && (row.value.institution == institution ||
+                                    std::find(row.value.shared_with.begin(),
+                                              row.value.shared_with.end(),
+                                              institution) != row.value.shared_with.end());
+  if (!visible) {
+    return Status(StatusCode::FAILED_PRECONDITION,
+                  named + ": no such case visible to institution '" + institution + "'");
+  }
+  if (!rec.case_sha256_hex().empty() && rec.case_sha256_hex() != row.value.payload_sha256_hex) {
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "record.case_sha256_hex = " + rec.case_sha256_hex() + ": " + named +
+                      " has payload sha256 " + row.value.payload_sha256_hex);
+  }
+  return Status::OK;
+}
+
 grpc::ServerUnaryReactor* SessionsService::UploadSession(
     grpc::CallbackServerContext* ctx, const ves::v1::UploadSessionRequest* request,
     ves::v1::UploadSessionResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const ves::v1::SessionRecord& rec = request->record();
   auto reject = [&](const Status& s) {
     FinishAudited(reactor, deps_, who, "session.upload", rec.uuid(), s);
@@ -185,16 +222,21 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kStation}, "upload sessions");
   if (!a.ok()) return reject(ToGrpcStatus(a));
   if (!request->has_record()) return reject(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
-  const std::string problem = CheckSessionRecord(rec);
+  const std::string problem = CheckSessionRecord(rec, NowUnixMs());
   if (!problem.empty()) return reject(Status(StatusCode::INVALID_ARGUMENT, problem));
   auto institution = TraineeInstitution(rec.trainee_id());
-  if (institution.status.code == StoreCode::kNotFound) {
+  // Absent, or of another institution: the same answer (no existence leak).
+  if (institution.status.code == StoreCode::kNotFound ||
+      (institution.ok() && !RequireInstitution(who, institution.value, "upload").ok())) {
     return reject(Status(StatusCode::FAILED_PRECONDITION,
-                         "record.trainee_id = '" + rec.trainee_id() + "': no such trainee"));
+                         "record.trainee_id = '" + rec.trainee_id() + "': no such trainee in "
+                         "institution '" + who.institution + "'"));
   }
   if (!institution.ok()) return reject(ToGrpcStatus(institution.status));
-  a = RequireInstitution(who, institution.value, "upload sessions for trainees");
-  if (!a.ok()) return reject(ToGrpcStatus(a));
+  // The case must exist in the version named and be visible to the trainee's
+  // institution; its payload hash, when the record gives one, must match.
+  const Status case_status = CheckRecordCase(rec, institution.value);
+  if (!case_status.ok()) return reject(case_status);
 
   patient_db::SessionRow row;
   row.uuid = rec.uuid();
@@ -219,10 +261,19 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
-      [reactor, response, body_sha, judge](const patient_db::StoreStatus& status,
+      [reactor, response, body_sha, judge, institution = institution.value](
+          const patient_db::StoreStatus& status,
                                            const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
           reactor->Finish(ToGrpcStatus(status));
+          return;
+        }
+        if (result.outcome == patient_db::SessionPut::kConflict &&
+            result.first.institution != institution) {
+          // Another institution's session: nothing about it is told.
+          reactor->Finish(Status(StatusCode::ALREADY_EXISTS,
+                                 "session " + result.first.uuid +
+                                     ": this uuid is taken; a record needs a new uuid"));
           return;
         }
         if (result.outcome == patient_db::SessionPut::kConflict) {
@@ -251,7 +302,7 @@ grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContex
                                                       ves::v1::AddTraineeResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const ves::v1::Trainee& t = request->trainee();
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "add trainees");
@@ -283,7 +334,7 @@ grpc::ServerUnaryReactor* TraineesService::ListTrainees(
     ves::v1::ListTraineesResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
   const Status status = [&]() -> Status {
@@ -305,7 +356,7 @@ grpc::ServerUnaryReactor* TraineesService::ListSessions(
     ves::v1::ListSessionsResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps_, who, request->trainee_id(), "list the sessions", &trainee);
@@ -324,7 +375,7 @@ grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
     ves::v1::LearningCurveResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s =
@@ -358,7 +409,7 @@ grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContex
                                                       ves::v1::GetSessionResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
                                      StoreRole::kTrainee}, "read sessions");
@@ -367,6 +418,9 @@ grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContex
     if (!row.ok()) return ToGrpcStatus(row.status);
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps_, who, row.value.trainee_id, "read the sessions", &trainee);
+    if (s.error_code() == StatusCode::NOT_FOUND) {
+      return Status(StatusCode::NOT_FOUND, "no session '" + request->uuid() + "'");
+    }
     if (!s.ok()) return s;
     if (!response->mutable_record()->ParseFromString(row.value.body)) {
       return Status(StatusCode::DATA_LOSS, "stored session " + request->uuid() + " is corrupt");
@@ -385,7 +439,7 @@ grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext*
                                                     ves::v1::CreateTokenResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
   const Status status = [&]() -> Status {
@@ -441,7 +495,7 @@ grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* c
                                                   ves::v1::ListAuditResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "read the audit log");
   if (!a.ok()) {
     FinishAudited(reactor, deps_, who, "audit.list", "", ToGrpcStatus(a));

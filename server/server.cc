@@ -1,12 +1,15 @@
 #include "server/server.h"
 
+#include <google/protobuf/stubs/logging.h>
 #include <grpcpp/support/server_interceptor.h>
 #include <spdlog/spdlog.h>
 
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
+#include "patient_db/limits.h"
 #include "patient_db/net_address.h"
 
 namespace ves::server {
@@ -49,6 +52,69 @@ class CallLogInterceptor final : public grpc::experimental::Interceptor {
  private:
   grpc::experimental::ServerRpcInfo* info_;
   std::chrono::steady_clock::time_point start_;
+};
+
+// What protobuf last logged on this thread while parsing (it names a string
+// field that is not UTF-8); gRPC parses a request on the thread that then
+// runs the interceptors below.
+thread_local std::string last_parse_error;
+google::protobuf::LogHandler* previous_log_handler = nullptr;
+
+void RecordParseError(google::protobuf::LogLevel level, const char* file, int line,
+                      const std::string& message) {
+  if (level >= google::protobuf::LOGLEVEL_ERROR) last_parse_error = message;
+  if (previous_log_handler != nullptr) previous_log_handler(level, file, line, message);
+}
+
+void InstallParseErrorRecorder() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    previous_log_handler = google::protobuf::SetLogHandler(&RecordParseError);
+  });
+}
+
+// gRPC answers a request it cannot parse (not protobuf, or a string field
+// that is not UTF-8) UNIMPLEMENTED with no message, before any handler runs.
+// This turns that answer into INVALID_ARGUMENT saying what was wrong.
+class MalformedRequestInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit MalformedRequestInterceptor(grpc::experimental::ServerRpcInfo* info) : info_(info) {}
+
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    using grpc::experimental::InterceptionHookPoints;
+    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::POST_RECV_MESSAGE) &&
+        methods->GetRecvMessage() == nullptr &&
+        info_->type() == grpc::experimental::ServerRpcInfo::Type::UNARY) {
+      malformed_ = true;
+      why_ = std::move(last_parse_error);
+      last_parse_error.clear();
+    }
+    if (malformed_ &&
+        methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS) &&
+        methods->GetSendStatus().error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+      methods->ModifySendStatus(grpc::Status(
+          grpc::StatusCode::INVALID_ARGUMENT,
+          std::string("request is not a valid message for ") + info_->method() +
+              ": malformed protobuf, or a string field that is not UTF-8" +
+              (why_.empty() ? std::string()
+                            : " (" + patient_db::PrintableExcerpt(why_, 200) + ")")));
+    }
+    methods->Proceed();
+  }
+
+ private:
+  grpc::experimental::ServerRpcInfo* info_;
+  bool malformed_ = false;
+  std::string why_;  // protobuf's own words, when it logged any
+};
+
+class MalformedRequestFactory final
+    : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo* info) override {
+    return new MalformedRequestInterceptor(info);
+  }
 };
 
 class CallLogFactory final : public grpc::experimental::ServerInterceptorFactoryInterface {
@@ -128,11 +194,11 @@ void VesServer::Start() {
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
-  if (options_.log_calls) {
-    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> logs;
-    logs.push_back(std::make_unique<CallLogFactory>());
-    builder.experimental().SetInterceptorCreators(std::move(logs));
-  }
+  InstallParseErrorRecorder();
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
+  creators.push_back(std::make_unique<MalformedRequestFactory>());
+  if (options_.log_calls) creators.push_back(std::make_unique<CallLogFactory>());
+  builder.experimental().SetInterceptorCreators(std::move(creators));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
     server_.reset();

@@ -93,10 +93,10 @@ int RunCaseList(const CommandArgs& args) {
   if (!status.ok()) return ReportRpcError("case list", status.error_code(), status.error_message());
   for (const auto& c : r.cases()) {
     // The payload hash, as `case validate` and the station print it.
-    std::printf("%-24s v%-3u %-12s %-16s %10llu  %.12s  %s\n", c.case_id().c_str(), c.version(),
-                ves::v1::Difficulty_Name(c.difficulty()).c_str() + 11, c.institution().c_str(),
-                static_cast<unsigned long long>(c.size_bytes()), c.payload_sha256_hex().c_str(),
-                c.title().c_str());
+    std::printf("%-24s v%-3u %-12s %-16s %10llu  %.12s  %s\n", Shown(c.case_id()).c_str(),
+                c.version(), ves::v1::Difficulty_Name(c.difficulty()).c_str() + 11,
+                Shown(c.institution()).c_str(), static_cast<unsigned long long>(c.size_bytes()),
+                Shown(c.payload_sha256_hex()).c_str(), Shown(c.title()).c_str());
   }
   return kExitOk;
 }

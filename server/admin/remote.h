@@ -27,6 +27,9 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
                 int deadline_s);
 // "YYYY-MM-DD HH:MM" in UTC: the date column of the tables ves-admin prints.
 std::string FormatUtcMinute(int64_t unix_ms);
+// A string from the server made safe for the terminal: control characters
+// (an ANSI escape in a display name) escaped as \xNN, cut at 256 bytes.
+std::string Shown(const std::string& text);
 // Prints "ves-admin NAME: CODE: message" and returns kExitFailed.
 int ReportRpcError(const std::string& name, int code, const std::string& message);
 

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "patient_db/case_format.h"
+#include "patient_db/limits.h"
 #include "server/admin/remote.h"
 #include "server/auth.h"
 #include "ves/v1/services.grpc.pb.h"
@@ -69,13 +70,15 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
   return -1;
 }
 
+std::string Shown(const std::string& text) { return patient_db::PrintableExcerpt(text, 256); }
+
 int ReportRpcError(const std::string& name, int code, const std::string& message) {
   static const char* const kNames[] = {
       "OK",        "CANCELLED",         "UNKNOWN",   "INVALID_ARGUMENT", "DEADLINE_EXCEEDED",
       "NOT_FOUND", "ALREADY_EXISTS",    "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
       "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED", "INTERNAL",
       "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
-  std::string first_line = message.substr(0, message.find('\n'));
+  std::string first_line = Shown(message.substr(0, message.find('\n')));
   std::cerr << "ves-admin " << name << ": " << (code >= 0 && code <= 16 ? kNames[code] : "ERROR")
             << ": " << first_line << "\n";
   return kExitFailed;
@@ -181,7 +184,8 @@ int RunTraineeCommand(const CommandArgs& args) {
     ves::v1::AddTraineeResponse r;
     auto status = stub->AddTrainee(&ctx, q, &r);
     if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    std::cout << "added " << r.trainee().trainee_id() << " (" << r.trainee().institution()
+    std::cout << "added " << Shown(r.trainee().trainee_id()) << " ("
+              << Shown(r.trainee().institution())
               << ")\n";
     return kExitOk;
   }
@@ -192,8 +196,8 @@ int RunTraineeCommand(const CommandArgs& args) {
     auto status = stub->ListTrainees(&ctx, q, &r);
     if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
     for (const auto& t : r.trainees()) {
-      std::printf("%-24s %-20s %s\n", t.trainee_id().c_str(), t.institution().c_str(),
-                  t.display_name().c_str());
+      std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
+                  Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
     }
     return kExitOk;
   }
@@ -227,7 +231,7 @@ int RunScoresCommand(const CommandArgs& args) {
     const std::string to_cecum =
         s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
     std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
-                FormatUtcMinute(s.start_unix_ms()).c_str(), s.case_id().c_str(),
+                FormatUtcMinute(s.start_unix_ms()).c_str(), Shown(s.case_id()).c_str(),
                 OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
   }
   return kExitOk;
@@ -289,9 +293,9 @@ int RunAuditCommand(const CommandArgs& args) {
   if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
   for (const auto& e : r.entries()) {
     std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatUtcMinute(e.at_unix_ms()).c_str(),
-                e.actor().c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
-                e.institution().c_str(), e.action().c_str(), e.target().c_str(),
-                e.result().c_str());
+                Shown(e.actor()).c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
+                Shown(e.institution()).c_str(), Shown(e.action()).c_str(),
+                Shown(e.target()).c_str(), Shown(e.result()).c_str());
   }
   return kExitOk;
 }

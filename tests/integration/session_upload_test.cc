@@ -5,12 +5,16 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <grpcpp/generic/generic_stub.h>
+
 #include <cmath>
+#include <condition_variable>
 #include <limits>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "patient_db/case_format.h"
 #include "tests/integration/test_server.h"
 
 namespace ves::server::testing {
@@ -22,6 +26,7 @@ class SessionUpload : public ::testing::Test {
  protected:
   void SetUp() override {
     server_.AddTrainee("t1", "north");
+    PutSampleCase(server_.store(), "north");
     station_ = server_.Client(server_.MakeToken(StoreRole::kStation, "north"));
     supervisor_ = server_.Client(server_.MakeToken(StoreRole::kSupervisor, "north"));
   }
@@ -152,7 +157,48 @@ TEST_F(SessionUpload, GarbageBytesOnThePortDoNotStopTheServer) {
   EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
 }
 
+// Bytes no UploadSessionRequest parses from: gRPC's own answer was
+// UNIMPLEMENTED with no message; now INVALID_ARGUMENT saying why.
+TEST_F(SessionUpload, AMalformedRequestIsInvalidArgumentWithAMessage) {
+  // record { station_id: "\xff" }: field 1 (message) holding field 6 (string).
+  const std::string not_utf8("\x0a\x03\x32\x01\xff", 5);
+  const std::string not_protobuf("\xff\xff\xff\xff", 4);
+  for (const std::string& bytes : {not_utf8, not_protobuf}) {
+    grpc::GenericStub stub(MakeClientChannel(station_));
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, station_);
+    grpc::Slice slice(bytes);
+    grpc::ByteBuffer request(&slice, 1), reply;
+    grpc::Status status;
+    std::mutex mutex;
+    std::condition_variable done_cv;
+    bool done = false;
+    stub.UnaryCall(&ctx, "/ves.v1.Sessions/UploadSession", grpc::StubOptions(), &request, &reply,
+                   [&](grpc::Status s) {
+                     std::lock_guard lock(mutex);
+                     status = s;
+                     done = true;
+                     done_cv.notify_one();
+                   });
+    std::unique_lock lock(mutex);
+    done_cv.wait(lock, [&] { return done; });
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(status.error_message().find("/ves.v1.Sessions/UploadSession: malformed protobuf"),
+              std::string::npos)
+        << status.error_message();
+    if (bytes == not_utf8) {
+      EXPECT_NE(status.error_message().find("ves.v1.SessionRecord.station_id"), std::string::npos)
+          << status.error_message();
+    }
+  }
+  EXPECT_EQ(server_.store().CountSessions().value, 0);
+}
+
 TEST_F(SessionUpload, SupervisorSeesScoresAndLearningCurvePerCase) {
+  PutTestCase(server_.store(),
+              patient_db::LoadCaseFile(std::string(VES_SOURCE_DIR) +
+                                       "/patient_db/cases/paper-sigmoid.textproto"),
+              "north");
   ves::v1::UploadSessionResponse r;
   for (int i = 0; i < 3; ++i) {
     auto record = MakeRecord(NewUuid(rng_), "t1", i);

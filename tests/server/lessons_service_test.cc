@@ -25,6 +25,7 @@ using patient_db::StoreRole;
 constexpr StatusCode OK = StatusCode::OK;
 constexpr StatusCode PD = StatusCode::PERMISSION_DENIED;
 constexpr StatusCode UA = StatusCode::UNAUTHENTICATED;
+constexpr StatusCode NF = StatusCode::NOT_FOUND;
 constexpr char kFirstLesson[] = "x-ray-free-1-gentle-minute";
 constexpr char kSecondLesson[] = "x-ray-free-2-cecum-with-aids";
 // The first lesson's time limit; scripted sessions run all of it.
@@ -83,6 +84,7 @@ class Lessons : public ::testing::Test {
     server_.AddTrainee("s1", "south");
     PutShippedCase(server_.store(), "paper-sigmoid", "north");
     PutShippedCase(server_.store(), "redundant-sigmoid", "north");
+    PutShippedCase(server_.store(), "standard-adult", "north");  // MakeRecord's case
     admin_ = server_.MakeToken(StoreRole::kAdmin, "north");
     supervisor_ = server_.MakeToken(StoreRole::kSupervisor, "north");
     station_ = server_.MakeToken(StoreRole::kStation, "north");
@@ -263,14 +265,16 @@ TEST_F(Lessons, RoleMatrix) {
                                         "trainee",       "supervisor_south", "station_south",
                                         "trainee_south", "none",          "wrong"};
   const std::map<std::string, std::vector<StatusCode>> expected = {
+      // Another institution's trainee, session or curriculum answers NOT_FOUND,
+      // as one that does not exist (NF): its existence is not told.
       {"CreateCurriculum", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
       {"ListCurricula", {OK, OK, OK, PD, PD, PD, PD, UA, UA}},
-      {"AssignCurriculum", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"SetTraineeGroup", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"GetNextLesson", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
-      {"GetProgress(trainee)", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
+      {"AssignCurriculum", {OK, OK, PD, PD, NF, PD, PD, UA, UA}},
+      {"SetTraineeGroup", {OK, OK, PD, PD, NF, PD, PD, UA, UA}},
+      {"GetNextLesson", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
+      {"GetProgress(trainee)", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
       {"GetProgress(group)", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"GetLessonVerdict", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
+      {"GetLessonVerdict", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
   };
   for (const auto& [method, codes] : expected) {
     for (size_t i = 0; i < who.size(); ++i) {
