@@ -283,10 +283,34 @@ ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::str
   return BuildCase(in, file_label, options, "imported centerline (CSV)");
 }
 
+namespace {
+
+ves::v1::ColonCase ImportSlicerMarkupsOrThrow(std::string_view json_text,
+                                              const std::optional<std::string>& radius_csv_text,
+                                              const std::string& file_label,
+                                              const ImportOptions& options);
+
+}  // namespace
+
 ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
                                        const std::optional<std::string>& radius_csv_text,
                                        const std::string& file_label,
                                        const ImportOptions& options) {
+  // A member of the wrong JSON type ("coordinateSystem": 5) is a problem of
+  // the file, not an abort (found by fuzzing: tests/fuzz/regressions/markups).
+  try {
+    return ImportSlicerMarkupsOrThrow(json_text, radius_csv_text, file_label, options);
+  } catch (const nlohmann::json::exception& e) {
+    throw CaseError(file_label, "json", -1, "", std::string("unexpected content: ") + e.what());
+  }
+}
+
+namespace {
+
+ves::v1::ColonCase ImportSlicerMarkupsOrThrow(std::string_view json_text,
+                                              const std::optional<std::string>& radius_csv_text,
+                                              const std::string& file_label,
+                                              const ImportOptions& options) {
   using nlohmann::json;
   json doc;
   try {
@@ -357,5 +381,7 @@ ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
   if (!problems.empty()) throw CaseError(std::move(problems));
   return BuildCase(in, file_label, options, "imported centerline (3D Slicer markups)");
 }
+
+}  // namespace
 
 }  // namespace ves::patient_db

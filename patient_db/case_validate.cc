@@ -11,6 +11,7 @@
 
 #include "patient_db/case_geometry.h"
 #include "patient_db/case_regions.h"
+#include "patient_db/limits.h"
 
 namespace ves::patient_db {
 namespace {
@@ -426,6 +427,15 @@ bool LooksLikeFineDate(const std::string& text) {
 
 std::vector<CaseProblem> ValidateCase(const ColonCase& colon_case, const std::string& file_label) {
   Checker check(file_label);
+  // Text that is not UTF-8 (a textproto "\xff" escape), control characters in
+  // a title, an over-long note: what every other reader of the case (the
+  // bundle's protobuf parser, a terminal) would trip on.
+  bool over = false;
+  const LimitProblem limit = FindLimitProblem(colon_case, "case", &over);
+  // (Counts of points, samples and regions have their own rules below.)
+  if (over && limit.is_text) {
+    check.Add(limit.path.substr(5), -1, "\"" + limit.excerpt + "\"", limit.why);
+  }
   CheckHeader(colon_case, check);
   const bool centerline_usable = CheckCenterline(colon_case, check);
   const double length_m = centerline_usable ? CalcCenterlineLength_m(colon_case) : 0.0;

@@ -111,8 +111,12 @@ std::string CheckText(std::string_view value, const FieldLimit& limit) {
   return {};
 }
 
-std::string CheckFields(const Message& m, const std::string& path, int depth) {
-  if (depth > 16) return path + ": nested too deep";
+// True (and *out filled) at the first field of `m` over its limit.
+bool CheckFields(const Message& m, const std::string& path, int depth, LimitProblem* out) {
+  if (depth > 16) {
+    *out = {path, "", "nested too deep"};
+    return true;
+  }
   const auto* d = m.GetDescriptor();
   const auto* r = m.GetReflection();
   for (int i = 0; i < d->field_count(); ++i) {
@@ -124,7 +128,9 @@ std::string CheckFields(const Message& m, const std::string& path, int depth) {
       const int n = r->FieldSize(m, f);
       const int max_items = LimitItemsOf(*f);
       if (n > max_items) {
-        return name + ": " + std::to_string(n) + " items, more than " + std::to_string(max_items);
+        *out = {name, "",
+                std::to_string(n) + " items, more than " + std::to_string(max_items)};
+        return true;
       }
       if (!is_string && !is_message) continue;
       const FieldLimit limit = is_string ? LimitOf(*f) : FieldLimit{};
@@ -134,10 +140,12 @@ std::string CheckFields(const Message& m, const std::string& path, int depth) {
           std::string scratch;
           const std::string& v = r->GetRepeatedStringReference(m, f, k, &scratch);
           const std::string why = CheckText(v, limit);
-          if (!why.empty()) return item + " = '" + PrintableExcerpt(v, 32) + "': " + why;
-        } else {
-          std::string found = CheckFields(r->GetRepeatedMessage(m, f, k), item, depth + 1);
-          if (!found.empty()) return found;
+          if (!why.empty()) {
+            *out = {item, PrintableExcerpt(v, 32), why, true};
+            return true;
+          }
+        } else if (CheckFields(r->GetRepeatedMessage(m, f, k), item, depth + 1, out)) {
+          return true;
         }
       }
       continue;
@@ -146,13 +154,16 @@ std::string CheckFields(const Message& m, const std::string& path, int depth) {
       std::string scratch;
       const std::string& v = r->GetStringReference(m, f, &scratch);
       const std::string why = CheckText(v, LimitOf(*f));
-      if (!why.empty()) return name + " = '" + PrintableExcerpt(v, 32) + "': " + why;
-    } else if (is_message && r->HasField(m, f)) {
-      std::string found = CheckFields(r->GetMessage(m, f), name, depth + 1);
-      if (!found.empty()) return found;
+      if (!why.empty()) {
+        *out = {name, PrintableExcerpt(v, 32), why, true};
+        return true;
+      }
+    } else if (is_message && r->HasField(m, f) &&
+               CheckFields(r->GetMessage(m, f), name, depth + 1, out)) {
+      return true;
     }
   }
-  return {};
+  return false;
 }
 
 }  // namespace
@@ -221,8 +232,18 @@ std::string PrintableExcerpt(std::string_view text, std::size_t max_bytes) {
   return out;
 }
 
+LimitProblem FindLimitProblem(const Message& message, const std::string& path, bool* found) {
+  LimitProblem problem;
+  *found = CheckFields(message, path, 0, &problem);
+  return problem;
+}
+
 std::string CheckMessageLimits(const Message& message, const std::string& path) {
-  return CheckFields(message, path, 0);
+  bool found = false;
+  const LimitProblem p = FindLimitProblem(message, path, &found);
+  if (!found) return {};
+  if (!p.is_text) return p.path + ": " + p.why;
+  return p.path + " = '" + p.excerpt + "': " + p.why;
 }
 
 }  // namespace ves::patient_db

@@ -69,6 +69,16 @@ bool IsPrintableId(std::string_view id);
 // "…(N bytes)" when cut.
 std::string PrintableExcerpt(std::string_view text, std::size_t max_bytes = 64);
 
+// The first field of a message over its limit.
+struct LimitProblem {
+  std::string path;     // "record.station_id", "case.centerline"
+  std::string excerpt;  // PrintableExcerpt of the value (strings; empty otherwise)
+  std::string why;      // "9437184 bytes, more than 128", "control character U+001B"
+  bool is_text = false;  // a string or bytes value (else a count or the nesting)
+};
+LimitProblem FindLimitProblem(const google::protobuf::Message& message, const std::string& path,
+                              bool* found);
+
 // Empty when every field of `message` (recursively) is within its limit;
 // otherwise one line naming the first field out of bounds, e.g.
 // "record.station_id: 9437184 bytes, more than 128" or

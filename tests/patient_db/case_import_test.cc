@@ -238,5 +238,22 @@ TEST(CaseImport, IdFromFileName) {
   EXPECT_EQ(CaseIdFromFileName("???.csv"), "imported-case");
 }
 
+// A member of the wrong JSON type aborted the process (uncaught
+// nlohmann::json::type_error); now it is one problem naming the file.
+TEST(CaseImportMarkups, AMemberOfTheWrongTypeIsAProblemNotAnAbort) {
+  for (const char* text : {R"({"markups":[{"coordinateSystem":5,"controlPoints":[]}]})",
+                           R"({"markups":[{"coordinateUnits":[],"controlPoints":[]}]})"}) {
+    try {
+      ImportSlicerMarkups(text, std::nullopt, "m.mrk.json");
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const CaseError& e) {
+      ASSERT_EQ(e.problems().size(), 1u) << e.what();
+      EXPECT_EQ(e.problems()[0].field, "json");
+      EXPECT_NE(e.problems()[0].message.find("type must be string"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ves::patient_db

@@ -260,6 +260,23 @@ TEST(CaseValidate, TooManyPointsOrTooLongIsOneProblem) {
   EXPECT_NE(problems[0].message.find("longer than 3 m"), std::string::npos) << problems[0].message;
 }
 
+// Found by fuzzing (tests/fuzz/regressions/textproto): text format escapes
+// can put bytes that are not UTF-8 in a string; such a case passed validation
+// and then could not be read back from its own bundle.
+TEST(CaseValidate, TextThatIsNotUtf8OrHasControlCharactersIsRejected) {
+  auto c = MakeValidCase();
+  c.mutable_provenance()->set_notes("scanned \xff\xfe");
+  auto problems = ValidateCase(c, "x");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_EQ(problems[0].ToString(),
+            "x: provenance.notes = \"scanned \\xff\\xfe\": not valid UTF-8 (byte 8)");
+  c = MakeValidCase();
+  c.set_title("red \x1b[31m");
+  problems = ValidateCase(c, "x");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_NE(problems[0].message.find("control character U+001B"), std::string::npos);
+}
+
 TEST(CaseValidate, RegionsOverlappingRejected) {
   ScratchDir dir;
   auto c = MakeValidCase();
