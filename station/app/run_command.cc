@@ -21,8 +21,11 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
+#include "patient_db/limits.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
@@ -148,6 +151,18 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   if (vm.count("scope")) o.scope_path = vm["scope"].as<std::string>();
   o.data_dir = vm["data-dir"].as<std::string>();
   o.station_id = vm.count("station-id") ? vm["station-id"].as<std::string>() : HostName();
+  // Ids go into the record and to the server: refused here, before a session
+  // runs, rather than by the server after it (docs/server.md, "Limits").
+  for (const auto& [flag, id] : {std::pair<const char*, const std::string*>{"--trainee",
+                                                                            &o.trainee_id},
+                                 {"--case", &o.case_id},
+                                 {"--station-id", &o.station_id}}) {
+    if ((!id->empty() || std::string_view(flag) != "--case") && !patient_db::IsPrintableId(*id)) {
+      throw UsageError(std::string(flag) + " '" + patient_db::PrintableExcerpt(*id, 40) +
+                       "' must be 1.." + std::to_string(patient_db::kMaxIdBytes) +
+                       " bytes of printable UTF-8");
+    }
+  }
   o.headless = vm.count("headless") > 0;
   if (o.headless) {
     if (!vm.count("operator")) throw UsageError("--headless needs --operator novice|expert");

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/integration/plaintext_probe.h"
@@ -69,6 +70,29 @@ TEST_F(StationCli, AnUnreadableCaFileIsOneLineAndExitStatus2) {
     EXPECT_EQ(Lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("--tls-ca /nonexistent.pem: cannot read the file"), std::string::npos)
         << r.err;
+  }
+}
+
+// Issue #20: a station id that is not UTF-8 ran a whole session, was
+// committed and then blocked the outbox. Now it is refused before anything.
+TEST_F(StationCli, IdsThatAreNotPrintableUtf8AreRefusedBeforeTheSession) {
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"--station-id", "st\xff\xfe"}, {"--station-id", "red\x1b[31m"},
+      {"--trainee", std::string(200, 't')}, {"--case", "adult\x07"}};
+  for (const auto& [flag, value] : bad) {
+    std::vector<std::string> args = {"run", "--trainee", kTrainee, "--case", "standard-adult",
+                                     "--headless", "--operator", "novice", "--out",
+                                     (dir_ / "out").string(), "--seconds", "1"};
+    for (size_t i = 0; i + 1 < args.size(); ++i) {
+      if (args[i] == flag) args[i + 1] = value;
+    }
+    if (flag == "--station-id") args.insert(args.end(), {flag, value});
+    const ProcessResult r = Station(args);
+    EXPECT_EQ(r.exit_code, 2) << flag << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find(flag + " '"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("printable UTF-8"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "station" / "outbox.db")) << "a session ran for " << flag;
   }
 }
 
