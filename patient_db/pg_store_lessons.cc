@@ -105,14 +105,17 @@ StoreResult<CurriculumRow> PgStore::GetCurriculum(const std::string& curriculum_
   return out;
 }
 
-StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution) {
+StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution,
+                                                               const ListPage& page) {
   std::vector<CurriculumRow> out;
   StoreStatus st = Transact("list curricula", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
     pqxx::result ids = tx.exec_params(
         "SELECT curriculum_id FROM curricula WHERE ($1 = '' OR institution = $1) "
-        "ORDER BY curriculum_id COLLATE \"C\"",
-        institution);
+        "AND ($2 = 0 OR curriculum_id COLLATE \"C\" > $3) "
+        "ORDER BY curriculum_id COLLATE \"C\" LIMIT $4",
+        institution, page.has_after ? 1 : 0, page.after_text,
+        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
     for (const auto& id : ids) {
       CurriculumRow row;
       StoreStatus read = ReadCurriculum(tx, id[0].as<std::string>(), &row);

@@ -136,14 +136,15 @@ StoreResult<CurriculumRow> SqliteStore::GetCurriculum(const std::string& curricu
 }
 
 StoreResult<std::vector<CurriculumRow>> SqliteStore::ListCurricula(
-    const std::string& institution) {
+    const std::string& institution, const ListPage& page) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
       "SELECT curriculum_id FROM curricula WHERE (? = '' OR institution = ?) "
-      "ORDER BY curriculum_id",
+      "AND (? = 0 OR curriculum_id > ?) ORDER BY curriculum_id LIMIT ?",
       nullptr);
   if (!s) return Internal(r.db(), "list curricula");
-  s->Bind(1, institution).Bind(2, institution);
+  s->Bind(1, institution).Bind(2, institution).Bind(3, int64_t{page.has_after});
+  s->Bind(4, page.after_text).Bind(5, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<std::string> ids;
   while (s->Step(&rc)) ids.push_back(s->Text(0));

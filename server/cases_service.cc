@@ -251,9 +251,23 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
     filter.institution = request->institution();
     filter.all_versions = request->all_versions();
     if (who.role != StoreRole::kAdmin) filter.visible_to = who.institution;
+    const Status token = ReadPageToken(request->page_token(), "cases", &filter.page);
+    if (!token.ok()) return token;
+    const int size = PageSizeOf(request->page_size());
+    filter.page.limit = size + 1;  // one more tells whether a next page exists
     auto rows = deps_.store->ListCases(filter);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& row : rows.value) ToSummary(row, response->add_cases());
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      ToSummary(rows.value[i], response->add_cases());
+      bytes += response->cases(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        const auto& last = rows.value[i];
+        response->set_next_page_token(MakePageToken("cases", last.version, last.case_id));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "case.list", request->institution(), status);

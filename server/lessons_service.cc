@@ -185,12 +185,26 @@ grpc::ServerUnaryReactor* LessonsService::ListCurricula(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list curricula");
     if (a.ok()) a = RequireInstitution(who, institution, "list the curricula");
     if (!a.ok()) return ToGrpcStatus(a);
-    auto rows = deps_.store->ListCurricula(institution);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request->page_token(), "curricula", &page);
+    if (!token.ok()) return token;
+    // Curricula are large (up to 200 lessons each): ten a page by default.
+    const int size = PageSizeOf(request->page_size(), 10);
+    page.limit = size + 1;
+    auto rows = deps_.store->ListCurricula(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) {
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      const auto& r = rows.value[i];
       if (!response->add_curricula()->ParseFromString(r.body)) {
         return Status(StatusCode::DATA_LOSS, "stored curriculum " + r.curriculum_id +
                                                  " is corrupt");
+      }
+      bytes += r.body.size() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        response->set_next_page_token(MakePageToken("curricula", 0, r.curriculum_id));
+        break;
       }
     }
     return Status::OK;

@@ -3,6 +3,7 @@
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <map>
 
@@ -121,6 +122,36 @@ std::string DeterministicBytes(const google::protobuf::Message& m) {
 }
 
 bool IsName(const std::string& s) { return patient_db::IsPrintableId(s); }
+
+int PageSizeOf(uint32_t requested, int default_size) {
+  if (requested == 0) return default_size;
+  return static_cast<int>(std::min<uint32_t>(requested, patient_db::kMaxPageSize));
+}
+
+std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text) {
+  return listing + ":" + std::to_string(number) + ":" + text;
+}
+
+Status ReadPageToken(const std::string& token, const std::string& listing,
+                     patient_db::ListPage* page) {
+  if (token.empty()) return Status::OK;
+  const auto bad = [&] {
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "page_token = '" + patient_db::PrintableExcerpt(token, 40) +
+                      "': not a next_page_token of this listing");
+  };
+  if (token.compare(0, listing.size() + 1, listing + ":") != 0) return bad();
+  const size_t number_end = token.find(':', listing.size() + 1);
+  if (number_end == std::string::npos) return bad();
+  const std::string number = token.substr(listing.size() + 1, number_end - listing.size() - 1);
+  int64_t value = 0;
+  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
+  if (number.empty() || ec != std::errc() || end != number.data() + number.size()) return bad();
+  page->has_after = true;
+  page->after_number = value;
+  page->after_text = token.substr(number_end + 1);
+  return Status::OK;
+}
 
 namespace {
 
@@ -342,9 +373,23 @@ grpc::ServerUnaryReactor* TraineesService::ListTrainees(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list trainees");
     if (a.ok()) a = RequireInstitution(who, institution, "list the trainees");
     if (!a.ok()) return ToGrpcStatus(a);
-    auto rows = deps_.store->ListTrainees(institution);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request->page_token(), "trainees", &page);
+    if (!token.ok()) return token;
+    const int size = PageSizeOf(request->page_size());
+    page.limit = size + 1;  // one more tells whether a next page exists
+    auto rows = deps_.store->ListTrainees(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) ToTrainee(r, response->add_trainees());
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      ToTrainee(rows.value[i], response->add_trainees());
+      bytes += response->trainees(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        response->set_next_page_token(MakePageToken("trainees", 0, rows.value[i].trainee_id));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "trainee.list", institution, status);
@@ -361,9 +406,24 @@ grpc::ServerUnaryReactor* TraineesService::ListSessions(
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps_, who, request->trainee_id(), "list the sessions", &trainee);
     if (!s.ok()) return s;
-    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id());
+    patient_db::ListPage page;
+    s = ReadPageToken(request->page_token(), "sessions", &page);
+    if (!s.ok()) return s;
+    const int size = PageSizeOf(request->page_size());
+    page.limit = size + 1;
+    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id(), page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) *response->add_sessions() = ToSummary(r);
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      *response->add_sessions() = ToSummary(rows.value[i]);
+      bytes += response->sessions(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        const auto& last = rows.value[i];
+        response->set_next_page_token(MakePageToken("sessions", last.start_unix_ms, last.uuid));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "trainee.sessions", request->trainee_id(), status);
@@ -501,12 +561,22 @@ grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* c
     FinishAudited(reactor, deps_, who, "audit.list", "", ToGrpcStatus(a));
     return reactor;
   }
-  const int limit =
-      request->limit() == 0 ? 1000 : static_cast<int>(std::min(request->limit(), 100000u));
-  auto rows = deps_.store->ListAudit(request->since_unix_ms(), limit);
+  const int size = PageSizeOf(request->limit(), patient_db::kMaxPageSize);
+  patient_db::ListPage page;
+  const Status token = ReadPageToken(request->page_token(), "audit", &page);
+  if (!token.ok()) {
+    reactor->Finish(token);
+    return reactor;
+  }
+  auto rows = deps_.store->ListAudit(request->since_unix_ms(), size + 1,
+                                     page.has_after ? page.after_number : 0);
   if (!rows.ok()) {
     reactor->Finish(ToGrpcStatus(rows.status));
     return reactor;
+  }
+  if (static_cast<int>(rows.value.size()) > size) {
+    rows.value.resize(size);
+    response->set_next_page_token(MakePageToken("audit", rows.value.back().id, ""));
   }
   for (const auto& r : rows.value) {
     auto* e = response->add_entries();

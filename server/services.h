@@ -10,6 +10,7 @@
 
 #include <google/protobuf/message.h>
 
+#include "patient_db/limits.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/lesson_judge.h"
@@ -25,6 +26,9 @@ namespace ves::server {
 inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
 inline constexpr uint64_t kMaxCaseUploadBytes = 256ull << 20;  // a bundle's limit
 inline constexpr size_t kMaxAuditTextBytes = 160;              // audit target, label, institution
+// A list reply stops early (with a next_page_token) past this many bytes,
+// whatever its page size: no reply can outgrow the 16 MiB message limit.
+inline constexpr size_t kPageReplyBudgetBytes = 8u << 20;
 
 // What every handler needs; owned by VesServer.
 struct ServiceDeps {
@@ -172,6 +176,15 @@ grpc::Status CheckRequestLimits(const google::protobuf::Message& request);
 // (UNAUTHENTICATED); on failure finishes it and returns false.
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
            const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who);
+// List replies are pages (docs/server.md, "Limits"): the size asked for, 0
+// meaning `default_size`, cut to patient_db::kMaxPageSize.
+int PageSizeOf(uint32_t requested, int default_size = patient_db::kDefaultPageSize);
+// A page token names the listing and the sort key of the last row sent:
+// "<listing>:<number>:<text>". Read fills `page` (limit untouched);
+// INVALID_ARGUMENT naming page_token when it is not a token of that listing.
+std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text);
+grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
+                           patient_db::ListPage* page);
 // A message's bytes with deterministic map order: stored bodies hash the same.
 std::string DeterministicBytes(const google::protobuf::Message& m);
 // An id: 1-128 bytes of printable UTF-8 (patient_db::IsPrintableId).

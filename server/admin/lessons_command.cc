@@ -82,16 +82,21 @@ int CurriculumCreate(const std::string& file, const ClientOptions& client,
 int CurriculumList(const ClientOptions& client, const std::string& institution) {
   ves::v1::ListCurriculaRequest q;
   q.set_institution(institution);
-  ves::v1::ListCurriculaResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->ListCurricula(&ctx, q, &r);
+  auto stub = LessonsStub(client);
+  auto status = ForEachPage<ves::v1::ListCurriculaResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListCurricula(c, request, reply);
+      },
+      [](const ves::v1::ListCurriculaResponse& r) {
+        for (const auto& c : r.curricula()) {
+          std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),
+                      Shown(c.institution()).c_str(), c.lessons_size(), Shown(c.title()).c_str());
+        }
+        return true;
+      });
   if (!status.ok()) {
     return ReportRpcError("curriculum list", status.error_code(), status.error_message());
-  }
-  for (const auto& c : r.curricula()) {
-    std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),
-                Shown(c.institution()).c_str(), c.lessons_size(), Shown(c.title()).c_str());
   }
   return kExitOk;
 }

@@ -1,5 +1,6 @@
 // ves-admin subcommands against a running server: token, trainee, scores,
 // session, audit, and `case upload|list|download` (docs/server.md).
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -169,10 +170,10 @@ int RunTraineeCommand(const CommandArgs& args) {
   const int rc = ParseRemote("trainee", "trainee add --id ID [--name N] | list", args, options,
                              &pos, &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   auto stub = Stub<ves::v1::Trainees>(client);
   if (action == "add") {
+    grpc::ClientContext ctx;
+    ves::server::PrepareContext(&ctx, client);
     if (id.empty()) {
       std::cerr << "ves-admin trainee add: --id is required\n";
       return kExitUsage;
@@ -192,13 +193,19 @@ int RunTraineeCommand(const CommandArgs& args) {
   if (action == "list") {
     ves::v1::ListTraineesRequest q;
     q.set_institution(institution);
-    ves::v1::ListTraineesResponse r;
-    auto status = stub->ListTrainees(&ctx, q, &r);
+    auto status = ForEachPage<ves::v1::ListTraineesResponse>(
+        client, q,
+        [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+          return stub->ListTrainees(c, request, reply);
+        },
+        [](const ves::v1::ListTraineesResponse& r) {
+          for (const auto& t : r.trainees()) {
+            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
+                        Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
+          }
+          return true;
+        });
     if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    for (const auto& t : r.trainees()) {
-      std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
-                  Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
-    }
     return kExitOk;
   }
   std::cerr << "ves-admin trainee: unknown action '" << action << "' (add or list)\n";
@@ -217,23 +224,33 @@ int RunScoresCommand(const CommandArgs& args) {
   const int rc = ParseRemote("scores", "scores --trainee ID [--case C]", args, options, nullptr,
                              &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::ListSessionsRequest q;
   q.set_trainee_id(trainee);
   q.set_case_id(case_id);
-  ves::v1::ListSessionsResponse r;
-  auto status = Stub<ves::v1::Trainees>(client)->ListSessions(&ctx, q, &r);
+  q.set_page_size(1000);
+  auto stub = Stub<ves::v1::Trainees>(client);
+  bool header = false;
+  auto status = ForEachPage<ves::v1::ListSessionsResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListSessions(c, request, reply);
+      },
+      [&](const ves::v1::ListSessionsResponse& r) {
+        if (!header) {
+          std::printf("%-16s  %-20s  %-9s  %12s  %11s  %6s\n", "date (UTC)", "case", "outcome",
+                      "to cecum (s)", "pain (s)", "score");
+          header = true;
+        }
+        for (const auto& s : r.sessions()) {
+          const std::string to_cecum =
+              s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
+          std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
+                      FormatUtcMinute(s.start_unix_ms()).c_str(), Shown(s.case_id()).c_str(),
+                      OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
+        }
+        return true;
+      });
   if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
-  std::printf("%-16s  %-20s  %-9s  %12s  %11s  %6s\n", "date (UTC)", "case", "outcome",
-              "to cecum (s)", "pain (s)", "score");
-  for (const auto& s : r.sessions()) {
-    const std::string to_cecum =
-        s.completed() ? std::to_string(static_cast<int>(s.time_to_cecum_s() + 0.5)) : "-";
-    std::printf("%-16s  %-20s  %-9s  %12s  %11.1f  %6.1f\n",
-                FormatUtcMinute(s.start_unix_ms()).c_str(), Shown(s.case_id()).c_str(),
-                OutcomeName(s.outcome()), to_cecum.c_str(), s.pain_s(), s.score());
-  }
   return kExitOk;
 }
 
@@ -283,20 +300,29 @@ int RunAuditCommand(const CommandArgs& args) {
   const int rc = ParseRemote("audit", "audit [--since UNIX_MS] [--limit N]", args, options,
                              nullptr, &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::ListAuditRequest q;
   q.set_since_unix_ms(since_unix_ms);
-  q.set_limit(limit);
-  ves::v1::ListAuditResponse r;
-  auto status = Stub<ves::v1::Admin>(client)->ListAudit(&ctx, q, &r);
+  q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
+  auto stub = Stub<ves::v1::Admin>(client);
+  unsigned shown = 0;
+  auto status = ForEachPage<ves::v1::ListAuditResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListAudit(c, request, reply);
+      },
+      [&](const ves::v1::ListAuditResponse& r) {
+        for (const auto& e : r.entries()) {
+          if (shown == limit) return false;
+          ++shown;
+          std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n",
+                      FormatUtcMinute(e.at_unix_ms()).c_str(), Shown(e.actor()).c_str(),
+                      ves::v1::Role_Name(e.role()).c_str() + 5, Shown(e.institution()).c_str(),
+                      Shown(e.action()).c_str(), Shown(e.target()).c_str(),
+                      Shown(e.result()).c_str());
+        }
+        return shown < limit;
+      });
   if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
-  for (const auto& e : r.entries()) {
-    std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatUtcMinute(e.at_unix_ms()).c_str(),
-                Shown(e.actor()).c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
-                Shown(e.institution()).c_str(), Shown(e.action()).c_str(),
-                Shown(e.target()).c_str(), Shown(e.result()).c_str());
-  }
   return kExitOk;
 }
 

@@ -157,6 +157,31 @@ TEST(AdminCli, ControlCharactersFromTheServerAreNeverPrintedRaw) {
   EXPECT_NE(list.out.find("\\x1b[2J\\x1b[31mred"), std::string::npos) << list.out;
 }
 
+// More sessions than one page holds: `scores` walks every page.
+TEST(AdminCli, ScoresListsEverySessionAcrossPages) {
+  TestServer server;
+  server.AddTrainee("bulk", "north");
+  patient_db::WriteBatch batch;
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 1205; ++i) {
+    patient_db::SessionRow row;
+    row.uuid = NewUuid(rng);
+    row.trainee_id = "bulk";
+    row.institution = "north";
+    row.case_id = "standard-adult";
+    row.start_unix_ms = 1'700'000'000'000 + i;
+    row.body = "x";
+    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    batch.sessions.push_back(row);
+  }
+  ASSERT_TRUE(server.store().CommitBatch(batch).ok());
+  AdminRun scores = Admin(server.dir(), "scores --trainee bulk --server " + server.address() +
+                                            " --token " +
+                                            server.MakeToken(StoreRole::kSupervisor, "north"));
+  ASSERT_EQ(scores.exit_status, 0) << scores.err;
+  EXPECT_EQ(Lines(scores.out), 1 + 1205);  // header and every session
+}
+
 TEST(AdminCli, RefusesToSendTheTokenInPlaintextOffLoopback) {
   const auto dir = MakeTempDir("admin_plaintext");
   ves::testing::NonLoopbackListener listener;

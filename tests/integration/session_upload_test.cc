@@ -7,6 +7,7 @@
 
 #include <grpcpp/generic/generic_stub.h>
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <limits>
@@ -192,6 +193,52 @@ TEST_F(SessionUpload, AMalformedRequestIsInvalidArgumentWithAMessage) {
     }
   }
   EXPECT_EQ(server_.store().CountSessions().value, 0);
+}
+
+// Issue #20: one trainee's sessions made ListSessions outgrow the message
+// limit for good. Replies are pages now: walked with next_page_token they
+// give every session once, in order; a token of another listing is refused.
+TEST_F(SessionUpload, ListSessionsComesInPages) {
+  patient_db::WriteBatch batch;
+  for (int i = 0; i < 250; ++i) {
+    patient_db::SessionRow row;
+    row.uuid = NewUuid(rng_);
+    row.trainee_id = "t1";
+    row.institution = "north";
+    row.case_id = "standard-adult";
+    row.start_unix_ms = 1'700'000'000'000 + i / 3;  // ties broken by uuid
+    row.body = "x";
+    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    batch.sessions.push_back(row);
+  }
+  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  auto stub = ves::v1::Trainees::NewStub(MakeClientChannel(supervisor_));
+  ves::v1::ListSessionsRequest q;
+  q.set_trainee_id("t1");
+  q.set_page_size(100);
+  std::vector<std::pair<int64_t, std::string>> seen;
+  int pages = 0;
+  do {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, supervisor_);
+    ves::v1::ListSessionsResponse r;
+    ASSERT_TRUE(stub->ListSessions(&ctx, q, &r).ok());
+    EXPECT_LE(r.sessions_size(), 100);
+    for (const auto& s : r.sessions()) seen.emplace_back(s.start_unix_ms(), s.uuid());
+    q.set_page_token(r.next_page_token());
+    ++pages;
+  } while (!q.page_token().empty());
+  EXPECT_EQ(pages, 3);
+  ASSERT_EQ(seen.size(), 250u);
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_EQ(std::set(seen.begin(), seen.end()).size(), 250u);
+  grpc::ClientContext ctx;
+  PrepareContext(&ctx, supervisor_);
+  q.set_page_token("cases:1:standard-adult");
+  ves::v1::ListSessionsResponse r;
+  const grpc::Status bad = stub->ListSessions(&ctx, q, &r);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.error_message().find("page_token"), std::string::npos);
 }
 
 TEST_F(SessionUpload, SupervisorSeesScoresAndLearningCurvePerCase) {
