@@ -2,6 +2,9 @@
 
 #include <google/protobuf/stubs/logging.h>
 #include <grpcpp/support/server_interceptor.h>
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <spdlog/spdlog.h>
 
 #include <fstream>
@@ -23,6 +26,33 @@ std::string ReadPem(const std::string& path, const std::string& flag) {
     throw std::invalid_argument(flag + " " + path + ": cannot read the file");
   }
   return text.str();
+}
+
+// The key pair said what was wrong when the pair was bad: gRPC only fails
+// to listen later ("address in use or invalid").
+void CheckKeyMatchesCertificate(const std::string& key_pem, const std::string& cert_pem,
+                                const ServerOptions& o) {
+  BIO* cert_bio = BIO_new_mem_buf(cert_pem.data(), static_cast<int>(cert_pem.size()));
+  X509* cert = PEM_read_bio_X509(cert_bio, nullptr, nullptr, nullptr);
+  BIO_free(cert_bio);
+  BIO* key_bio = BIO_new_mem_buf(key_pem.data(), static_cast<int>(key_pem.size()));
+  EVP_PKEY* key = PEM_read_bio_PrivateKey(key_bio, nullptr, nullptr, nullptr);
+  BIO_free(key_bio);
+  const bool matches = cert != nullptr && key != nullptr && X509_check_private_key(cert, key) == 1;
+  ERR_clear_error();
+  X509_free(cert);
+  EVP_PKEY_free(key);
+  if (cert == nullptr) {
+    throw std::invalid_argument("--tls-cert " + o.tls_cert_file + ": not a PEM certificate");
+  }
+  if (key == nullptr) {
+    throw std::invalid_argument("--tls-key " + o.tls_key_file +
+                                ": not a PEM private key (or it is encrypted)");
+  }
+  if (!matches) {
+    throw std::invalid_argument("--tls-key " + o.tls_key_file + " is not the key of --tls-cert " +
+                                o.tls_cert_file);
+  }
 }
 
 // One log line per call: method, status, duration, peer.
@@ -152,8 +182,10 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptio
     throw std::invalid_argument("--insecure-loopback cannot be combined with TLS flags");
   }
   grpc::SslServerCredentialsOptions ssl;
-  ssl.pem_key_cert_pairs.push_back(
-      {ReadPem(o.tls_key_file, "--tls-key"), ReadPem(o.tls_cert_file, "--tls-cert")});
+  const std::string key = ReadPem(o.tls_key_file, "--tls-key");
+  const std::string cert = ReadPem(o.tls_cert_file, "--tls-cert");
+  CheckKeyMatchesCertificate(key, cert, o);
+  ssl.pem_key_cert_pairs.push_back({key, cert});
   if (!o.tls_client_ca_file.empty()) {
     ssl.pem_root_certs = ReadPem(o.tls_client_ca_file, "--tls-client-ca");
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;

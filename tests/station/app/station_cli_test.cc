@@ -96,5 +96,18 @@ TEST_F(StationCli, IdsThatAreNotPrintableUtf8AreRefusedBeforeTheSession) {
   }
 }
 
+// haptic-check said exit 1 for a CAN interface that is not there, where
+// `run` says 2 (bad input): now both say 2, in one line naming the device.
+TEST_F(StationCli, HapticCheckOnAMissingCanInterfaceIsBadInputLikeRun) {
+  if (fs::exists("/sys/class/net/vcan0")) GTEST_SKIP() << "vcan0 exists here: not missing";
+  const ProcessResult r = RunProgram(
+      {kStationBin, "haptic-check", "--device", "can:vcan0", "--mode", "free", "--profile",
+       "sine:10:0.5", "--seconds", "1", "--csv", (dir_ / "check.csv").string()},
+      dir_ / "haptic-check", {}, std::chrono::seconds(60));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--device can:vcan0: CAN interface 'vcan0'"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace ves::station::testing

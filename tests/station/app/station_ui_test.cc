@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 
@@ -126,6 +127,38 @@ class StationUi : public StationFixture {
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return XwdPixels(ReadFile(file));
   }
+  // The id of a window of that name other than `old_id` (a run that came up
+  // again), polled until it appears or the station exits.
+  std::string NewWindowId(const std::string& name, const std::string& old_id) {
+    for (int i = 0; i < 300; ++i) {
+      const ProcessResult found = X({"xdotool", "search", "--name", "^" + name + "$"});
+      std::istringstream ids(found.out);
+      for (std::string id; std::getline(ids, id);) {
+        if (!id.empty() && id != old_id) return id;
+      }
+      if (!station_->Running()) return "";
+      std::this_thread::sleep_for(milliseconds(200));
+    }
+    return "";
+  }
+  // Polls the station's stdout until `text` appears (true) or 60 s pass.
+  bool WaitForOutput(const fs::path& stdout_file, const std::string& text) {
+    for (int i = 0; i < 600; ++i) {
+      if (ReadFile(stdout_file).find(text) != std::string::npos) return true;
+      if (!station_->Running()) return ReadFile(stdout_file).find(text) != std::string::npos;
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+    return false;
+  }
+  // Shots of `window` until one differs from `before` by more than `share`
+  // (true) or 30 s pass: a repaint on a loaded machine takes what it takes.
+  bool ChangesFrom(const std::string& window, const std::string& before, double share) {
+    for (int i = 0; i < 30; ++i) {
+      if (ChangedShare(before, Shot(window)) > share) return true;
+      std::this_thread::sleep_for(milliseconds(700));
+    }
+    return false;
+  }
   void Keys(const std::string& window, const std::vector<std::string>& keys) {
     X({"xdotool", "windowfocus", "--sync", window});
     std::vector<std::string> args = {"xdotool", "key", "--delay", "60"};
@@ -232,15 +265,18 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   std::this_thread::sleep_for(kSettle);
 
   // n: the panel's next case (the only other one); r: repeat with it.
+  // Each step waits for what it causes, not a fixed time (this test once
+  // failed under a full `ctest -j2` and passed on rerun).
   const std::string before = Shot(panel);
   Keys(endoscope, {"n"});
-  EXPECT_GT(ChangedShare(before, Shot(panel)), 0.0);  // the case name changed
+  EXPECT_TRUE(ChangesFrom(panel, before, 0.0));  // the case name changed
   Keys(endoscope, {"r"});
-  // The new run brings up its windows again; give it time, then quit it.
-  std::this_thread::sleep_for(kSettle);
-  std::this_thread::sleep_for(kSettle);
-  const std::string endoscope_again = WindowId("VES endoscope");
+  ASSERT_TRUE(WaitForOutput(dir_ / "interactive.out", "switched to case paper-sigmoid"))
+      << ReadFile(dir_ / "interactive.out") << ReadFile(dir_ / "interactive.err");
+  // The new run brings up its own windows: quit that one.
+  const std::string endoscope_again = NewWindowId("VES endoscope", endoscope);
   ASSERT_FALSE(endoscope_again.empty()) << ReadFile(dir_ / "interactive.err");
+  std::this_thread::sleep_for(kSettle);
   Keys(endoscope_again, {"q"});
   const ProcessResult quit = station_->Wait(seconds(60));
   EXPECT_NE(quit.out.find("switched to case paper-sigmoid"), std::string::npos)
