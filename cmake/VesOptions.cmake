@@ -17,6 +17,31 @@ if(VES_SANITIZE)
   endif()
   add_compile_options(-fsanitize=${VES_SANITIZE} -fno-omit-frame-pointer)
   add_link_options(-fsanitize=${VES_SANITIZE})
+  if(VES_SANITIZE STREQUAL "undefined")
+    # A finding fails the test instead of scrolling past in its log.
+    add_compile_options(-fno-sanitize-recover=undefined)
+  endif()
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    # GCC 12 reports false -Wmaybe-uninitialized inside libstdc++ (std::regex,
+    # std::function) once sanitizers instrument it; still shown, not fatal.
+    add_compile_options(-Wno-error=maybe-uninitialized)
+  endif()
+endif()
+
+# libFuzzer targets in tests/fuzz (docs/fuzzing.md): clang only. Everything is
+# built with coverage for the fuzzer and with ASan + UBSan, so the same build
+# also runs the sanitized test suites.
+option(VES_FUZZ "Build the libFuzzer targets (clang) with ASan and UBSan" OFF)
+if(VES_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "VES_FUZZ needs clang (CXX=clang++-14), not ${CMAKE_CXX_COMPILER_ID}")
+  endif()
+  if(VES_SANITIZE)
+    message(FATAL_ERROR "VES_FUZZ brings its own sanitizers (address, undefined): drop VES_SANITIZE")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+                      -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
 endif()
 
 # Interface target carrying the warning flags; every ves_* target links it.

@@ -12,6 +12,10 @@ function(ves_add_test)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
+  if(VES_SANITIZE OR VES_FUZZ)
+    # Sanitized code runs several times slower.
+    math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * 3")
+  endif()
   # Escape the list so several labels stay one LABELS value through
   # gtest_discover_tests' PROPERTIES key/value list.
   string(REPLACE ";" "\\;" labels "${ARG_LABELS}")

@@ -19,6 +19,8 @@ PACKAGES=(
   xdotool x11-apps
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # fuzzing (libFuzzer) and the sanitized CI stage: deploy/fuzz.sh, deploy/ci-hardening.sh
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()

@@ -79,40 +79,55 @@ std::string EncodeCaseBundle(const ves::v1::ColonCase& colon_case) {
   return bundle;
 }
 
-ves::v1::ColonCase DecodeCaseBundle(std::string_view bytes, const std::string& file_label) {
+void CheckCaseBundleHead(std::string_view head, uint64_t total_bytes,
+                         const std::string& file_label) {
   auto fail = [&](std::string field, std::string value, std::string message) {
     throw CaseError(file_label, std::move(field), -1, std::move(value), std::move(message));
   };
-  if (bytes.size() < kCaseBundleMagic.size()) {
-    fail("bundle", std::to_string(bytes.size()) + " bytes", "truncated: shorter than the magic");
-  }
-  if (bytes.substr(0, kCaseBundleMagic.size()) != kCaseBundleMagic) {
-    fail("bundle.magic", "\"" + Hex(reinterpret_cast<const unsigned char*>(bytes.data()), 8) +
-                             "\" (hex)",
+  const std::string_view magic = head.substr(0, kCaseBundleMagic.size());
+  if (magic != kCaseBundleMagic.substr(0, magic.size()) ||
+      (head.size() == total_bytes && magic.size() < kCaseBundleMagic.size())) {
+    if (total_bytes < kCaseBundleMagic.size()) {
+      fail("bundle", std::to_string(total_bytes) + " bytes", "truncated: shorter than the magic");
+    }
+    fail("bundle.magic",
+         "\"" + Hex(reinterpret_cast<const unsigned char*>(magic.data()), magic.size()) +
+             "\" (hex)",
          "wrong magic: not a VES case bundle (expected \"VESCASE\\0\")");
   }
-  if (bytes.size() < kCaseBundleHeaderSize) {
-    fail("bundle", std::to_string(bytes.size()) + " bytes", "truncated inside the header");
+  if (head.size() < kCaseBundleHeaderSize) {
+    if (head.size() == total_bytes) {
+      fail("bundle", std::to_string(total_bytes) + " bytes", "truncated inside the header");
+    }
+    return;  // the rest is checked when more has arrived
   }
-  const uint64_t version = GetLittleEndian(bytes, 8, 4);
+  const uint64_t version = GetLittleEndian(head, 8, 4);
   if (version != kCaseBundleFormatVersion) {
     fail("bundle.format_version", std::to_string(version),
          "unsupported format version (this build reads " +
              std::to_string(kCaseBundleFormatVersion) + ")");
   }
-  const uint64_t payload_size = GetLittleEndian(bytes, 12, 8);
+  const uint64_t payload_size = GetLittleEndian(head, 12, 8);
   if (payload_size > kMaxCaseBundlePayloadSize) {
     fail("bundle.payload_length", std::to_string(payload_size), "larger than 256 MiB");
   }
   const uint64_t expected_size = kCaseBundleHeaderSize + payload_size + kCaseBundleHashSize;
-  if (bytes.size() < expected_size) {
-    fail("bundle", std::to_string(bytes.size()) + " bytes",
+  if (total_bytes < expected_size) {
+    fail("bundle", std::to_string(total_bytes) + " bytes",
          "truncated: header announces " + std::to_string(expected_size) + " bytes");
   }
-  if (bytes.size() > expected_size) {
-    fail("bundle", std::to_string(bytes.size()) + " bytes",
+  if (total_bytes > expected_size) {
+    fail("bundle", std::to_string(total_bytes) + " bytes",
          "trailing bytes: header announces " + std::to_string(expected_size) + " bytes");
   }
+}
+
+ves::v1::ColonCase DecodeCaseBundle(std::string_view bytes, const std::string& file_label) {
+  auto fail = [&](std::string field, std::string value, std::string message) {
+    throw CaseError(file_label, std::move(field), -1, std::move(value), std::move(message));
+  };
+  CheckCaseBundleHead(bytes, bytes.size(), file_label);
+  const uint64_t payload_size = GetLittleEndian(bytes, 12, 8);
   const std::string_view payload = bytes.substr(kCaseBundleHeaderSize, payload_size);
   const std::string_view stored_hash =
       bytes.substr(kCaseBundleHeaderSize + payload_size, kCaseBundleHashSize);

@@ -35,6 +35,13 @@ std::string CasePayloadSha256Hex(const ves::v1::ColonCase& colon_case);
 // Encodes without validating (WriteCaseFile validates first).
 std::string EncodeCaseBundle(const ves::v1::ColonCase& colon_case);
 
+// Checks the first bytes of a bundle of `total_bytes` as soon as they are in
+// (a stream need not wait for the rest): the magic once some bytes are there,
+// then format version and payload length against `total_bytes`. Throws
+// CaseError naming the problem; returns when nothing is wrong so far.
+void CheckCaseBundleHead(std::string_view head, uint64_t total_bytes,
+                         const std::string& file_label);
+
 // Decodes and validates; throws CaseError naming the problem (truncated, wrong
 // magic, unsupported version, hash mismatch, trailing bytes, bad payload,
 // invalid case).

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -15,6 +16,7 @@
 #include "patient_db/case_problem.h"
 #include "patient_db/case_regions.h"
 #include "patient_db/case_validate.h"
+#include "patient_db/limits.h"
 
 namespace ves::patient_db {
 namespace {
@@ -58,6 +60,18 @@ CsvTable ReadCsvTable(std::string_view text, const std::string& file,
                       std::vector<CaseProblem>& problems) {
   CsvTable table;
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM (spreadsheets)
+  // A binary file is one problem, said as such, not a header of garbage.
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if (byte < 0x20 && byte != '\t' && byte != '\r' && byte != '\n') {
+      char at[48];
+      std::snprintf(at, sizeof at, "byte 0x%02x at offset %zu", byte, i);
+      throw CaseError(file, "csv", -1, at, "not a text CSV file (a control byte: binary data?)");
+    }
+  }
+  if (!IsValidUtf8(text)) {
+    throw CaseError(file, "csv", -1, "", "not a text CSV file (not valid UTF-8: binary data?)");
+  }
   int line_number = 0;
   size_t start = 0;
   while (start <= text.size()) {
@@ -174,6 +188,17 @@ ves::v1::ColonCase BuildCase(const ImportedPoints& in, const std::string& file,
     problems.push_back({file, "region", -1, "",
                         "regions given twice (a region column and landmarks): keep one"});
   }
+  // Arcs, radius samples and region spans are derived from the points: a
+  // point that is not finite is reported once, here, instead of in each.
+  for (size_t i = 0; i < in.p_W_m.size(); ++i) {
+    const char* names[3] = {"centerline.x_m", "centerline.y_m", "centerline.z_m"};
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(in.p_W_m[i][k]) || std::abs(in.p_W_m[i][k]) > 1e6) {
+        problems.push_back({file, names[k], static_cast<int>(i), std::to_string(in.p_W_m[i][k]),
+                            "not a finite number in range"});
+      }
+    }
+  }
   if (!problems.empty()) throw CaseError(std::move(problems));
 
   ves::v1::ColonCase c;
@@ -247,9 +272,9 @@ void ReadRadiusAndRegion(const CsvTable& table, const std::map<std::string, int>
   for (const auto& row : table.rows) {
     if (columns.count("radius_mm")) {
       const auto r = ParseNumber(row.cells[columns.at("radius_mm")]);
-      if (!r) {
+      if (!r || !std::isfinite(*r)) {
         problems.push_back({file, "csv.radius_mm", row.line, row.cells[columns.at("radius_mm")],
-                            "not a number"});
+                            r ? "not a finite number" : "not a number"});
       }
       out.radius_m.push_back(r.value_or(0.0) * kMetresPerMillimetre);
     }
@@ -303,8 +328,14 @@ ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::str
     for (int k = 0; k < 3; ++k) {
       const std::string& cell = row.cells[columns.at(names[k])];
       const auto value = ParseNumber(cell);
-      if (!value) problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
-                                      "not a number"});
+      if (!value) {
+        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
+                            "not a number"});
+      } else if (!std::isfinite(*value)) {
+        // Said here, once: arcs, radii and regions derived from it would repeat it.
+        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
+                            "not a finite number"});
+      }
       p[k] = value.value_or(0.0) * kMetresPerMillimetre;
     }
     in.p_W_m.push_back(p);
@@ -451,11 +482,12 @@ std::vector<double> ReadRadiusMeasurement(const nlohmann::json& markup, size_t p
 
 }  // namespace
 
-ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
-                                       const std::optional<std::string>& radius_csv_text,
-                                       const std::string& file_label,
-                                       const ImportOptions& options,
-                                       const std::optional<std::string>& landmarks_json_text) {
+namespace {
+
+ves::v1::ColonCase ImportSlicerMarkupsOrThrow(
+    std::string_view json_text, const std::optional<std::string>& radius_csv_text,
+    const std::string& file_label, const ImportOptions& options,
+    const std::optional<std::string>& landmarks_json_text) {
   using nlohmann::json;
   const auto parse = [](std::string_view text, const std::string& label) {
     try {
@@ -517,6 +549,23 @@ ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
   }
   if (!problems.empty()) throw CaseError(std::move(problems));
   return BuildCase(in, file_label, options, "imported centerline (3D Slicer markups)");
+}
+
+}  // namespace
+
+ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
+                                       const std::optional<std::string>& radius_csv_text,
+                                       const std::string& file_label,
+                                       const ImportOptions& options,
+                                       const std::optional<std::string>& landmarks_json_text) {
+  // A member of the wrong JSON type ("coordinateSystem": 5) is a problem of
+  // the file, not an abort (found by fuzzing: tests/fuzz/regressions/markups).
+  try {
+    return ImportSlicerMarkupsOrThrow(json_text, radius_csv_text, file_label, options,
+                                      landmarks_json_text);
+  } catch (const nlohmann::json::exception& e) {
+    throw CaseError(file_label, "json", -1, "", std::string("unexpected content: ") + e.what());
+  }
 }
 
 }  // namespace ves::patient_db

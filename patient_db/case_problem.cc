@@ -2,12 +2,15 @@
 
 #include <utility>
 
+#include "patient_db/limits.h"
+
 namespace ves::patient_db {
 
 std::string CaseProblem::ToString() const {
   std::string text = file + ": " + field;
   if (index >= 0) text += "[" + std::to_string(index) + "]";
-  if (!value.empty()) text += " = " + value;
+  // Values come from files and requests: shown cut and with control bytes escaped.
+  if (!value.empty()) text += " = " + PrintableExcerpt(value, 200);
   text += ": " + message;
   return text;
 }

@@ -2,12 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <numbers>
 #include <regex>
+#include <unordered_map>
+#include <vector>
 
 #include "patient_db/case_geometry.h"
 #include "patient_db/case_regions.h"
+#include "patient_db/limits.h"
 
 namespace ves::patient_db {
 namespace {
@@ -89,6 +93,12 @@ bool CheckCenterline(const ColonCase& c, Checker& check) {
               "needs at least " + std::to_string(kMinControlPoints) + " control points");
     usable = points.size() >= 2;
   }
+  if (points.size() > kMaxControlPoints) {
+    // One problem, and nothing computed from them: the rest would only cost time.
+    check.Add("centerline", -1, std::to_string(points.size()) + " points",
+              "more than " + std::to_string(kMaxControlPoints) + " control points");
+    return false;
+  }
   for (int i = 0; i < points.size(); ++i) {
     const double xyz[3] = {points[i].x_m(), points[i].y_m(), points[i].z_m()};
     const char* names[3] = {"centerline.x_m", "centerline.y_m", "centerline.z_m"};
@@ -109,6 +119,11 @@ bool CheckCenterline(const ColonCase& c, Checker& check) {
       usable = false;
     }
   }
+  if (usable && arcs_m.back() > kMaxCenterlineLength_m) {
+    check.Add("centerline", -1, Num(arcs_m.back()) + " m long",
+              "longer than " + Num(kMaxCenterlineLength_m) + " m (a colon is 1.5 to 1.9 m)");
+    usable = false;
+  }
   return usable;
 }
 
@@ -118,6 +133,11 @@ bool CheckRadiusProfile(const ColonCase& c, double length_m, bool length_known,
   const auto& profile = c.radius_profile();
   if (profile.empty()) {
     check.Add("radius_profile", -1, "", "needs at least one radius sample");
+    return false;
+  }
+  if (profile.size() > kMaxControlPoints) {
+    check.Add("radius_profile", -1, std::to_string(profile.size()) + " samples",
+              "more than " + std::to_string(kMaxControlPoints) + " radius samples");
     return false;
   }
   bool usable = true;
@@ -191,6 +211,11 @@ void CheckRegions(const ColonCase& c, double length_m, bool length_known, bool r
     check.Add("regions", -1, "", "needs at least one region span");
     return;
   }
+  if (regions.size() > kMaxRegionSpans) {
+    check.Add("regions", -1, std::to_string(regions.size()) + " spans",
+              "more than " + std::to_string(kMaxRegionSpans) + " region spans");
+    return;
+  }
   for (int i = 0; i < regions.size(); ++i) {
     const auto& span = regions[i];
     if (!ves::v1::Region_IsValid(span.region()) ||
@@ -234,6 +259,23 @@ void CheckRegions(const ColonCase& c, double length_m, bool length_known, bool r
   }
 }
 
+// CalcRadiusAt_m by bisection: the profile is strictly increasing here
+// (CheckRadiusProfile passed), so the self-proximity test stays O(N log N).
+double SortedRadiusAt_m(const ColonCase& c, double arc_m) {
+  const auto& profile = c.radius_profile();
+  if (profile.empty()) return 0.0;
+  if (arc_m <= profile[0].arc_m()) return profile[0].radius_m();
+  const auto it = std::partition_point(profile.begin() + 1, profile.end(),
+                                       [&](const auto& s) { return s.arc_m() < arc_m; });
+  if (it == profile.end()) return profile[profile.size() - 1].radius_m();
+  const auto& a = *(it - 1);
+  const auto& b = *it;
+  const double span_m = b.arc_m() - a.arc_m();
+  if (!(span_m > 0.0)) return b.radius_m();
+  const double t = (arc_m - a.arc_m()) / span_m;
+  return a.radius_m() + t * (b.radius_m() - a.radius_m());
+}
+
 struct Sample {
   double x, y, z, arc_m, radius_m;
   int control_index;
@@ -256,12 +298,31 @@ void CheckSelfProximity(const ColonCase& c, Checker& check) {
       const double t = static_cast<double>(k) / pieces;
       const double arc_m = arcs_m[i] + t * (arcs_m[i + 1] - arcs_m[i]);
       samples.push_back({a.x_m() + t * (b.x_m() - a.x_m()), a.y_m() + t * (b.y_m() - a.y_m()),
-                         a.z_m() + t * (b.z_m() - a.z_m()), arc_m, CalcRadiusAt_m(c, arc_m), i});
+                         a.z_m() + t * (b.z_m() - a.z_m()), arc_m, SortedRadiusAt_m(c, arc_m), i});
     }
   }
   const auto& end = points[points.size() - 1];
   samples.push_back({end.x_m(), end.y_m(), end.z_m(), arcs_m.back(),
-                     CalcRadiusAt_m(c, arcs_m.back()), static_cast<int>(points.size()) - 1});
+                     SortedRadiusAt_m(c, arcs_m.back()), static_cast<int>(points.size()) - 1});
+
+  // Candidates from a uniform grid of cells no smaller than the largest sum
+  // of radii: a pair closer than its sum of radii lies in the same or a
+  // neighbouring cell, so each sample is compared with the samples near it
+  // in space, not with all of them (the test grew quadratically: 15 s for a
+  // 40k-point case).
+  double max_radius_m = 0.0;
+  for (const Sample& sample : samples) max_radius_m = std::max(max_radius_m, sample.radius_m);
+  const double cell_m = std::max(2.0 * max_radius_m, 1e-3);
+  auto cell_of = [&](double v) { return static_cast<int64_t>(std::floor(v / cell_m)); };
+  auto key_of = [](int64_t cx, int64_t cy, int64_t cz) {
+    // Coordinates are within +-kMaxCoordinate_m: a few thousand cells a side.
+    return ((cx + (1 << 20)) << 42) | ((cy + (1 << 20)) << 21) | (cz + (1 << 20));
+  };
+  std::unordered_map<int64_t, std::vector<int>> cells;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    cells[key_of(cell_of(samples[i].x), cell_of(samples[i].y), cell_of(samples[i].z))].push_back(
+        static_cast<int>(i));
+  }
 
   constexpr int kMaxReports = 20;
   int reports = 0;
@@ -283,20 +344,32 @@ void CheckSelfProximity(const ColonCase& c, Checker& check) {
     worst_i = worst_j = -1;
   };
   for (size_t i = 0; i < samples.size(); ++i) {
+    const Sample& si = samples[i];
+    const int64_t cx = cell_of(si.x), cy = cell_of(si.y), cz = cell_of(si.z);
     bool violates = false;
-    for (size_t j = i + 1; j < samples.size(); ++j) {
-      const Sample& si = samples[i];
-      const Sample& sj = samples[j];
-      const double sum_m = si.radius_m + sj.radius_m;
-      if (sj.arc_m - si.arc_m <= std::numbers::pi / 2.0 * sum_m) continue;
-      const double d = std::hypot(si.x - sj.x, si.y - sj.y, si.z - sj.z);
-      if (d >= sum_m) continue;
-      violates = true;
-      const double ratio = d / sum_m;
-      if (worst_i < 0 || ratio < worst_ratio) {
-        worst_ratio = ratio;
-        worst_i = static_cast<int>(i);
-        worst_j = static_cast<int>(j);
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          const auto cell = cells.find(key_of(cx + dx, cy + dy, cz + dz));
+          if (cell == cells.end()) continue;
+          for (const int j : cell->second) {
+            if (j <= static_cast<int>(i)) continue;
+            const Sample& sj = samples[j];
+            const double sum_m = si.radius_m + sj.radius_m;
+            if (sj.arc_m - si.arc_m <= std::numbers::pi / 2.0 * sum_m) continue;
+            const double d = std::hypot(si.x - sj.x, si.y - sj.y, si.z - sj.z);
+            if (d >= sum_m) continue;
+            violates = true;
+            const double ratio = d / sum_m;
+            // The closest pair of the run; on a tie the earlier sample.
+            if (worst_i < 0 || ratio < worst_ratio ||
+                (ratio == worst_ratio && worst_i == static_cast<int>(i) && j < worst_j)) {
+              worst_ratio = ratio;
+              worst_i = static_cast<int>(i);
+              worst_j = j;
+            }
+          }
+        }
       }
     }
     if (!violates && in_run) flush();
@@ -354,6 +427,15 @@ bool LooksLikeFineDate(const std::string& text) {
 
 std::vector<CaseProblem> ValidateCase(const ColonCase& colon_case, const std::string& file_label) {
   Checker check(file_label);
+  // Text that is not UTF-8 (a textproto "\xff" escape), control characters in
+  // a title, an over-long note: what every other reader of the case (the
+  // bundle's protobuf parser, a terminal) would trip on.
+  bool over = false;
+  const LimitProblem limit = FindLimitProblem(colon_case, "case", &over);
+  // (Counts of points, samples and regions have their own rules below.)
+  if (over && limit.is_text) {
+    check.Add(limit.path.substr(5), -1, "\"" + limit.excerpt + "\"", limit.why);
+  }
   CheckHeader(colon_case, check);
   const bool centerline_usable = CheckCenterline(colon_case, check);
   const double length_m = centerline_usable ? CalcCenterlineLength_m(colon_case) : 0.0;

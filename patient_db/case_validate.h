@@ -13,6 +13,9 @@ namespace ves::patient_db {
 // Limits of the rules; the documented ranges.
 inline constexpr double kMaxRadius_m = 0.060;              // beyond anatomy
 inline constexpr int kMinControlPoints = 4;
+inline constexpr int kMaxControlPoints = 5000;             // patient_db/limits.h kMaxCasePoints
+inline constexpr double kMaxCenterlineLength_m = 3.0;      // a colon is 1.5 to 1.9 m
+inline constexpr int kMaxRegionSpans = 64;
 inline constexpr double kMinPointSpacing_m = 1e-4;         // closer: a duplicate point
 inline constexpr double kMaxCoordinate_m = 2.0;            // |x|,|y|,|z| from the anus
 inline constexpr double kArcTolerance_m = 0.001;           // region joints and ends

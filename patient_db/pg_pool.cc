@@ -20,7 +20,9 @@ PgPool::Lease PgPool::Acquire() {
   std::unique_ptr<pqxx::connection> conn;
   {
     std::unique_lock lock(mutex_);
+    ++waiting_;
     available_.wait(lock, [&] { return on_loan_ < max_size_; });
+    --waiting_;
     ++on_loan_;
     if (!idle_.empty()) {
       conn = std::move(idle_.back());
@@ -36,6 +38,11 @@ PgPool::Lease PgPool::Acquire() {
     }
   }
   return Lease(this, std::move(conn));
+}
+
+size_t PgPool::waiting() {
+  std::lock_guard lock(mutex_);
+  return waiting_;
 }
 
 void PgPool::Return(std::unique_ptr<pqxx::connection> conn) {

@@ -49,6 +49,8 @@ class PgPool {
   std::unique_ptr<pqxx::connection> Connect() const;
 
   size_t max_size() const { return max_size_; }
+  // Callers blocked in Acquire now (all max_size connections on loan).
+  size_t waiting();
 
  private:
   void Return(std::unique_ptr<pqxx::connection> conn);
@@ -59,6 +61,7 @@ class PgPool {
   std::condition_variable available_;
   std::vector<std::unique_ptr<pqxx::connection>> idle_;  // guarded by mutex_
   size_t on_loan_ = 0;                                    // guarded by mutex_
+  size_t waiting_ = 0;                                    // guarded by mutex_
 };
 
 }  // namespace ves::patient_db

@@ -248,15 +248,18 @@ StoreResult<TraineeRow> PgStore::GetTrainee(const std::string& trainee_id) {
   return t;
 }
 
-StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& institution) {
+StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& institution,
+                                                           const ListPage& page) {
   std::vector<TraineeRow> out;
   StoreStatus st = Transact("list trainees", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
     // COLLATE "C": byte order, as SQLite sorts, whatever the cluster's locale.
     pqxx::result r = tx.exec_params(
         "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
-        "WHERE institution = $1 ORDER BY trainee_id COLLATE \"C\"",
-        institution);
+        "WHERE institution = $1 AND ($2 = 0 OR trainee_id COLLATE \"C\" > $3) "
+        "ORDER BY trainee_id COLLATE \"C\" LIMIT $4",
+        institution, page.has_after ? 1 : 0, page.after_text,
+        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
     for (const auto& row : r) {
       out.push_back({row[0].as<std::string>(), row[1].as<std::string>(),
                      row[2].as<std::string>(), row[3].as<int64_t>()});
@@ -267,14 +270,15 @@ StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& in
   return out;
 }
 
-StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int limit) {
+StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int limit,
+                                                     int64_t after_id) {
   std::vector<AuditRow> out;
   StoreStatus st = Transact("list audit", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
     pqxx::result r = tx.exec_params(
         "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
-        "FROM audit_log WHERE at_unix_ms >= $1 ORDER BY id LIMIT $2",
-        since_unix_ms, limit);
+        "FROM audit_log WHERE at_unix_ms >= $1 AND id > $2 ORDER BY id LIMIT $3",
+        since_unix_ms, after_id, limit);
     for (const auto& row : r) {
       out.push_back({row[0].as<int64_t>(), row[1].as<int64_t>(), row[2].as<std::string>(),
                      row[3].as<std::string>(), row[4].as<std::string>(),

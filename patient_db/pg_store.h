@@ -48,7 +48,8 @@ class PgStore final : public Store {
   StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) override;
   StoreStatus AddTrainee(const TraineeRow& trainee) override;
   StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) override;
-  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution) override;
+  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution,
+                                                    const ListPage& page = {}) override;
   StoreResult<PutCaseResult> PutCase(const CaseRow& row, const std::string& payload) override;
   StoreResult<std::vector<CaseRow>> ListCases(const CaseFilter& filter) override;
   StoreResult<CaseRow> GetCase(const std::string& case_id, uint32_t version) override;
@@ -56,12 +57,15 @@ class PgStore final : public Store {
   StoreResult<std::vector<SessionPutResult>> CommitBatch(const WriteBatch& batch) override;
   StoreResult<SessionRow> GetSession(const std::string& uuid) override;
   StoreResult<std::vector<SessionRow>> ListSessions(const std::string& trainee_id,
-                                                    const std::string& case_id) override;
+                                                    const std::string& case_id,
+                                                    const ListPage& page = {}) override;
   StoreResult<int64_t> CountSessions() override;
-  StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) override;
+  StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
+                                               int64_t after_id = 0) override;
   StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
   StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) override;
-  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution) override;
+  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution,
+                                                        const ListPage& page = {}) override;
   StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) override;
   StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) override;
   StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) override;
@@ -75,6 +79,7 @@ class PgStore final : public Store {
       const std::string& trainee_id) override;
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
+  StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
 
   int schema_version() const { return schema_version_; }
 

@@ -1,5 +1,6 @@
 // PgStore: curricula, groups, assignments and lesson verdicts
 // (docs/lessons.md). Schema: migration 2, the same SQL as SQLite.
+#include <optional>
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
@@ -9,7 +10,7 @@ namespace {
 
 constexpr const char* kVerdictColumns =
     "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
-    "judged_unix_ms, detail";
+    "judged_unix_ms, detail, rejected";
 
 LessonVerdictRow ReadVerdictRow(const pqxx::row& r) {
   LessonVerdictRow v;
@@ -22,6 +23,7 @@ LessonVerdictRow ReadVerdictRow(const pqxx::row& r) {
   v.session_start_unix_ms = r[6].as<int64_t>();
   v.judged_unix_ms = r[7].as<int64_t>();
   v.detail = r[8].as<std::string>();
+  v.rejected = r[9].as<int>() != 0;
   return v;
 }
 
@@ -103,14 +105,17 @@ StoreResult<CurriculumRow> PgStore::GetCurriculum(const std::string& curriculum_
   return out;
 }
 
-StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution) {
+StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution,
+                                                               const ListPage& page) {
   std::vector<CurriculumRow> out;
   StoreStatus st = Transact("list curricula", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
     pqxx::result ids = tx.exec_params(
         "SELECT curriculum_id FROM curricula WHERE ($1 = '' OR institution = $1) "
-        "ORDER BY curriculum_id COLLATE \"C\"",
-        institution);
+        "AND ($2 = 0 OR curriculum_id COLLATE \"C\" > $3) "
+        "ORDER BY curriculum_id COLLATE \"C\" LIMIT $4",
+        institution, page.has_after ? 1 : 0, page.after_text,
+        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
     for (const auto& id : ids) {
       CurriculumRow row;
       StoreStatus read = ReadCurriculum(tx, id[0].as<std::string>(), &row);
@@ -229,10 +234,10 @@ StoreResult<bool> PgStore::PutLessonVerdict(const LessonVerdictRow& v) {
   StoreStatus st = Transact("put verdict", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
     pqxx::result r = tx.exec_params(
         std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
-            ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9) "
+            ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) "
             "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
         v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
-        v.session_start_unix_ms, v.judged_unix_ms, v.detail);
+        v.session_start_unix_ms, v.judged_unix_ms, v.detail, v.rejected ? 1 : 0);
     inserted = !r.empty();
     return StoreStatus::Ok();
   });
@@ -294,6 +299,25 @@ StoreResult<std::vector<std::string>> PgStore::ListUnjudgedLessonSessions(
   });
   if (!st.ok()) return st;
   return out;
+}
+
+StoreResult<int> PgStore::AddJudgeStarts(const std::string& session_uuid, int delta) {
+  std::optional<int> starts;
+  StoreStatus st = Transact("add judge starts", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "UPDATE lesson_sessions SET judge_starts = judge_starts + $1 WHERE session_uuid = $2 "
+        "RETURNING judge_starts",
+        delta, session_uuid);
+    starts.reset();
+    if (!r.empty()) starts = r[0][0].as<int>();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  if (!starts) {
+    return StoreStatus::Error(StoreCode::kNotFound,
+                              "no lesson session '" + session_uuid + "' to judge");
+  }
+  return *starts;
 }
 
 }  // namespace ves::patient_db

@@ -10,6 +10,8 @@
 
 #include <pqxx/pqxx>
 
+#include <cstdint>
+
 #include "patient_db/pg_store.h"
 
 namespace ves::patient_db {
@@ -177,17 +179,27 @@ StoreResult<std::vector<CaseRow>> PgStore::ListCases(const CaseFilter& f) {
   sql += " AND ($3 = '' OR c.institution = $3)";
   sql += " AND ($4 = '' OR c.institution = $4 OR EXISTS (SELECT 1 FROM case_shares s WHERE "
          "s.case_id = c.case_id AND s.version = c.version AND s.institution = $4))";
+  // Pages: after (case_id, version) with all versions, else after case_id.
+  sql += f.all_versions ? " AND ($5 = 0 OR c.case_id COLLATE \"C\" > $6 OR "
+                          "(c.case_id = $6 AND c.version > $7::BIGINT))"
+                        : " AND ($5 = 0 OR c.case_id COLLATE \"C\" > $6 OR $7::BIGINT < 0)";
   sql += " ORDER BY c.case_id COLLATE \"C\", c.version";
   const int64_t region_bit = f.region != 0 ? static_cast<int64_t>(uint64_t{1} << f.region) : 0;
+  const size_t limit = f.page.limit > 0 ? static_cast<size_t>(f.page.limit) : SIZE_MAX;
   std::vector<CaseRow> out;
   StoreStatus st = Transact("list cases", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
     pqxx::result r =
-        tx.exec_params(sql, region_bit, int64_t{f.difficulty}, f.institution, f.visible_to);
+        tx.exec_params(sql, region_bit, int64_t{f.difficulty}, f.institution, f.visible_to,
+                       f.page.has_after ? 1 : 0, f.page.after_text, f.page.after_number);
     for (const auto& row : r) {
       CaseRow c = ReadCaseRow(row);
       // Rows come ordered by (id, version): a later version replaces the last one.
-      if (!f.all_versions && !out.empty() && out.back().case_id == c.case_id) out.pop_back();
+      if (!f.all_versions && !out.empty() && out.back().case_id == c.case_id) {
+        out.back() = std::move(c);
+        continue;
+      }
+      if (out.size() == limit) break;  // the next case would be one too many
       out.push_back(std::move(c));
     }
     for (CaseRow& c : out) ReadShares(tx, &c);
@@ -349,14 +361,19 @@ StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
 }
 
 StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& trainee_id,
-                                                           const std::string& case_id) {
+                                                           const std::string& case_id,
+                                                           const ListPage& page) {
   const std::string sql = std::string("SELECT ") + kSessionColumns +
                           " FROM sessions WHERE trainee_id = $1 AND ($2 = '' OR case_id = $2)"
-                          " ORDER BY start_unix_ms, uuid COLLATE \"C\"";
+                          " AND ($3 = 0 OR start_unix_ms > $4 OR (start_unix_ms = $4 AND "
+                          "uuid COLLATE \"C\" > $5))"
+                          " ORDER BY start_unix_ms, uuid COLLATE \"C\" LIMIT $6";
   std::vector<SessionRow> out;
   StoreStatus st = Transact("list sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
     out.clear();
-    for (const auto& row : tx.exec_params(sql, trainee_id, case_id)) {
+    for (const auto& row : tx.exec_params(
+             sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
+             page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
       out.push_back(ReadSessionRow(row));
     }
     return StoreStatus::Ok();

@@ -204,14 +204,16 @@ StoreResult<TraineeRow> SqliteStore::GetTrainee(const std::string& trainee_id) {
   return t;
 }
 
-StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string& institution) {
+StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string& institution,
+                                                               const ListPage& page) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
       "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
-      "WHERE institution = ? ORDER BY trainee_id",
+      "WHERE institution = ? AND (? = 0 OR trainee_id > ?) ORDER BY trainee_id LIMIT ?",
       nullptr);
   if (!s) return Internal(r.db(), "list trainees");
-  s->Bind(1, institution);
+  s->Bind(1, institution).Bind(2, int64_t{page.has_after}).Bind(3, page.after_text);
+  s->Bind(4, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<TraineeRow> out;
   while (s->Step(&rc)) out.push_back({s->Text(0), s->Text(1), s->Text(2), s->Int(3)});
@@ -220,14 +222,15 @@ StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string
   return out;
 }
 
-StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms, int limit) {
+StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms, int limit,
+                                                         int64_t after_id) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
       "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
-      "FROM audit_log WHERE at_unix_ms >= ? ORDER BY id LIMIT ?",
+      "FROM audit_log WHERE at_unix_ms >= ? AND id > ? ORDER BY id LIMIT ?",
       nullptr);
   if (!s) return Internal(r.db(), "list audit");
-  s->Bind(1, since_unix_ms).Bind(2, int64_t{limit});
+  s->Bind(1, since_unix_ms).Bind(2, after_id).Bind(3, int64_t{limit});
   int rc = SQLITE_OK;
   std::vector<AuditRow> out;
   while (s->Step(&rc)) {

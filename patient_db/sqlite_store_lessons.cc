@@ -22,7 +22,7 @@ bool IsConstraint(int rc) { return (rc & 0xff) == SQLITE_CONSTRAINT; }
 
 constexpr const char* kVerdictColumns =
     "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
-    "judged_unix_ms, detail";
+    "judged_unix_ms, detail, rejected";
 
 LessonVerdictRow ReadVerdictRow(const SqliteStatement& s) {
   LessonVerdictRow v;
@@ -35,6 +35,7 @@ LessonVerdictRow ReadVerdictRow(const SqliteStatement& s) {
   v.session_start_unix_ms = s.Int(6);
   v.judged_unix_ms = s.Int(7);
   v.detail = s.Text(8);
+  v.rejected = s.Int(9) != 0;
   return v;
 }
 
@@ -135,14 +136,15 @@ StoreResult<CurriculumRow> SqliteStore::GetCurriculum(const std::string& curricu
 }
 
 StoreResult<std::vector<CurriculumRow>> SqliteStore::ListCurricula(
-    const std::string& institution) {
+    const std::string& institution, const ListPage& page) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
       "SELECT curriculum_id FROM curricula WHERE (? = '' OR institution = ?) "
-      "ORDER BY curriculum_id",
+      "AND (? = 0 OR curriculum_id > ?) ORDER BY curriculum_id LIMIT ?",
       nullptr);
   if (!s) return Internal(r.db(), "list curricula");
-  s->Bind(1, institution).Bind(2, institution);
+  s->Bind(1, institution).Bind(2, institution).Bind(3, int64_t{page.has_after});
+  s->Bind(4, page.after_text).Bind(5, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<std::string> ids;
   while (s->Step(&rc)) ids.push_back(s->Text(0));
@@ -274,12 +276,13 @@ StoreResult<bool> SqliteStore::PutLessonVerdict(const LessonVerdictRow& v) {
   std::lock_guard lock(write_mutex_);
   SqliteStatement* s = writer_->Prepare(
       std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
-          ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
+          ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
       nullptr);
   if (!s) return Internal(*writer_, "put verdict");
   s->Bind(1, v.session_uuid).Bind(2, v.trainee_id).Bind(3, v.curriculum_id);
   s->Bind(4, v.lesson_id).Bind(5, int64_t{v.passed}).Bind(6, v.score);
   s->Bind(7, v.session_start_unix_ms).Bind(8, v.judged_unix_ms).Bind(9, v.detail);
+  s->Bind(10, int64_t{v.rejected});
   int rc = SQLITE_OK;
   if (!Run(s, &rc)) {
     if (IsConstraint(rc)) {
@@ -341,6 +344,26 @@ StoreResult<std::vector<std::string>> SqliteStore::ListUnjudgedLessonSessions(
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list unjudged");
   return out;
+}
+
+StoreResult<int> SqliteStore::AddJudgeStarts(const std::string& session_uuid, int delta) {
+  std::lock_guard lock(write_mutex_);
+  SqliteStatement* s = writer_->Prepare(
+      "UPDATE lesson_sessions SET judge_starts = judge_starts + ? WHERE session_uuid = ? "
+      "RETURNING judge_starts",
+      nullptr);
+  if (!s) return Internal(*writer_, "add judge starts");
+  s->Bind(1, int64_t{delta}).Bind(2, session_uuid);
+  int rc = SQLITE_OK;
+  std::optional<int> starts;
+  if (s->Step(&rc)) starts = static_cast<int>(s->Int(0));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(*writer_, "add judge starts");
+  if (!starts) {
+    return StoreStatus::Error(StoreCode::kNotFound,
+                              "no lesson session '" + session_uuid + "' to judge");
+  }
+  return *starts;
 }
 
 }  // namespace ves::patient_db

@@ -3,6 +3,8 @@
 #include <map>
 #include <optional>
 
+#include <cstdint>
+
 #include "patient_db/sqlite_store.h"
 
 namespace ves::patient_db {
@@ -176,6 +178,10 @@ StoreResult<std::vector<CaseRow>> SqliteStore::ListCases(const CaseFilter& f) {
     sql += " AND (c.institution = ? OR EXISTS (SELECT 1 FROM case_shares s WHERE "
            "s.case_id = c.case_id AND s.version = c.version AND s.institution = ?))";
   }
+  if (f.page.has_after) {
+    sql += f.all_versions ? " AND (c.case_id > ? OR (c.case_id = ? AND c.version > ?))"
+                          : " AND c.case_id > ?";
+  }
   sql += " ORDER BY c.case_id, c.version";
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(sql, nullptr);
@@ -188,12 +194,24 @@ StoreResult<std::vector<CaseRow>> SqliteStore::ListCases(const CaseFilter& f) {
     s->Bind(i, f.visible_to).Bind(i + 1, f.visible_to);
     i += 2;
   }
+  if (f.page.has_after) {
+    s->Bind(i++, f.page.after_text);
+    if (f.all_versions) {
+      s->Bind(i, f.page.after_text).Bind(i + 1, f.page.after_number);
+      i += 2;
+    }
+  }
   int rc = SQLITE_OK;
   std::vector<CaseRow> out;
+  const size_t limit = f.page.limit > 0 ? static_cast<size_t>(f.page.limit) : SIZE_MAX;
   while (s->Step(&rc)) {
     CaseRow row = ReadCaseRow(*s);
     // Rows come ordered by (id, version): a later version replaces the last one.
-    if (!f.all_versions && !out.empty() && out.back().case_id == row.case_id) out.pop_back();
+    if (!f.all_versions && !out.empty() && out.back().case_id == row.case_id) {
+      out.back() = std::move(row);
+      continue;
+    }
+    if (out.size() == limit) break;  // the next case would be one too many
     out.push_back(std::move(row));
   }
   s->Reset();
@@ -343,16 +361,24 @@ StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
 }
 
 StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string& trainee_id,
-                                                               const std::string& case_id) {
+                                                               const std::string& case_id,
+                                                               const ListPage& page) {
   Reader r = Read();
   std::string sql =
       std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE trainee_id = ?";
   if (!case_id.empty()) sql += " AND case_id = ?";
-  sql += " ORDER BY start_unix_ms, uuid";
+  if (page.has_after) sql += " AND (start_unix_ms > ? OR (start_unix_ms = ? AND uuid > ?))";
+  sql += " ORDER BY start_unix_ms, uuid LIMIT ?";
   SqliteStatement* s = r.db().Prepare(sql, nullptr);
   if (!s) return Internal(r.db(), "list sessions");
-  s->Bind(1, trainee_id);
-  if (!case_id.empty()) s->Bind(2, case_id);
+  int i = 1;
+  s->Bind(i++, trainee_id);
+  if (!case_id.empty()) s->Bind(i++, case_id);
+  if (page.has_after) {
+    s->Bind(i, page.after_number).Bind(i + 1, page.after_number).Bind(i + 2, page.after_text);
+    i += 3;
+  }
+  s->Bind(i, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<SessionRow> out;
   while (s->Step(&rc)) out.push_back(ReadSessionRow(*s));

@@ -77,12 +77,25 @@ struct CaseRow {
   bool operator==(const CaseRow&) const = default;
 };
 
+// Where a page of a listing starts (docs/server.md, "Limits"): after the row
+// whose sort key is (after_text, after_number) — the previous page's last
+// row — and at most `limit` rows (0: all, for the server's own use). Which
+// part of the key a listing uses is said at the listing.
+struct ListPage {
+  bool has_after = false;
+  std::string after_text;
+  int64_t after_number = 0;
+  int limit = 0;
+};
+
 struct CaseFilter {
   int region = 0;             // 0: any
   int difficulty = 0;         // 0: any
   std::string institution;    // owner; empty: any
   std::string visible_to;     // owner or shared with this institution; empty: no restriction
   bool all_versions = false;  // false: the latest version of each case only
+  // Key (case_id, version) with all_versions, else case_id; limit counts cases.
+  ListPage page;
 };
 
 struct PutCaseResult {
@@ -165,6 +178,7 @@ struct LessonVerdictRow {
   int64_t session_start_unix_ms = 0;
   int64_t judged_unix_ms = 0;
   std::string detail;  // one line per criterion
+  bool rejected = false;  // refused unjudged (over a budget, an impossible log): final
   bool operator==(const LessonVerdictRow&) const = default;
 };
 
@@ -197,7 +211,9 @@ class Store {
 
   virtual StoreStatus AddTrainee(const TraineeRow& trainee) = 0;
   virtual StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) = 0;
-  virtual StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution) = 0;
+  // By trainee id; page key: trainee_id.
+  virtual StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution,
+                                                            const ListPage& page = {}) = 0;
 
   // Stores the payload under its SHA-256 (once) and the (id, version) row. The
   // same id, version and hash again: already_stored. Same id and version with
@@ -213,13 +229,16 @@ class Store {
   // audit row. The result has one entry per session.
   virtual StoreResult<std::vector<SessionPutResult>> CommitBatch(const WriteBatch& batch) = 0;
   virtual StoreResult<SessionRow> GetSession(const std::string& uuid) = 0;  // with body
-  // Oldest first, without bodies; case_id empty: all.
+  // Oldest first, without bodies; case_id empty: all. Page key:
+  // (uuid, start_unix_ms).
   virtual StoreResult<std::vector<SessionRow>> ListSessions(const std::string& trainee_id,
-                                                            const std::string& case_id) = 0;
+                                                            const std::string& case_id,
+                                                            const ListPage& page = {}) = 0;
   virtual StoreResult<int64_t> CountSessions() = 0;
 
-  // Oldest first, at most `limit`.
-  virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit) = 0;
+  // Oldest first, at most `limit`, ids above `after_id`.
+  virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
+                                                       int64_t after_id = 0) = 0;
 
   // ---- Lessons (docs/lessons.md) ----
   // Stores the curriculum and its lesson ids. The same id and body hash again:
@@ -227,8 +246,9 @@ class Store {
   // by another curriculum: kAlreadyExists.
   virtual StoreResult<bool> PutCurriculum(const CurriculumRow& row) = 0;
   virtual StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) = 0;
-  // By id; institution empty: all.
-  virtual StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution) = 0;
+  // By id; institution empty: all. Page key: curriculum_id.
+  virtual StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution,
+                                                                const ListPage& page = {}) = 0;
   // The curriculum holding the lesson (kNotFound when none).
   virtual StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) = 0;
   // One group per trainee; "" removes it.
@@ -252,6 +272,12 @@ class Store {
   // trainee_id empty: everyone's.
   virtual StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(
       const std::string& trainee_id, int limit) = 0;
+  // Adds `delta` to the times judging of this lesson session started and
+  // returns the new count (durable before it returns); kNotFound when the
+  // session is not queued for judging. The judge counts a start before each
+  // replay and takes it back when it stops cleanly, so what remains counts
+  // replays that never finished (a crash).
+  virtual StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

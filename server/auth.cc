@@ -103,23 +103,4 @@ AuthStatus RequireTraineeReader(const Principal& p, const patient_db::TraineeRow
   return Denied("role 'station' may not " + what);
 }
 
-bool IsLoopbackListenAddress(const std::string& address) {
-  const size_t colon = address.rfind(':');
-  if (colon == std::string::npos) return false;
-  std::string host = address.substr(0, colon);
-  if (host.rfind("ipv4:", 0) == 0) host = host.substr(5);
-  if (host == "localhost" || host == "[::1]") return true;
-  // 127.0.0.0/8: four dotted decimal parts, the first 127.
-  if (host.rfind("127.", 0) != 0) return false;
-  int parts = 1;
-  for (char c : host) {
-    if (c == '.') {
-      ++parts;
-    } else if (c < '0' || c > '9') {
-      return false;
-    }
-  }
-  return parts == 4;
-}
-
 }  // namespace ves::server

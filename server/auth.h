@@ -60,7 +60,4 @@ AuthStatus RequireInstitution(const Principal& p, const std::string& institution
 AuthStatus RequireTraineeReader(const Principal& p, const patient_db::TraineeRow& trainee,
                                 const std::string& what);
 
-// True for 127.0.0.0/8, [::1] and localhost listen addresses ("host:port").
-bool IsLoopbackListenAddress(const std::string& address);
-
 }  // namespace ves::server

@@ -133,6 +133,8 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
 
  private:
   Status Take() {
+    const Status limits = CheckRequestLimits(request_);
+    if (!limits.ok()) return limits;
     if (request_.has_header()) {
       if (has_header_) return Status(StatusCode::INVALID_ARGUMENT, "a second header");
       header_ = request_.header();
@@ -142,7 +144,6 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
                       "header.total_bytes = " + std::to_string(header_.total_bytes()) +
                           ": larger than the limit " + std::to_string(kMaxCaseUploadBytes));
       }
-      bytes_.reserve(header_.total_bytes());
       return Status::OK;
     }
     if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "chunk before the header");
@@ -152,12 +153,27 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
                         std::to_string(header_.total_bytes()));
     }
     bytes_ += request_.chunk();
+    if (!head_checked_) {
+      // The bundle's magic and length are checked with its first bytes, not
+      // after 256 MiB of something else have been buffered.
+      try {
+        patient_db::CheckCaseBundleHead(bytes_, header_.total_bytes(), Label());
+      } catch (const patient_db::CaseError& e) {
+        return Status(StatusCode::INVALID_ARGUMENT, patient_db::JoinProblems(e.problems()));
+      }
+      head_checked_ = bytes_.size() >= patient_db::kCaseBundleHeaderSize;
+      if (head_checked_) bytes_.reserve(header_.total_bytes());
+    }
     return Status::OK;
+  }
+
+  std::string Label() const {
+    return header_.file_label().empty() ? std::string("upload") : header_.file_label();
   }
 
   Status Complete() {
     if (!has_header_) return Status(StatusCode::INVALID_ARGUMENT, "no header was sent");
-    const std::string label = header_.file_label().empty() ? "upload" : header_.file_label();
+    const std::string label = Label();
     if (bytes_.size() != header_.total_bytes()) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     label + ": received " + std::to_string(bytes_.size()) +
@@ -212,6 +228,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
   ves::v1::UploadCaseRequest request_;
   ves::v1::UploadCaseHeader header_;
   bool has_header_ = false;
+  bool head_checked_ = false;
   std::string bytes_;
   std::string target_ = "?";
 };
@@ -223,11 +240,7 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
                                                   ves::v1::ListCasesResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
-  if (!a.ok()) {
-    reactor->Finish(ToGrpcStatus(a));
-    return reactor;
-  }
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus r = RequireRole(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list cases");
@@ -238,9 +251,23 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
     filter.institution = request->institution();
     filter.all_versions = request->all_versions();
     if (who.role != StoreRole::kAdmin) filter.visible_to = who.institution;
+    const Status token = ReadPageToken(request->page_token(), "cases", &filter.page);
+    if (!token.ok()) return token;
+    const int size = PageSizeOf(request->page_size());
+    filter.page.limit = size + 1;  // one more tells whether a next page exists
     auto rows = deps_.store->ListCases(filter);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& row : rows.value) ToSummary(row, response->add_cases());
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      ToSummary(rows.value[i], response->add_cases());
+      bytes += response->cases(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        const auto& last = rows.value[i];
+        response->set_next_page_token(MakePageToken("cases", last.version, last.case_id));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "case.list", request->institution(), status);
@@ -250,6 +277,8 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
 grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     grpc::CallbackServerContext* ctx, const ves::v1::DownloadCaseRequest* request) {
   using Error = ErrorReactor<grpc::ServerWriteReactor<ves::v1::CaseChunk>>;
+  const Status limits = CheckRequestLimits(*request);
+  if (!limits.ok()) return new Error(limits);
   Principal who;
   AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
   if (!a.ok()) return new Error(ToGrpcStatus(a));
@@ -264,9 +293,11 @@ grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     if (!row.ok()) return ToGrpcStatus(row.status);
     target = CaseTarget(row.value.case_id, row.value.version);
     if (!VisibleTo(row.value, who)) {
-      return Status(StatusCode::PERMISSION_DENIED, "case " + target +
-                                                       " is not shared with institution '" +
-                                                       who.institution + "'");
+      // As for a case that does not exist: its existence is not told.
+      const uint32_t version = request->version();
+      return Status(StatusCode::NOT_FOUND,
+                    "no case '" + request->case_id() + "'" +
+                        (version == 0 ? std::string() : " version " + std::to_string(version)));
     }
     if (request->offset() > row.value.size_bytes) {
       return Status(StatusCode::OUT_OF_RANGE,

@@ -23,7 +23,8 @@ std::string JoinLines(const std::vector<std::string>& lines) {
 
 }  // namespace
 
-LessonJudge::LessonJudge(patient_db::Store* store) : store_(store) {}
+LessonJudge::LessonJudge(patient_db::Store* store, training::JudgeBudget budget)
+    : store_(store), budget_(budget) {}
 
 LessonJudge::~LessonJudge() { Stop(); }
 
@@ -83,7 +84,10 @@ void LessonJudge::Loop() {
                           std::chrono::steady_clock::now() - start).count();
     if (verdict.ok()) {
       spdlog::info("lesson judge: session {} lesson {}: {} (score {:.1f}, replay {:.0f} ms)", uuid,
-                   verdict.value.lesson_id, verdict.value.passed ? "PASSED" : "FAILED",
+                   verdict.value.lesson_id,
+                   verdict.value.passed ? "PASSED"
+                   : verdict.value.rejected ? "REJECTED"
+                                            : "FAILED",
                    verdict.value.score, ms);
     } else {
       spdlog::error("lesson judge: session {}: {}", uuid, verdict.status.message);
@@ -156,14 +160,27 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
   } else {
     auto colon_case = LessonCase(*lesson);
     if (!colon_case.ok()) return colon_case.status;  // stays unjudged; retried on restart
+    // Counted durably before the replay: a record whose replay kills the
+    // server is not replayed forever on every restart.
+    auto starts = store_->AddJudgeStarts(session_uuid, 1);
+    if (!starts.ok()) return starts.status;
     training::GateResult gate;
-    try {
-      gate = training::JudgeLessonSession(*lesson, colon_case.value, record, &cancel_);
-    } catch (const training::JudgeCancelled& cancelled) {
-      return StoreStatus::Error(StoreCode::kInternal, cancelled.what());  // judged next start
+    if (starts.value > kMaxJudgeStarts) {
+      gate.checks.push_back("rejected: its replay was started " +
+                            std::to_string(starts.value - 1) +
+                            " times and never finished (the server stopped during it)");
+      gate.rejected = true;
+    } else {
+      try {
+        gate = training::JudgeLessonSession(*lesson, colon_case.value, record, &cancel_, budget_);
+      } catch (const training::JudgeCancelled& cancelled) {
+        store_->AddJudgeStarts(session_uuid, -1);  // a clean stop is not a failed start
+        return StoreStatus::Error(StoreCode::kInternal, cancelled.what());  // judged next start
+      }
     }
     v.passed = gate.passed;
     v.score = gate.score;
+    v.rejected = gate.rejected;
     checks = gate.checks;
   }
   v.detail = JoinLines(checks);

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "patient_db/store.h"
+#include "station/training/lesson_gate.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
 
@@ -20,12 +21,19 @@
 // CPU (a 60 s session about 2.4 s), so it never runs on a gRPC thread: an
 // upload is acknowledged once the session is durable, and the session is
 // queued for judging in the same transaction (table lesson_sessions), so a
-// server killed before the verdict judges it when it starts again.
+// server killed before the verdict judges it when it starts again. Each
+// replay runs within training::JudgeBudget (memory and CPU); a session over
+// it, or whose replay was started kMaxJudgeStarts times without finishing,
+// gets a final rejected verdict, so no record can cost more than that again.
 namespace ves::server {
+
+// Replays of one session that may start without finishing (the server died
+// during them) before the session gets a rejected verdict instead of a third.
+inline constexpr int kMaxJudgeStarts = 2;
 
 class LessonJudge {
  public:
-  explicit LessonJudge(patient_db::Store* store);
+  explicit LessonJudge(patient_db::Store* store, training::JudgeBudget budget = {});
   ~LessonJudge();  // Stop()
   LessonJudge(const LessonJudge&) = delete;
   LessonJudge& operator=(const LessonJudge&) = delete;
@@ -50,6 +58,7 @@ class LessonJudge {
   patient_db::StoreResult<ves::v1::ColonCase> LessonCase(const ves::v1::Lesson& lesson);
 
   patient_db::Store* store_;
+  training::JudgeBudget budget_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::string> queue_;  // guarded by mutex_

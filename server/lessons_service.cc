@@ -79,7 +79,8 @@ Status LessonReader(const ServiceDeps& deps, const Principal& who, const std::st
   if (!found.ok()) return ToGrpcStatus(found.status);
   a = who.role == StoreRole::kStation ? RequireInstitution(who, found.value.institution, what)
                                       : RequireTraineeReader(who, found.value, what);
-  if (!a.ok()) return ToGrpcStatus(a);
+  // As for an absent trainee: existence is not told outside the institution.
+  if (!a.ok()) return Status(StatusCode::NOT_FOUND, "no trainee '" + trainee_id + "'");
   *trainee = found.value;
   return Status::OK;
 }
@@ -118,6 +119,7 @@ void ToProtoVerdict(const patient_db::LessonVerdictRow& v, ves::v1::LessonVerdic
   out->set_curriculum_id(v.curriculum_id);
   out->set_lesson_id(v.lesson_id);
   out->set_passed(v.passed);
+  out->set_rejected(v.rejected);
   out->set_score(v.score);
   size_t start = 0;
   while (start < v.detail.size()) {
@@ -136,7 +138,7 @@ grpc::ServerUnaryReactor* LessonsService::CreateCurriculum(
     ves::v1::CreateCurriculumResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   ves::v1::Curriculum c = request->curriculum();
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
@@ -175,7 +177,7 @@ grpc::ServerUnaryReactor* LessonsService::ListCurricula(
     ves::v1::ListCurriculaResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
   const Status status = [&]() -> Status {
@@ -183,12 +185,26 @@ grpc::ServerUnaryReactor* LessonsService::ListCurricula(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list curricula");
     if (a.ok()) a = RequireInstitution(who, institution, "list the curricula");
     if (!a.ok()) return ToGrpcStatus(a);
-    auto rows = deps_.store->ListCurricula(institution);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request->page_token(), "curricula", &page);
+    if (!token.ok()) return token;
+    // Curricula are large (up to 200 lessons each): ten a page by default.
+    const int size = PageSizeOf(request->page_size(), 10);
+    page.limit = size + 1;
+    auto rows = deps_.store->ListCurricula(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) {
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      const auto& r = rows.value[i];
       if (!response->add_curricula()->ParseFromString(r.body)) {
         return Status(StatusCode::DATA_LOSS, "stored curriculum " + r.curriculum_id +
                                                  " is corrupt");
+      }
+      bytes += r.body.size() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        response->set_next_page_token(MakePageToken("curricula", 0, r.curriculum_id));
+        break;
       }
     }
     return Status::OK;
@@ -202,7 +218,7 @@ grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
     ves::v1::AssignCurriculumResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const bool to_group = request->has_group();
   const std::string assignee = to_group ? request->group() : request->trainee_id();
   const Status status = [&]() -> Status {
@@ -212,8 +228,10 @@ grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
     auto curriculum = deps_.store->GetCurriculum(request->curriculum_id());
     if (!curriculum.ok()) return ToGrpcStatus(curriculum.status);
     const std::string& institution = curriculum.value.institution;
-    a = RequireInstitution(who, institution, "assign the curricula of the institution");
-    if (!a.ok()) return ToGrpcStatus(a);
+    // Another institution's curriculum answers as an absent one (no existence leak).
+    if (!RequireInstitution(who, institution, "assign").ok()) {
+      return Status(StatusCode::NOT_FOUND, "no curriculum '" + request->curriculum_id() + "'");
+    }
     if (!IsName(assignee)) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     std::string(to_group ? "group" : "trainee_id") + " = '" + assignee +
@@ -252,15 +270,16 @@ grpc::ServerUnaryReactor* LessonsService::SetTraineeGroup(
     ves::v1::SetTraineeGroupResponse* /*response*/) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
                                "set trainee groups");
     if (!a.ok()) return ToGrpcStatus(a);
     auto trainee = deps_.store->GetTrainee(request->trainee_id());
     if (!trainee.ok()) return ToGrpcStatus(trainee.status);
-    a = RequireInstitution(who, trainee.value.institution, "group the trainees");
-    if (!a.ok()) return ToGrpcStatus(a);
+    if (!RequireInstitution(who, trainee.value.institution, "group").ok()) {
+      return Status(StatusCode::NOT_FOUND, "no trainee '" + request->trainee_id() + "'");
+    }
     if (!request->group().empty() && !IsName(request->group())) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     "group = '" + request->group() + "': must be 1..128 printable characters");
@@ -276,7 +295,7 @@ grpc::ServerUnaryReactor* LessonsService::GetNextLesson(
     ves::v1::GetNextLessonResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s = LessonReader(deps_, who, request->trainee_id(), "get lessons", &trainee);
@@ -311,7 +330,7 @@ grpc::ServerUnaryReactor* LessonsService::GetProgress(grpc::CallbackServerContex
                                                       ves::v1::GetProgressResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const bool by_group = request->has_group();
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
@@ -355,7 +374,7 @@ grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
     ves::v1::GetLessonVerdictResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
                                      StoreRole::kStation, StoreRole::kTrainee}, "read verdicts");
@@ -364,6 +383,9 @@ grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
     if (!session.ok()) return ToGrpcStatus(session.status);
     patient_db::TraineeRow trainee;
     Status s = LessonReader(deps_, who, session.value.trainee_id, "read verdicts", &trainee);
+    if (s.error_code() == StatusCode::NOT_FOUND) {
+      return Status(StatusCode::NOT_FOUND, "no session '" + request->session_uuid() + "'");
+    }
     if (!s.ok()) return s;
     auto verdict = deps_.store->GetLessonVerdict(request->session_uuid());
     if (verdict.ok()) {

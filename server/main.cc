@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
       "drain-s", po::value(&drain_s)->default_value(drain_s),
       "on SIGTERM, seconds in-flight calls get to finish")(
       "port-file", po::value(&port_file), "write the bound port here (for --listen ...:0)")(
+      "judge-memory-mb", po::value<int>()->default_value(1024),
+      "memory one judged lesson session's input log may take, MiB")(
+      "judge-cpu-s", po::value(&options.judge_budget.cpu_base_s)->default_value(60.0),
+      "CPU seconds a judged replay may use, plus half a second per second of the lesson")(
       "quiet", "do not log every call");
   po::variables_map vm;
   try {
@@ -49,7 +53,27 @@ int main(int argc, char** argv) {
     std::cerr << "ves-server: " << e.what() << " (see ves-server --help)\n";
     return 2;
   }
-  options.max_receive_message_bytes = vm["max-message-mb"].as<int>() << 20;
+  const int max_message_mb = vm["max-message-mb"].as<int>();
+  const int judge_memory_mb = vm["judge-memory-mb"].as<int>();
+  if (max_message_mb < 1 || max_message_mb > 1024) {
+    std::cerr << "ves-server: --max-message-mb " << max_message_mb << ": must be in 1..1024\n";
+    return 2;
+  }
+  if (drain_s < 0 || drain_s > 3600) {
+    std::cerr << "ves-server: --drain-s " << drain_s << ": must be in 0..3600\n";
+    return 2;
+  }
+  if (judge_memory_mb < 16 || judge_memory_mb > 65536) {
+    std::cerr << "ves-server: --judge-memory-mb " << judge_memory_mb << ": must be in 16..65536\n";
+    return 2;
+  }
+  if (!(options.judge_budget.cpu_base_s >= 1.0 && options.judge_budget.cpu_base_s <= 86400.0)) {
+    std::cerr << "ves-server: --judge-cpu-s " << options.judge_budget.cpu_base_s
+              << ": must be in 1..86400\n";
+    return 2;
+  }
+  options.judge_budget.memory_bytes = static_cast<uint64_t>(judge_memory_mb) << 20;
+  options.max_receive_message_bytes = max_message_mb << 20;
   options.log_calls = vm.count("quiet") == 0;
   try {
     ves::server::MakeServerCredentials(options);  // refuse bad TLS choices before opening the DB

@@ -2,9 +2,12 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
+#include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <map>
 
+#include "patient_db/limits.h"
 #include "server/services.h"
 #include "server/session_check.h"
 
@@ -67,15 +70,16 @@ patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
                                const std::string& target, const Status& result) {
   patient_db::AuditRow a;
   a.at_unix_ms = NowUnixMs();
+  // Bounded and printable whatever the request held (docs/server.md, "Limits").
   a.actor = who.token_id;
-  a.actor_label = who.label;
+  a.actor_label = patient_db::PrintableExcerpt(who.label, kMaxAuditTextBytes);
   a.role = patient_db::RoleName(who.role);
-  a.institution = who.institution;
+  a.institution = patient_db::PrintableExcerpt(who.institution, kMaxAuditTextBytes);
   a.action = action;
-  a.target = target;
+  a.target = patient_db::PrintableExcerpt(target, kMaxAuditTextBytes);
   a.result = result.ok() ? std::string("OK")
                           : std::string(StatusCodeName(result.error_code())) + ": " +
-                                result.error_message().substr(0, 200);
+                                patient_db::PrintableExcerpt(result.error_message(), 200);
   return a;
 }
 
@@ -86,8 +90,20 @@ void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
   reactor->Finish(status);
 }
 
+Status CheckRequestLimits(const google::protobuf::Message& request) {
+  const std::string problem = patient_db::CheckMessageLimits(request, "request");
+  if (problem.empty()) return Status::OK;
+  return Status(StatusCode::INVALID_ARGUMENT, problem);
+}
+
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, Principal* who) {
+           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who) {
+  // Bounded before anything looks at it: no store lookup, no audit row.
+  const Status limits = CheckRequestLimits(request);
+  if (!limits.ok()) {
+    reactor->Finish(limits);
+    return false;
+  }
   AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
   if (a.ok()) return true;
   reactor->Finish(ToGrpcStatus(a));
@@ -105,12 +121,36 @@ std::string DeterministicBytes(const google::protobuf::Message& m) {
   return out;
 }
 
-bool IsName(const std::string& s) {
-  if (s.empty() || s.size() > 128) return false;
-  for (char c : s) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) return false;
-  }
-  return true;
+bool IsName(const std::string& s) { return patient_db::IsPrintableId(s); }
+
+int PageSizeOf(uint32_t requested, int default_size) {
+  if (requested == 0) return default_size;
+  return static_cast<int>(std::min<uint32_t>(requested, patient_db::kMaxPageSize));
+}
+
+std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text) {
+  return listing + ":" + std::to_string(number) + ":" + text;
+}
+
+Status ReadPageToken(const std::string& token, const std::string& listing,
+                     patient_db::ListPage* page) {
+  if (token.empty()) return Status::OK;
+  const auto bad = [&] {
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "page_token = '" + patient_db::PrintableExcerpt(token, 40) +
+                      "': not a next_page_token of this listing");
+  };
+  if (token.compare(0, listing.size() + 1, listing + ":") != 0) return bad();
+  const size_t number_end = token.find(':', listing.size() + 1);
+  if (number_end == std::string::npos) return bad();
+  const std::string number = token.substr(listing.size() + 1, number_end - listing.size() - 1);
+  int64_t value = 0;
+  const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), value);
+  if (number.empty() || ec != std::errc() || end != number.data() + number.size()) return bad();
+  page->has_after = true;
+  page->after_number = value;
+  page->after_text = token.substr(number_end + 1);
+  return Status::OK;
 }
 
 namespace {
@@ -141,6 +181,10 @@ void ToTrainee(const patient_db::TraineeRow& r, ves::v1::Trainee* t) {
   t->set_created_unix_ms(r.created_unix_ms);
 }
 
+Status HiddenTrainee(const std::string& id) {
+  return Status(StatusCode::NOT_FOUND, "no trainee '" + id + "'");
+}
+
 // Looks the trainee up and checks that `who` may read their records.
 Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std::string& id,
                        const std::string& what, patient_db::TraineeRow* trainee) {
@@ -149,8 +193,10 @@ Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std:
   if (!a.ok()) return ToGrpcStatus(a);
   auto found = deps.store->GetTrainee(id);
   if (!found.ok()) return ToGrpcStatus(found.status);
-  a = RequireTraineeReader(who, found.value, what);
-  if (!a.ok()) return ToGrpcStatus(a);
+  // Another institution's trainee (or, for a trainee, anyone else) answers
+  // as an absent one does: outside its institution a trainee id's existence
+  // is not told.
+  if (!RequireTraineeReader(who, found.value, what).ok()) return HiddenTrainee(id);
   *trainee = found.value;
   return Status::OK;
 }
@@ -173,12 +219,34 @@ patient_db::StoreResult<std::string> SessionsService::TraineeInstitution(
   return trainee.value.institution;
 }
 
+Status SessionsService::CheckRecordCase(const ves::v1::SessionRecord& rec,
+                                        const std::string& institution) {
+  const std::string named = "record.case_id = '" + rec.case_id() + "' version " +
+                            std::to_string(rec.case_version());
+  auto row = deps_.store->GetCase(rec.case_id(), rec.case_version());
+  if (!row.ok() && row.status.code != StoreCode::kNotFound) return ToGrpcStatus(row.status);
+  const bool visible = row.ok() && (row.value.institution == institution ||
+                                    std::find(row.value.shared_with.begin(),
+                                              row.value.shared_with.end(),
+                                              institution) != row.value.shared_with.end());
+  if (!visible) {
+    return Status(StatusCode::FAILED_PRECONDITION,
+                  named + ": no such case visible to institution '" + institution + "'");
+  }
+  if (!rec.case_sha256_hex().empty() && rec.case_sha256_hex() != row.value.payload_sha256_hex) {
+    return Status(StatusCode::INVALID_ARGUMENT,
+                  "record.case_sha256_hex = " + rec.case_sha256_hex() + ": " + named +
+                      " has payload sha256 " + row.value.payload_sha256_hex);
+  }
+  return Status::OK;
+}
+
 grpc::ServerUnaryReactor* SessionsService::UploadSession(
     grpc::CallbackServerContext* ctx, const ves::v1::UploadSessionRequest* request,
     ves::v1::UploadSessionResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const ves::v1::SessionRecord& rec = request->record();
   auto reject = [&](const Status& s) {
     FinishAudited(reactor, deps_, who, "session.upload", rec.uuid(), s);
@@ -187,16 +255,21 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kStation}, "upload sessions");
   if (!a.ok()) return reject(ToGrpcStatus(a));
   if (!request->has_record()) return reject(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
-  const std::string problem = CheckSessionRecord(rec);
+  const std::string problem = CheckSessionRecord(rec, NowUnixMs());
   if (!problem.empty()) return reject(Status(StatusCode::INVALID_ARGUMENT, problem));
   auto institution = TraineeInstitution(rec.trainee_id());
-  if (institution.status.code == StoreCode::kNotFound) {
+  // Absent, or of another institution: the same answer (no existence leak).
+  if (institution.status.code == StoreCode::kNotFound ||
+      (institution.ok() && !RequireInstitution(who, institution.value, "upload").ok())) {
     return reject(Status(StatusCode::FAILED_PRECONDITION,
-                         "record.trainee_id = '" + rec.trainee_id() + "': no such trainee"));
+                         "record.trainee_id = '" + rec.trainee_id() + "': no such trainee in "
+                         "institution '" + who.institution + "'"));
   }
   if (!institution.ok()) return reject(ToGrpcStatus(institution.status));
-  a = RequireInstitution(who, institution.value, "upload sessions for trainees");
-  if (!a.ok()) return reject(ToGrpcStatus(a));
+  // The case must exist in the version named and be visible to the trainee's
+  // institution; its payload hash, when the record gives one, must match.
+  const Status case_status = CheckRecordCase(rec, institution.value);
+  if (!case_status.ok()) return reject(case_status);
 
   patient_db::SessionRow row;
   row.uuid = rec.uuid();
@@ -223,10 +296,19 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
-      [reactor, response, body_sha, judge](const patient_db::StoreStatus& status,
+      [reactor, response, body_sha, judge, institution = institution.value](
+          const patient_db::StoreStatus& status,
                                            const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
           reactor->Finish(ToGrpcStatus(status));
+          return;
+        }
+        if (result.outcome == patient_db::SessionPut::kConflict &&
+            result.first.institution != institution) {
+          // Another institution's session: nothing about it is told.
+          reactor->Finish(Status(StatusCode::ALREADY_EXISTS,
+                                 "session " + result.first.uuid +
+                                     ": this uuid is taken; a record needs a new uuid"));
           return;
         }
         if (result.outcome == patient_db::SessionPut::kConflict) {
@@ -255,7 +337,7 @@ grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContex
                                                       ves::v1::AddTraineeResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const ves::v1::Trainee& t = request->trainee();
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "add trainees");
@@ -287,7 +369,7 @@ grpc::ServerUnaryReactor* TraineesService::ListTrainees(
     ves::v1::ListTraineesResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
   const Status status = [&]() -> Status {
@@ -295,9 +377,23 @@ grpc::ServerUnaryReactor* TraineesService::ListTrainees(
         who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list trainees");
     if (a.ok()) a = RequireInstitution(who, institution, "list the trainees");
     if (!a.ok()) return ToGrpcStatus(a);
-    auto rows = deps_.store->ListTrainees(institution);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request->page_token(), "trainees", &page);
+    if (!token.ok()) return token;
+    const int size = PageSizeOf(request->page_size());
+    page.limit = size + 1;  // one more tells whether a next page exists
+    auto rows = deps_.store->ListTrainees(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) ToTrainee(r, response->add_trainees());
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      ToTrainee(rows.value[i], response->add_trainees());
+      bytes += response->trainees(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        response->set_next_page_token(MakePageToken("trainees", 0, rows.value[i].trainee_id));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "trainee.list", institution, status);
@@ -309,14 +405,29 @@ grpc::ServerUnaryReactor* TraineesService::ListSessions(
     ves::v1::ListSessionsResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps_, who, request->trainee_id(), "list the sessions", &trainee);
     if (!s.ok()) return s;
-    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id());
+    patient_db::ListPage page;
+    s = ReadPageToken(request->page_token(), "sessions", &page);
+    if (!s.ok()) return s;
+    const int size = PageSizeOf(request->page_size());
+    page.limit = size + 1;
+    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id(), page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
-    for (const auto& r : rows.value) *response->add_sessions() = ToSummary(r);
+    size_t bytes = 0;
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      *response->add_sessions() = ToSummary(rows.value[i]);
+      bytes += response->sessions(i).ByteSizeLong() + 8;
+      const bool more = i + 1 < static_cast<int>(rows.value.size());
+      if (more && (i + 1 == size || bytes > kPageReplyBudgetBytes)) {
+        const auto& last = rows.value[i];
+        response->set_next_page_token(MakePageToken("sessions", last.start_unix_ms, last.uuid));
+        break;
+      }
+    }
     return Status::OK;
   }();
   FinishAudited(reactor, deps_, who, "trainee.sessions", request->trainee_id(), status);
@@ -328,7 +439,7 @@ grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
     ves::v1::LearningCurveResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s =
@@ -362,7 +473,7 @@ grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContex
                                                       ves::v1::GetSessionResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const Status status = [&]() -> Status {
     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
                                      StoreRole::kTrainee}, "read sessions");
@@ -371,6 +482,9 @@ grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContex
     if (!row.ok()) return ToGrpcStatus(row.status);
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps_, who, row.value.trainee_id, "read the sessions", &trainee);
+    if (s.error_code() == StatusCode::NOT_FOUND) {
+      return Status(StatusCode::NOT_FOUND, "no session '" + request->uuid() + "'");
+    }
     if (!s.ok()) return s;
     if (!response->mutable_record()->ParseFromString(row.value.body)) {
       return Status(StatusCode::DATA_LOSS, "stored session " + request->uuid() + " is corrupt");
@@ -389,7 +503,7 @@ grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext*
                                                     ves::v1::CreateTokenResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
   const Status status = [&]() -> Status {
@@ -445,18 +559,28 @@ grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* c
                                                   ves::v1::ListAuditResponse* response) {
   auto* reactor = ctx->DefaultReactor();
   Principal who;
-  if (!Admit(ctx, reactor, deps_, &who)) return reactor;
+  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
   AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "read the audit log");
   if (!a.ok()) {
     FinishAudited(reactor, deps_, who, "audit.list", "", ToGrpcStatus(a));
     return reactor;
   }
-  const int limit =
-      request->limit() == 0 ? 1000 : static_cast<int>(std::min(request->limit(), 100000u));
-  auto rows = deps_.store->ListAudit(request->since_unix_ms(), limit);
+  const int size = PageSizeOf(request->limit(), patient_db::kMaxPageSize);
+  patient_db::ListPage page;
+  const Status token = ReadPageToken(request->page_token(), "audit", &page);
+  if (!token.ok()) {
+    reactor->Finish(token);
+    return reactor;
+  }
+  auto rows = deps_.store->ListAudit(request->since_unix_ms(), size + 1,
+                                     page.has_after ? page.after_number : 0);
   if (!rows.ok()) {
     reactor->Finish(ToGrpcStatus(rows.status));
     return reactor;
+  }
+  if (static_cast<int>(rows.value.size()) > size) {
+    rows.value.resize(size);
+    response->set_next_page_token(MakePageToken("audit", rows.value.back().id, ""));
   }
   for (const auto& r : rows.value) {
     auto* e = response->add_entries();

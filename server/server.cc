@@ -1,11 +1,19 @@
 #include "server/server.h"
 
+#include <google/protobuf/stubs/logging.h>
 #include <grpcpp/support/server_interceptor.h>
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <spdlog/spdlog.h>
 
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
+
+#include "patient_db/limits.h"
+#include "patient_db/net_address.h"
 
 namespace ves::server {
 namespace {
@@ -18,6 +26,33 @@ std::string ReadPem(const std::string& path, const std::string& flag) {
     throw std::invalid_argument(flag + " " + path + ": cannot read the file");
   }
   return text.str();
+}
+
+// The key pair said what was wrong when the pair was bad: gRPC only fails
+// to listen later ("address in use or invalid").
+void CheckKeyMatchesCertificate(const std::string& key_pem, const std::string& cert_pem,
+                                const ServerOptions& o) {
+  BIO* cert_bio = BIO_new_mem_buf(cert_pem.data(), static_cast<int>(cert_pem.size()));
+  X509* cert = PEM_read_bio_X509(cert_bio, nullptr, nullptr, nullptr);
+  BIO_free(cert_bio);
+  BIO* key_bio = BIO_new_mem_buf(key_pem.data(), static_cast<int>(key_pem.size()));
+  EVP_PKEY* key = PEM_read_bio_PrivateKey(key_bio, nullptr, nullptr, nullptr);
+  BIO_free(key_bio);
+  const bool matches = cert != nullptr && key != nullptr && X509_check_private_key(cert, key) == 1;
+  ERR_clear_error();
+  X509_free(cert);
+  EVP_PKEY_free(key);
+  if (cert == nullptr) {
+    throw std::invalid_argument("--tls-cert " + o.tls_cert_file + ": not a PEM certificate");
+  }
+  if (key == nullptr) {
+    throw std::invalid_argument("--tls-key " + o.tls_key_file +
+                                ": not a PEM private key (or it is encrypted)");
+  }
+  if (!matches) {
+    throw std::invalid_argument("--tls-key " + o.tls_key_file + " is not the key of --tls-cert " +
+                                o.tls_cert_file);
+  }
 }
 
 // One log line per call: method, status, duration, peer.
@@ -49,6 +84,69 @@ class CallLogInterceptor final : public grpc::experimental::Interceptor {
   std::chrono::steady_clock::time_point start_;
 };
 
+// What protobuf last logged on this thread while parsing (it names a string
+// field that is not UTF-8); gRPC parses a request on the thread that then
+// runs the interceptors below.
+thread_local std::string last_parse_error;
+google::protobuf::LogHandler* previous_log_handler = nullptr;
+
+void RecordParseError(google::protobuf::LogLevel level, const char* file, int line,
+                      const std::string& message) {
+  if (level >= google::protobuf::LOGLEVEL_ERROR) last_parse_error = message;
+  if (previous_log_handler != nullptr) previous_log_handler(level, file, line, message);
+}
+
+void InstallParseErrorRecorder() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    previous_log_handler = google::protobuf::SetLogHandler(&RecordParseError);
+  });
+}
+
+// gRPC answers a request it cannot parse (not protobuf, or a string field
+// that is not UTF-8) UNIMPLEMENTED with no message, before any handler runs.
+// This turns that answer into INVALID_ARGUMENT saying what was wrong.
+class MalformedRequestInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit MalformedRequestInterceptor(grpc::experimental::ServerRpcInfo* info) : info_(info) {}
+
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    using grpc::experimental::InterceptionHookPoints;
+    if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::POST_RECV_MESSAGE) &&
+        methods->GetRecvMessage() == nullptr &&
+        info_->type() == grpc::experimental::ServerRpcInfo::Type::UNARY) {
+      malformed_ = true;
+      why_ = std::move(last_parse_error);
+      last_parse_error.clear();
+    }
+    if (malformed_ &&
+        methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS) &&
+        methods->GetSendStatus().error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+      methods->ModifySendStatus(grpc::Status(
+          grpc::StatusCode::INVALID_ARGUMENT,
+          std::string("request is not a valid message for ") + info_->method() +
+              ": malformed protobuf, or a string field that is not UTF-8" +
+              (why_.empty() ? std::string()
+                            : " (" + patient_db::PrintableExcerpt(why_, 200) + ")")));
+    }
+    methods->Proceed();
+  }
+
+ private:
+  grpc::experimental::ServerRpcInfo* info_;
+  bool malformed_ = false;
+  std::string why_;  // protobuf's own words, when it logged any
+};
+
+class MalformedRequestFactory final
+    : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo* info) override {
+    return new MalformedRequestInterceptor(info);
+  }
+};
+
 class CallLogFactory final : public grpc::experimental::ServerInterceptorFactoryInterface {
  public:
   grpc::experimental::Interceptor* CreateServerInterceptor(
@@ -70,7 +168,7 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptio
           "refusing to serve without TLS: give --tls-cert and --tls-key, or "
           "--insecure-loopback with a loopback --listen address");
     }
-    if (!IsLoopbackListenAddress(o.listen)) {
+    if (!patient_db::IsLoopbackAddress(o.listen)) {
       throw std::invalid_argument("refusing plaintext on '" + o.listen +
                                   "': --insecure-loopback needs a loopback address such as "
                                   "127.0.0.1:50051");
@@ -84,8 +182,10 @@ std::shared_ptr<grpc::ServerCredentials> MakeServerCredentials(const ServerOptio
     throw std::invalid_argument("--insecure-loopback cannot be combined with TLS flags");
   }
   grpc::SslServerCredentialsOptions ssl;
-  ssl.pem_key_cert_pairs.push_back(
-      {ReadPem(o.tls_key_file, "--tls-key"), ReadPem(o.tls_cert_file, "--tls-cert")});
+  const std::string key = ReadPem(o.tls_key_file, "--tls-key");
+  const std::string cert = ReadPem(o.tls_cert_file, "--tls-cert");
+  CheckKeyMatchesCertificate(key, cert, o);
+  ssl.pem_key_cert_pairs.push_back({key, cert});
   if (!o.tls_client_ca_file.empty()) {
     ssl.pem_root_certs = ReadPem(o.tls_client_ca_file, "--tls-client-ca");
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
@@ -97,7 +197,7 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
     : options_(std::move(options)), store_(std::move(store)) {
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
-  judge_ = std::make_unique<LessonJudge>(store_.get());
+  judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
   const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);
@@ -126,11 +226,11 @@ void VesServer::Start() {
   builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
-  if (options_.log_calls) {
-    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> logs;
-    logs.push_back(std::make_unique<CallLogFactory>());
-    builder.experimental().SetInterceptorCreators(std::move(logs));
-  }
+  InstallParseErrorRecorder();
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
+  creators.push_back(std::make_unique<MalformedRequestFactory>());
+  if (options_.log_calls) creators.push_back(std::make_unique<CallLogFactory>());
+  builder.experimental().SetInterceptorCreators(std::move(creators));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
     server_.reset();

@@ -24,6 +24,7 @@ struct ServerOptions {
   int max_receive_message_bytes = 16 << 20;
   int max_send_message_bytes = 16 << 20;
   bool log_calls = true;                   // one spdlog line per call
+  training::JudgeBudget judge_budget;      // what judging one lesson session may cost
 };
 
 // Checks the TLS/plaintext choice and reads the PEM files. Throws

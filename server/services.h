@@ -10,6 +10,7 @@
 
 #include <google/protobuf/message.h>
 
+#include "patient_db/limits.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/lesson_judge.h"
@@ -24,6 +25,10 @@ namespace ves::server {
 
 inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
 inline constexpr uint64_t kMaxCaseUploadBytes = 256ull << 20;  // a bundle's limit
+inline constexpr size_t kMaxAuditTextBytes = 160;              // audit target, label, institution
+// A list reply stops early (with a next_page_token) past this many bytes,
+// whatever its page size: no reply can outgrow the 16 MiB message limit.
+inline constexpr size_t kPageReplyBudgetBytes = 8u << 20;
 
 // What every handler needs; owned by VesServer.
 struct ServiceDeps {
@@ -73,6 +78,10 @@ class SessionsService final : public ves::v1::Sessions::CallbackService {
  private:
   // The trainee's institution; cached, as a trainee never changes institution.
   patient_db::StoreResult<std::string> TraineeInstitution(const std::string& trainee_id);
+  // The record's case exists in its version, is visible to `institution` and
+  // (when the record names one) has its payload hash.
+  grpc::Status CheckRecordCase(const ves::v1::SessionRecord& record,
+                               const std::string& institution);
 
   ServiceDeps deps_;
   std::mutex mutex_;
@@ -160,13 +169,25 @@ ves::v1::Role ToProtoRole(StoreRole role);
 void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
                    const Principal& who, const std::string& action, const std::string& target,
                    const grpc::Status& status);
-// Authenticates the call; on failure finishes it (UNAUTHENTICATED) and
-// returns false.
+// INVALID_ARGUMENT naming the first field of `request` over its limit
+// (patient_db::CheckMessageLimits), else OK.
+grpc::Status CheckRequestLimits(const google::protobuf::Message& request);
+// Checks the request's limits (INVALID_ARGUMENT), then authenticates the call
+// (UNAUTHENTICATED); on failure finishes it and returns false.
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, Principal* who);
+           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who);
+// List replies are pages (docs/server.md, "Limits"): the size asked for, 0
+// meaning `default_size`, cut to patient_db::kMaxPageSize.
+int PageSizeOf(uint32_t requested, int default_size = patient_db::kDefaultPageSize);
+// A page token names the listing and the sort key of the last row sent:
+// "<listing>:<number>:<text>". Read fills `page` (limit untouched);
+// INVALID_ARGUMENT naming page_token when it is not a token of that listing.
+std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text);
+grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
+                           patient_db::ListPage* page);
 // A message's bytes with deterministic map order: stored bodies hash the same.
 std::string DeterministicBytes(const google::protobuf::Message& m);
-// An id or display name: 1-128 bytes, no control characters.
+// An id: 1-128 bytes of printable UTF-8 (patient_db::IsPrintableId).
 bool IsName(const std::string& s);
 
 }  // namespace ves::server

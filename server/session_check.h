@@ -1,16 +1,35 @@
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "ves/v1/session.pb.h"
 
 // What the server requires of an uploaded SessionRecord before it is stored
-// (docs/server.md). Pure: no store, no gRPC.
+// (docs/server.md, "Limits" and "Plausibility of a session record"). Pure: no
+// store, no gRPC, so any front end checks records the same way. That the case
+// exists and is visible to the trainee's institution needs the store: the
+// handler checks it after this.
 namespace ves::server {
 
+// Bounds of a plausible record (docs/server.md).
+inline constexpr int64_t kMinSessionStartUnixMs = 1'577'836'800'000;  // 2020-01-01 UTC
+inline constexpr int64_t kMaxClockSkewMs = 24 * 3600 * 1000;          // a start this far ahead
+inline constexpr double kMaxSessionDuration_s = 4 * 3600.0;
+inline constexpr double kMaxForce_N = 1e4;
+inline constexpr double kMaxLength_m = 10.0;       // insertion, arc, stretch
+inline constexpr double kMaxTipPath_m = 1e4;
+inline constexpr double kMaxDamageImpulse_N_s = 1e6;
+inline constexpr double kMaxEventValue = 1e9;
+inline constexpr int kEventsPerSecond = 20;        // events: 100 + this many per second of session
+inline constexpr uint32_t kMaxScopeLinks = 1000;
+inline constexpr uint32_t kMaxSegmentCount = 20000;
+
 // Empty when acceptable; otherwise one line naming the field and the value,
-// e.g. "record.metrics.pain_s = nan: must be finite".
-std::string CheckSessionRecord(const ves::v1::SessionRecord& record);
+// e.g. "record.metrics.pain_s = nan: must be finite" or
+// "record.metrics.time_to_cecum_s = -1: must be in (0, duration_s 300] when completed".
+// `now_unix_ms` bounds the start time (a clock at most kMaxClockSkewMs ahead).
+std::string CheckSessionRecord(const ves::v1::SessionRecord& record, int64_t now_unix_ms);
 
 // Lower-case RFC 4122 text form: 8-4-4-4-12 hex digits.
 bool IsLowerCaseUuid(const std::string& text);

@@ -30,7 +30,9 @@
 #include <sstream>
 #include <thread>
 
+#include "patient_db/case_format.h"
 #include "patient_db/pg_store.h"
+#include "station/training/input_log.h"
 #include "server/auth.h"
 #include "server/client.h"
 #include "ves/v1/services.grpc.pb.h"
@@ -68,6 +70,8 @@ std::string Uuid(std::mt19937_64& rng) {
   return s;
 }
 
+constexpr char kCaseFile[] = VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto";
+
 // A record of realistic size (a few KiB with its input log).
 ves::v1::SessionRecord Record(std::mt19937_64& rng, int i) {
   ves::v1::SessionRecord r;
@@ -83,11 +87,13 @@ ves::v1::SessionRecord Record(std::mt19937_64& rng, int i) {
   r.mutable_metrics()->set_completed(true);
   r.mutable_metrics()->set_time_to_cecum_s(200);
   r.set_score(75);
-  r.mutable_input_log()->set_format_version(1);
-  r.mutable_input_log()->set_dt_s(0.001);
-  r.mutable_input_log()->set_sample_count(1000);
-  r.mutable_input_log()->set_encoded(std::string(4096, static_cast<char>('a' + i % 26)));
-  r.mutable_input_log()->set_encoding("delta-zlib-v1");
+  // A well-formed log (its header is checked at upload) of 1000 steps.
+  std::vector<ves::training::InputSample> samples(1000);
+  for (size_t k = 0; k < samples.size(); ++k) {
+    samples[k].tick = k;
+    samples[k].push_force_N = 1e-4 * static_cast<double>((k * 7 + i) % 97);
+  }
+  *r.mutable_input_log() = ves::training::MakeInputLog(samples, 0.001);
   r.set_operator_kind("scripted");
   return r;
 }
@@ -275,6 +281,16 @@ int main(int argc, char** argv) {
       ves::patient_db::PgStore store(o);
       store.AddInstitution("bench", 1);
       store.AddTrainee({"bench-trainee", "bench", "Bench", 1});
+      // The case the records name (the server refuses sessions of unknown cases).
+      const auto colon_case = ves::patient_db::LoadCaseFile(kCaseFile);
+      const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
+      ves::patient_db::CaseRow row;
+      row.case_id = colon_case.id();
+      row.version = colon_case.version();
+      row.institution = "bench";
+      row.sha256_hex = ves::server::Sha256HexOf(bundle);
+      row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
+      store.PutCase(row, bundle);
       store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kStation,
                       "bench", "", "bench", 1});
     }

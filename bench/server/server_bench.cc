@@ -25,6 +25,7 @@
 #include "patient_db/sqlite_db.h"
 #include "server/client.h"
 #include "server/server.h"
+#include "station/training/input_log.h"
 #include "ves/v1/services.grpc.pb.h"
 
 namespace {
@@ -45,6 +46,20 @@ std::string Uuid(std::mt19937_64& rng) {
   return s;
 }
 
+// A well-formed input log (its header is checked at upload) of about 1 KiB.
+const ves::v1::InputLog& InputLogBytes() {
+  static const ves::v1::InputLog kLog = [] {
+    std::vector<ves::training::InputSample> samples(1000);
+    std::mt19937_64 rng(9);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      samples[i].tick = i;
+      samples[i].push_force_N = 1e-4 * static_cast<double>(rng() % 64);
+    }
+    return ves::training::MakeInputLog(samples, 0.001);
+  }();
+  return kLog;
+}
+
 // A session record of typical size: metrics, a few events, a 1 KiB input log.
 ves::v1::SessionRecord Record(const std::string& uuid, int seed) {
   ves::v1::SessionRecord r;
@@ -56,12 +71,16 @@ ves::v1::SessionRecord Record(const std::string& uuid, int seed) {
   r.set_start_unix_ms(1'700'000'000'000 + seed);
   r.set_end_unix_ms(r.start_unix_ms() + 300'000);
   r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
+  r.mutable_metrics()->set_duration_s(300);
   r.mutable_metrics()->set_completed(true);
   r.mutable_metrics()->set_time_to_cecum_s(200);
   r.mutable_metrics()->set_pain_s(4);
   r.set_score(70);
-  for (int i = 0; i < 8; ++i) r.add_events()->set_t_s(i);
-  r.mutable_input_log()->set_encoded(std::string(1024, 'x'));
+  for (int i = 0; i < 8; ++i) {
+    r.add_events()->set_t_s(i);
+    r.mutable_events(i)->set_kind(ves::v1::EVENT_KIND_LOOP);
+  }
+  *r.mutable_input_log() = InputLogBytes();
   return r;
 }
 
@@ -214,6 +233,18 @@ int main(int argc, char** argv) {
   auto& store = server.store();
   store.AddInstitution("bench", 1);
   store.AddTrainee({"bench-trainee", "bench", "Bench", 1});
+  {
+    // The case the records name (the server refuses sessions of unknown cases).
+    const auto plain = ves::patient_db::LoadCaseFile(case_file);
+    const std::string plain_bundle = ves::patient_db::EncodeCaseBundle(plain);
+    ves::patient_db::CaseRow row;
+    row.case_id = plain.id();
+    row.version = plain.version();
+    row.institution = "bench";
+    row.sha256_hex = ves::server::Sha256HexOf(plain_bundle);
+    row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(plain);
+    store.PutCase(row, plain_bundle);
+  }
   const std::string token = ves::server::NewToken();
   store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kAdmin, "bench",
                   "", "bench", 1});
@@ -245,6 +276,7 @@ int main(int argc, char** argv) {
   }
   colon_case.mutable_mucosa_texture()->set_media_type("image/png");
   colon_case.mutable_mucosa_texture()->set_image(image);
+  colon_case.set_version(colon_case.version() + 1);  // the records' version stays as it is
   const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
   ves::patient_db::CaseRow row;
   row.case_id = colon_case.id();

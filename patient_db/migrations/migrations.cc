@@ -128,8 +128,10 @@ CREATE TABLE lesson_verdicts (
 );
 CREATE INDEX lesson_verdicts_by_trainee ON lesson_verdicts(trainee_id, session_start_unix_ms);
 )sql"},
-      // Numbered 4, leaving 3 to the migration of another branch; versions
-      // are applied one by one, so the order of merging does not matter.
+      {3, "hardening: rejected lesson verdicts, judge starts", R"sql(
+ALTER TABLE lesson_verdicts ADD COLUMN rejected INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE lesson_sessions ADD COLUMN judge_starts INTEGER NOT NULL DEFAULT 0;
+)sql"},
       {4, "sessions: who operated and how deep the tip got, for listings", R"sql(
 ALTER TABLE sessions ADD COLUMN operator_kind TEXT NOT NULL DEFAULT '';
 ALTER TABLE sessions ADD COLUMN max_tip_arc_m DOUBLE PRECISION NOT NULL DEFAULT 0;

@@ -85,19 +85,26 @@ int RunCaseList(const CommandArgs& args) {
   ves::v1::ListCasesRequest q;
   q.set_institution(institution);
   q.set_all_versions(vm.count("all-versions") > 0);
-  ves::v1::ListCasesResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status =
-      ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client))->ListCases(&ctx, q, &r);
+  q.set_page_size(1000);
+  auto stub = ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client));
+  auto status = ForEachPage<ves::v1::ListCasesResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListCases(c, request, reply);
+      },
+      [](const ves::v1::ListCasesResponse& r) {
+        for (const auto& c : r.cases()) {
+          // The payload hash, as `case validate` and the station print it.
+          std::printf("%-24s v%-3u %-12s %-16s %10llu  %.12s  %s\n",
+                      Shown(c.case_id()).c_str(), c.version(),
+                      ves::v1::Difficulty_Name(c.difficulty()).c_str() + 11,
+                      Shown(c.institution()).c_str(),
+                      static_cast<unsigned long long>(c.size_bytes()),
+                      Shown(c.payload_sha256_hex()).c_str(), Shown(c.title()).c_str());
+        }
+        return true;
+      });
   if (!status.ok()) return ReportRpcError("case list", status.error_code(), status.error_message());
-  for (const auto& c : r.cases()) {
-    // The payload hash, as `case validate` and the station print it.
-    std::printf("%-24s v%-3u %-12s %-16s %10llu  %.12s  %s\n", c.case_id().c_str(), c.version(),
-                ves::v1::Difficulty_Name(c.difficulty()).c_str() + 11, c.institution().c_str(),
-                static_cast<unsigned long long>(c.size_bytes()), c.payload_sha256_hex().c_str(),
-                c.title().c_str());
-  }
   return kExitOk;
 }
 

@@ -82,16 +82,21 @@ int CurriculumCreate(const std::string& file, const ClientOptions& client,
 int CurriculumList(const ClientOptions& client, const std::string& institution) {
   ves::v1::ListCurriculaRequest q;
   q.set_institution(institution);
-  ves::v1::ListCurriculaResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->ListCurricula(&ctx, q, &r);
+  auto stub = LessonsStub(client);
+  auto status = ForEachPage<ves::v1::ListCurriculaResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListCurricula(c, request, reply);
+      },
+      [](const ves::v1::ListCurriculaResponse& r) {
+        for (const auto& c : r.curricula()) {
+          std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),
+                      Shown(c.institution()).c_str(), c.lessons_size(), Shown(c.title()).c_str());
+        }
+        return true;
+      });
   if (!status.ok()) {
     return ReportRpcError("curriculum list", status.error_code(), status.error_message());
-  }
-  for (const auto& c : r.curricula()) {
-    std::printf("%-24s %-16s %2d lesson(s)  %s\n", c.curriculum_id().c_str(),
-                c.institution().c_str(), c.lessons_size(), c.title().c_str());
   }
   return kExitOk;
 }
@@ -103,14 +108,14 @@ void PrintTraineeProgress(const ves::v1::TraineeProgress& t) {
   for (const auto& l : t.lessons()) {
     const std::string passes =
         std::to_string(l.passes()) + "/" + std::to_string(l.required_passes());
-    std::printf("%-16s %-32s %8u %8s %6.1f %6s  %-16s\n", l.curriculum_id().c_str(),
-                l.lesson_id().c_str(), l.attempts(), passes.c_str(), l.best_score(),
+    std::printf("%-16s %-32s %8u %8s %6.1f %6s  %-16s\n", Shown(l.curriculum_id()).c_str(),
+                Shown(l.lesson_id()).c_str(), l.attempts(), passes.c_str(), l.best_score(),
                 l.completed() ? "yes" : "no",
                 FormatDate(l.completed() ? l.completed_unix_ms() : l.last_attempt_unix_ms())
                     .c_str());
   }
   std::printf("next lesson: %s; verdicts pending: %u\n",
-              t.next_lesson_id().empty() ? "none" : t.next_lesson_id().c_str(),
+              t.next_lesson_id().empty() ? "none" : Shown(t.next_lesson_id()).c_str(),
               t.pending_verdicts());
 }
 
@@ -133,7 +138,7 @@ void PrintGroupProgress(const ves::v1::GetProgressResponse& r) {
   for (const auto& t : r.trainees()) {
     std::map<std::string, const ves::v1::LessonProgress*> by_id;
     for (const auto& l : t.lessons()) by_id[l.lesson_id()] = &l;
-    std::printf("%-20s", t.trainee_id().c_str());
+    std::printf("%-20s", Shown(t.trainee_id()).c_str());
     for (const auto& id : lessons) {
       auto it = by_id.find(id);
       std::string cell = "-";
@@ -150,7 +155,7 @@ void PrintGroupProgress(const ves::v1::GetProgressResponse& r) {
     std::printf(" %-8s %u\n", next.c_str(), t.pending_verdicts());
   }
   for (size_t i = 0; i < lessons.size(); ++i) {
-    std::printf("#%zu = %s\n", i + 1, lessons[i].c_str());
+    std::printf("#%zu = %s\n", i + 1, Shown(lessons[i]).c_str());
   }
 }
 

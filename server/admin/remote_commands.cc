@@ -1,5 +1,6 @@
 // ves-admin subcommands against a running server: token, trainee, scores,
 // session, audit, and `case upload|list|download` (docs/server.md).
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -7,6 +8,7 @@
 #include <iostream>
 
 #include "patient_db/case_format.h"
+#include "patient_db/limits.h"
 #include "server/admin/remote.h"
 #include "server/auth.h"
 #include "ves/v1/services.grpc.pb.h"
@@ -21,7 +23,8 @@ void AddRemoteOptions(po::options_description* options, ClientOptions* client, i
       "server", po::value(&client->address)->required(), "server address host:port")(
       "token", po::value(&client->token), "bearer token (default: $VES_TOKEN)")(
       "tls-ca", po::value(&client->tls_ca_file), "CA of the server certificate (PEM); "
-                                                "without it the connection is plaintext")(
+                                                "without it only a loopback --server is allowed "
+                                                "(plaintext)")(
       "tls-cert", po::value(&client->tls_cert_file), "client certificate (PEM)")(
       "tls-key", po::value(&client->tls_key_file), "client key (PEM)")(
       "deadline-s", po::value(deadline_s)->default_value(30), "deadline of each call, seconds");
@@ -45,6 +48,11 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
     return kExitUsage;
   }
   deadline_s = (*vm)["deadline-s"].as<int>();
+  if (deadline_s < 1 || deadline_s > 3600) {
+    std::cerr << "ves-admin " << name << ": --deadline-s " << deadline_s
+              << ": must be in 1..3600\n";
+    return kExitUsage;
+  }
   client->deadline = std::chrono::seconds(deadline_s);
   if (client->token.empty()) {
     const char* env = std::getenv("VES_TOKEN");
@@ -54,8 +62,16 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
     std::cerr << "ves-admin " << name << ": no token (give --token or set VES_TOKEN)\n";
     return kExitUsage;
   }
+  try {
+    ves::server::CheckClientOptions(*client);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "ves-admin " << name << ": " << e.what() << "\n";
+    return kExitUsage;
+  }
   return -1;
 }
+
+std::string Shown(const std::string& text) { return patient_db::PrintableExcerpt(text, 256); }
 
 int ReportRpcError(const std::string& name, int code, const std::string& message) {
   static const char* const kNames[] = {
@@ -63,7 +79,7 @@ int ReportRpcError(const std::string& name, int code, const std::string& message
       "NOT_FOUND", "ALREADY_EXISTS",    "PERMISSION_DENIED", "RESOURCE_EXHAUSTED",
       "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE", "UNIMPLEMENTED", "INTERNAL",
       "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
-  std::string first_line = message.substr(0, message.find('\n'));
+  std::string first_line = Shown(message.substr(0, message.find('\n')));
   std::cerr << "ves-admin " << name << ": " << (code >= 0 && code <= 16 ? kNames[code] : "ERROR")
             << ": " << first_line << "\n";
   return kExitFailed;
@@ -241,10 +257,10 @@ int RunTraineeCommand(const CommandArgs& args) {
   const int rc = ParseRemote("trainee", "trainee add --id ID [--name N] | list", args, options,
                              &pos, &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   auto stub = Stub<ves::v1::Trainees>(client);
   if (action == "add") {
+    grpc::ClientContext ctx;
+    ves::server::PrepareContext(&ctx, client);
     if (id.empty()) {
       std::cerr << "ves-admin trainee add: --id is required\n";
       return kExitUsage;
@@ -256,20 +272,27 @@ int RunTraineeCommand(const CommandArgs& args) {
     ves::v1::AddTraineeResponse r;
     auto status = stub->AddTrainee(&ctx, q, &r);
     if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    std::cout << "added " << r.trainee().trainee_id() << " (" << r.trainee().institution()
+    std::cout << "added " << Shown(r.trainee().trainee_id()) << " ("
+              << Shown(r.trainee().institution())
               << ")\n";
     return kExitOk;
   }
   if (action == "list") {
     ves::v1::ListTraineesRequest q;
     q.set_institution(institution);
-    ves::v1::ListTraineesResponse r;
-    auto status = stub->ListTrainees(&ctx, q, &r);
+    auto status = ForEachPage<ves::v1::ListTraineesResponse>(
+        client, q,
+        [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+          return stub->ListTrainees(c, request, reply);
+        },
+        [](const ves::v1::ListTraineesResponse& r) {
+          for (const auto& t : r.trainees()) {
+            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
+                        Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
+          }
+          return true;
+        });
     if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    for (const auto& t : r.trainees()) {
-      std::printf("%-24s %-20s %s\n", t.trainee_id().c_str(), t.institution().c_str(),
-                  t.display_name().c_str());
-    }
     return kExitOk;
   }
   std::cerr << "ves-admin trainee: unknown action '" << action << "' (add or list)\n";
@@ -288,28 +311,41 @@ int RunScoresCommand(const CommandArgs& args) {
   const int rc = ParseRemote("scores", "scores --trainee ID [--case C]", args, options, nullptr,
                              &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::ListSessionsRequest q;
   q.set_trainee_id(trainee);
   q.set_case_id(case_id);
-  ves::v1::ListSessionsResponse r;
-  auto status = Stub<ves::v1::Trainees>(client)->ListSessions(&ctx, q, &r);
+  q.set_page_size(1000);
+  auto stub = Stub<ves::v1::Trainees>(client);
+  bool header = false;
+  auto status = ForEachPage<ves::v1::ListSessionsResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListSessions(c, request, reply);
+      },
+      [&](const ves::v1::ListSessionsResponse& r) {
+        // One session a line, oldest first; `session show SESSION` reads one.
+        if (!header) {
+          std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8s  %7s\n",
+                      "date (UTC)", "session", "trainee", "operator", "case", "outcome",
+                      "depth (m)", "cecum (s)", "pain (s)", "score");
+          header = true;
+        }
+        for (const auto& s : r.sessions()) {
+          const std::string to_cecum = s.completed() ? Fixed(s.time_to_cecum_s(), 1) : "-";
+          const std::string depth = s.max_tip_arc_m() > 0.0 ? Fixed(s.max_tip_arc_m(), 2) : "-";
+          const std::string case_label =
+              Shown(s.case_id()) + " v" + std::to_string(s.case_version());
+          const std::string operator_kind =
+              s.operator_kind().empty() ? "-" : Shown(s.operator_kind());
+          std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8.1f  %7s\n",
+                      FormatUtcMinute(s.start_unix_ms()).c_str(), Shown(s.uuid()).c_str(),
+                      Shown(s.trainee_id()).c_str(), operator_kind.c_str(), case_label.c_str(),
+                      OutcomeName(s.outcome()), depth.c_str(), to_cecum.c_str(), s.pain_s(),
+                      (Fixed(s.score(), 1) + "/100").c_str());
+        }
+        return true;
+      });
   if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
-  // One session a line, oldest first; `session show SESSION` reads one.
-  std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8s  %7s\n", "date (UTC)",
-              "session", "trainee", "operator", "case", "outcome", "depth (m)", "cecum (s)",
-              "pain (s)", "score");
-  for (const auto& s : r.sessions()) {
-    const std::string to_cecum = s.completed() ? Fixed(s.time_to_cecum_s(), 1) : "-";
-    const std::string depth = s.max_tip_arc_m() > 0.0 ? Fixed(s.max_tip_arc_m(), 2) : "-";
-    const std::string case_label = s.case_id() + " v" + std::to_string(s.case_version());
-    std::printf("%-16s  %-36s  %-12s  %-8s  %-18s  %-13s  %9s  %8s  %8.1f  %7s\n",
-                FormatUtcMinute(s.start_unix_ms()).c_str(), s.uuid().c_str(),
-                s.trainee_id().c_str(), s.operator_kind().empty() ? "-" : s.operator_kind().c_str(),
-                case_label.c_str(), OutcomeName(s.outcome()), depth.c_str(), to_cecum.c_str(),
-                s.pain_s(), (Fixed(s.score(), 1) + "/100").c_str());
-  }
   return kExitOk;
 }
 
@@ -367,20 +403,29 @@ int RunAuditCommand(const CommandArgs& args) {
   const int rc = ParseRemote("audit", "audit [--since UNIX_MS] [--limit N]", args, options,
                              nullptr, &vm, &client, deadline_s);
   if (rc >= 0) return rc;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::ListAuditRequest q;
   q.set_since_unix_ms(since_unix_ms);
-  q.set_limit(limit);
-  ves::v1::ListAuditResponse r;
-  auto status = Stub<ves::v1::Admin>(client)->ListAudit(&ctx, q, &r);
+  q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
+  auto stub = Stub<ves::v1::Admin>(client);
+  unsigned shown = 0;
+  auto status = ForEachPage<ves::v1::ListAuditResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListAudit(c, request, reply);
+      },
+      [&](const ves::v1::ListAuditResponse& r) {
+        for (const auto& e : r.entries()) {
+          if (shown == limit) return false;
+          ++shown;
+          std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n",
+                      FormatUtcMinute(e.at_unix_ms()).c_str(), Shown(e.actor()).c_str(),
+                      ves::v1::Role_Name(e.role()).c_str() + 5, Shown(e.institution()).c_str(),
+                      Shown(e.action()).c_str(), Shown(e.target()).c_str(),
+                      Shown(e.result()).c_str());
+        }
+        return shown < limit;
+      });
   if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
-  for (const auto& e : r.entries()) {
-    std::printf("%s  %-12s %-10s %-12s %-18s %-40s %s\n", FormatUtcMinute(e.at_unix_ms()).c_str(),
-                e.actor().c_str(), ves::v1::Role_Name(e.role()).c_str() + 5,
-                e.institution().c_str(), e.action().c_str(), e.target().c_str(),
-                e.result().c_str());
-  }
   return kExitOk;
 }
 

@@ -302,6 +302,17 @@ int RunHapticCheckCommand(const CommandArgs& args) {
   }
   spdlog::set_default_logger(spdlog::stderr_color_mt("haptic-check"));
 
+  // A CAN interface that cannot be opened is bad input, as for `run`: said
+  // first, exit status 2.
+  std::optional<hx::CanBus> can_bus;
+  if (!simulated) {
+    try {
+      can_bus.emplace(hx::CanBus::OpenSocketCan(options.device.substr(4)));
+    } catch (const std::exception& error) {
+      std::cerr << kName << ": --device " << options.device << ": " << error.what() << "\n";
+      return 2;
+    }
+  }
   std::vector<hx::HapticSnapshot> rows;
   rows.reserve(static_cast<std::size_t>(options.seconds * 1000.0) + 1024);
   int status = 0;
@@ -312,8 +323,7 @@ int RunHapticCheckCommand(const CommandArgs& args) {
       auto [host, device] = hx::CanBus::CreateSocketPair();
       status = RunWallClock(options, std::move(host), std::move(device), &rows);
     } else {
-      hx::CanBus bus = hx::CanBus::OpenSocketCan(options.device.substr(4));
-      status = RunWallClock(options, std::move(bus), std::nullopt, &rows);
+      status = RunWallClock(options, std::move(*can_bus), std::nullopt, &rows);
     }
   } catch (const std::exception& error) {
     std::cerr << kName << ": " << error.what() << "\n";

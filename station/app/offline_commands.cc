@@ -8,6 +8,7 @@
 
 #include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
+#include "patient_db/limits.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/sync/case_cache.h"
@@ -29,6 +30,9 @@ std::optional<int> ParseOfflineArgs(std::string_view name, std::string_view usag
       "station data folder (default $VES_STATION_DIR or ~/.ves-station)");
   return ParseCommandLine(name, usage, args, options, vm, positional);
 }
+
+// Text from the outbox or the server, safe for the terminal.
+std::string Shown(const std::string& text) { return patient_db::PrintableExcerpt(text, 256); }
 
 sync::StationPaths Paths(const po::variables_map& vm) {
   return sync::ResolveStationPaths(vm["data-dir"].as<std::string>());
@@ -146,10 +150,18 @@ int RunStatusCommand(const CommandArgs& args) {
     const auto pending = outbox.Pending();
     std::cout << "pending uploads: " << pending.size() << "\n";
     for (const auto& upload : pending) {
-      std::cout << "  " << upload.uuid << "  trainee=" << upload.record.trainee_id()
-                << "  case=" << upload.record.case_id() << "  attempts=" << upload.attempts
-                << (upload.last_error.empty() ? "" : "  last error: " + upload.last_error)
+      std::cout << "  " << upload.uuid << "  trainee=" << Shown(upload.record.trainee_id())
+                << "  case=" << Shown(upload.record.case_id()) << "  attempts=" << upload.attempts
+                << (upload.last_error.empty() ? "" : "  last error: " + Shown(upload.last_error))
                 << "\n";
+    }
+    // Refused by the server as invalid, or unreadable: kept, never retried,
+    // and never in the way of the pending ones.
+    const auto set_aside = outbox.SetAside();
+    std::cout << "set aside: " << set_aside.size() << "\n";
+    for (const auto& record : set_aside) {
+      std::cout << "  " << Shown(record.uuid) << "  attempts=" << record.attempts
+                << "  reason: " << Shown(record.reason) << "\n";
     }
     // Lesson sessions: the server judges them from their replay; until the
     // station has fetched that verdict (ves-station sync) it is awaited.
@@ -165,7 +177,8 @@ int RunStatusCommand(const CommandArgs& args) {
     for (const auto& verdict : verdicts) {
       std::cout << "  " << verdict.session_uuid() << "  trainee=" << verdict.trainee_id()
                 << "  lesson=" << verdict.lesson_id() << "  "
-                << (verdict.passed() ? "PASSED" : "FAILED") << "  score=" << verdict.score()
+                << (verdict.passed() ? "PASSED" : verdict.rejected() ? "REJECTED" : "FAILED")
+                << "  score=" << verdict.score()
                 << "\n";
     }
     for (const auto& problem : damaged_verdicts) std::cout << "  DAMAGED " << problem << "\n";

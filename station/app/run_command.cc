@@ -23,8 +23,11 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
+#include "patient_db/limits.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
@@ -132,6 +135,11 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
     endpoint.token = vm["token"].as<std::string>();
     if (vm.count("tls-ca")) endpoint.tls_ca_file = vm["tls-ca"].as<std::string>();
     endpoint.deadline = std::chrono::seconds(10);
+    try {
+      sync::CheckEndpoint(endpoint);
+    } catch (const std::invalid_argument& error) {
+      throw UsageError(error.what());
+    }
     o.server = endpoint;
   } else if (vm.count("tls-ca")) {
     throw UsageError("--tls-ca needs --server");
@@ -146,6 +154,18 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   if (vm.count("scope")) o.scope_path = vm["scope"].as<std::string>();
   o.data_dir = vm["data-dir"].as<std::string>();
   o.station_id = vm.count("station-id") ? vm["station-id"].as<std::string>() : HostName();
+  // Ids go into the record and to the server: refused here, before a session
+  // runs, rather than by the server after it (docs/server.md, "Limits").
+  for (const auto& [flag, id] : {std::pair<const char*, const std::string*>{"--trainee",
+                                                                            &o.trainee_id},
+                                 {"--case", &o.case_id},
+                                 {"--station-id", &o.station_id}}) {
+    if ((!id->empty() || std::string_view(flag) != "--case") && !patient_db::IsPrintableId(*id)) {
+      throw UsageError(std::string(flag) + " '" + patient_db::PrintableExcerpt(*id, 40) +
+                       "' must be 1.." + std::to_string(patient_db::kMaxIdBytes) +
+                       " bytes of printable UTF-8");
+    }
+  }
   o.headless = vm.count("headless") > 0;
   if (o.headless) {
     if (!vm.count("operator")) throw UsageError("--headless needs --operator novice|expert");
@@ -604,7 +624,8 @@ int RunRunCommand(const CommandArgs& args) {
   desc.add_options()("help,h", "show this help")(
       "server", po::value<std::string>(), "server address host:port")(
       "token", po::value<std::string>(), "station bearer token")(
-      "tls-ca", po::value<std::string>(), "CA of the server certificate (PEM); none: plaintext")(
+      "tls-ca", po::value<std::string>(),
+      "CA of the server certificate (PEM); none: plaintext, loopback --server only")(
       "trainee", po::value<std::string>(), "trainee id")(
       "case", po::value<std::string>(),
       "case id (cached or on the server), or a case file (.textproto, .vescase, .csv, "
@@ -688,6 +709,7 @@ int RunSyncCommand(const CommandArgs& args) {
     if (attempts < 1 || attempts > 20) {
       throw UsageError("--attempts " + std::to_string(attempts) + " must be in [1, 20]");
     }
+    sync::CheckEndpoint(endpoint);
   } catch (const std::exception& e) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;

@@ -16,7 +16,8 @@ std::string Short(const std::string& sha) { return sha.substr(0, 16); }
 
 void PrintVerdict(const ves::v1::LessonVerdict& v, std::ostream& out) {
   out << "server verdict (replayed): lesson " << v.lesson_id() << " session " << v.session_uuid()
-      << ": " << (v.passed() ? "PASSED" : "FAILED") << " score=" << v.score() << "\n";
+      << ": " << (v.passed() ? "PASSED" : v.rejected() ? "REJECTED" : "FAILED")
+      << " score=" << v.score() << "\n";
   for (const auto& c : v.checks()) out << "  " << c << "\n";
 }
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <ctime>
 #include <stdexcept>
+#include <string_view>
 
 namespace ves::haptics {
 namespace {
@@ -61,6 +62,11 @@ std::optional<CandumpRecord> ParseCandumpLine(const std::string& line) {
   if (std::sscanf(line.c_str(), "(%lld.%15[0-9]) %31s %63s", &seconds, micros, iface, body) != 4) {
     return std::nullopt;
   }
+  // candump writes six digits of microseconds; seconds past year ~5000 are
+  // not a log of ours (and would overflow the microseconds when written back).
+  if (seconds < 0 || seconds > 100'000'000'000LL || std::string_view(micros).size() != 6) {
+    return std::nullopt;
+  }
   record.timestamp_s = static_cast<double>(seconds) + std::atof(micros) / 1e6;
   record.interface_name = iface;
   const std::string text = body;
@@ -72,6 +78,10 @@ std::optional<CandumpRecord> ParseCandumpLine(const std::string& line) {
     if (digit < 0) return std::nullopt;
     id = (id << 4) | static_cast<canid_t>(digit);
   }
+  // Three digits: an 11-bit id. Eight: a 29-bit id, or an error frame's
+  // class bits with CAN_ERR_FLAG; never the EFF or RTR flag bits themselves.
+  if (hash == 3 && id > CAN_SFF_MASK) return std::nullopt;
+  if (hash == 8 && (id & (CAN_EFF_FLAG | CAN_RTR_FLAG))) return std::nullopt;
   if (hash == 8 && !(id & CAN_ERR_FLAG)) id |= CAN_EFF_FLAG;
   record.frame.can_id = id;
   const std::string data = text.substr(hash + 1);

@@ -104,6 +104,12 @@ void Outbox::Exec(const char* sql) const {
 void Outbox::Commit(const ves::v1::SessionRecord& record) {
   if (record.uuid().empty()) throw std::invalid_argument("outbox: session record has no uuid");
   const std::string bytes = SerializeDeterministic(record);
+  // Protobuf writes a string that is not UTF-8 but will not read it back:
+  // such a record would sit in the outbox unreadable forever.
+  if (ves::v1::SessionRecord readable; !readable.ParseFromString(bytes)) {
+    throw std::invalid_argument("outbox: session " + record.uuid() +
+                                " would not read back (a string field that is not UTF-8?)");
+  }
   std::lock_guard lock(mutex_);
   Exec("BEGIN IMMEDIATE");
   try {
@@ -130,22 +136,49 @@ void Outbox::Commit(const ves::v1::SessionRecord& record) {
   }
 }
 
-std::vector<PendingUpload> Outbox::Pending() const {
+std::vector<PendingUpload> Outbox::Pending() {
   std::lock_guard lock(mutex_);
-  Statement select(db_,
-                   "SELECT uuid, record, attempts, last_error FROM outbox "
-                   "WHERE state = 'pending' ORDER BY committed_seq",
-                   path_);
   std::vector<PendingUpload> pending;
-  while (select.Step()) {
-    PendingUpload upload;
-    upload.uuid = select.Text(0);
-    upload.record = ParseRecord(select.Text(1), upload.uuid);
-    upload.attempts = static_cast<int>(select.Int(2));
-    upload.last_error = select.Text(3);
-    pending.push_back(std::move(upload));
+  std::vector<std::string> unreadable;
+  {
+    Statement select(db_,
+                     "SELECT uuid, record, attempts, last_error FROM outbox "
+                     "WHERE state = 'pending' ORDER BY committed_seq",
+                     path_);
+    while (select.Step()) {
+      PendingUpload upload;
+      upload.uuid = select.Text(0);
+      if (!upload.record.ParseFromString(select.Text(1))) {
+        unreadable.push_back(upload.uuid);
+        continue;
+      }
+      upload.attempts = static_cast<int>(select.Int(2));
+      upload.last_error = select.Text(3);
+      pending.push_back(std::move(upload));
+    }
+  }
+  for (const std::string& uuid : unreadable) {
+    Statement update(db_,
+                     "UPDATE outbox SET state = 'rejected', last_error = ? WHERE uuid = ?",
+                     path_);
+    update.Bind(1, std::string("set aside: the stored record does not parse"));
+    update.Bind(2, uuid);
+    update.Step();
   }
   return pending;
+}
+
+std::vector<Outbox::SetAsideRecord> Outbox::SetAside() const {
+  std::lock_guard lock(mutex_);
+  Statement select(db_,
+                   "SELECT uuid, attempts, last_error FROM outbox WHERE state = 'rejected' "
+                   "ORDER BY committed_seq",
+                   path_);
+  std::vector<SetAsideRecord> out;
+  while (select.Step()) {
+    out.push_back({select.Text(0), static_cast<int>(select.Int(1)), select.Text(2)});
+  }
+  return out;
 }
 
 std::size_t Outbox::PendingCount() const {

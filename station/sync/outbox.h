@@ -27,7 +27,10 @@ struct PendingUpload {
 // the session's client UUID, so committing the same record twice stores it
 // once, and a station killed at any moment loses nothing: on restart every
 // unacknowledged record is pending again and is re-sent with the same UUID
-// (the server's upload is idempotent on it).
+// (the server's upload is idempotent on it). Durable means on disk, not only
+// handed to the OS: with synchronous=FULL SQLite fsyncs the WAL before a
+// commit returns, and the folder when it creates the database, journal and
+// WAL (Outbox.ACommitIsOnDiskFileAndFolderBeforeItReturns watches both).
 class Outbox {
  public:
   // Opens or creates the database; throws std::runtime_error naming the path.
@@ -38,12 +41,24 @@ class Outbox {
 
   // Durably stores the record (returns once it is on disk). A record whose
   // UUID is already stored with the same bytes is a no-op; with other bytes
-  // it throws std::invalid_argument: a UUID names one session forever.
+  // it throws std::invalid_argument: a UUID names one session forever. So
+  // does a record that would not read back (a string that is not UTF-8).
   void Commit(const ves::v1::SessionRecord& record);
 
-  // Unacknowledged records, oldest first.
-  std::vector<PendingUpload> Pending() const;
+  // Unacknowledged records, oldest first. A stored record that no longer
+  // parses is set aside (as MarkRejected does, with the reason) instead of
+  // failing the call: one bad record never blocks the others.
+  std::vector<PendingUpload> Pending();
   std::size_t PendingCount() const;
+
+  // Records set aside for good: refused by the server as invalid, or
+  // unreadable. Kept, never retried, listed by `ves-station status`.
+  struct SetAsideRecord {
+    std::string uuid;
+    int attempts{0};
+    std::string reason;
+  };
+  std::vector<SetAsideRecord> SetAside() const;
 
   // The server acknowledged the record: it leaves the pending set (it is
   // kept, marked with the time, as the station's own history).

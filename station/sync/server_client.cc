@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "patient_db/case_bundle.h"
+#include "patient_db/net_address.h"
 
 namespace ves::sync {
 namespace {
@@ -31,7 +32,24 @@ std::string ReadFileOrEmpty(const std::filesystem::path& path) {
 
 }  // namespace
 
+void CheckEndpoint(const ServerEndpoint& endpoint) {
+  if (endpoint.tls_ca_file.empty()) {
+    if (!patient_db::IsLoopbackAddress(endpoint.address)) {
+      throw std::invalid_argument("refusing to send the token in plaintext to '" +
+                                  endpoint.address +
+                                  "': give --tls-ca (plaintext only to a loopback address such "
+                                  "as 127.0.0.1:50051)");
+    }
+    return;
+  }
+  if (ReadFileOrEmpty(endpoint.tls_ca_file).empty()) {
+    throw std::invalid_argument("--tls-ca " + endpoint.tls_ca_file +
+                                ": cannot read the file (or it is empty)");
+  }
+}
+
 std::shared_ptr<grpc::Channel> MakeChannel(const ServerEndpoint& endpoint) {
+  CheckEndpoint(endpoint);
   grpc::ChannelArguments arguments;
   arguments.SetMaxReceiveMessageSize(8 << 20);
   if (endpoint.tls_ca_file.empty()) {
@@ -40,9 +58,6 @@ std::shared_ptr<grpc::Channel> MakeChannel(const ServerEndpoint& endpoint) {
   }
   grpc::SslCredentialsOptions options;
   options.pem_root_certs = ReadFileOrEmpty(endpoint.tls_ca_file);
-  if (options.pem_root_certs.empty()) {
-    throw std::runtime_error("cannot read the server CA file " + endpoint.tls_ca_file);
-  }
   return grpc::CreateCustomChannel(endpoint.address, grpc::SslCredentials(options), arguments);
 }
 

@@ -20,8 +20,12 @@ struct ServerEndpoint {
   std::chrono::milliseconds deadline{std::chrono::seconds(10)};  // per call
 };
 
-// A channel to the endpoint: TLS when a CA file is given, else insecure.
-// Throws std::runtime_error when the CA file cannot be read.
+// Refuses an endpoint that would send the token in plaintext off loopback
+// (the server's own rule, docs/server.md) or whose CA file cannot be read:
+// throws std::invalid_argument with one line naming the flag.
+void CheckEndpoint(const ServerEndpoint& endpoint);
+
+// CheckEndpoint, then a channel: TLS when a CA file is given, else plaintext.
 std::shared_ptr<grpc::Channel> MakeChannel(const ServerEndpoint& endpoint);
 
 // What an upload status means for the outbox: transient failures (server

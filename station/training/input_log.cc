@@ -40,23 +40,39 @@ std::array<std::int64_t, kColumns> ToColumns(const InputSample& s) {
           s.fluoroscopy_on ? 1 : 0};
 }
 
+// Column c of ToColumns back into the sample; throws InputLogError for a
+// value no sample can have.
+void SetColumn(InputSample* s, int c, std::int64_t v) {
+  switch (c) {
+    case 0:
+      if (v < 0) throw InputLogError("input log: negative tick " + std::to_string(v));
+      s->tick = static_cast<std::uint64_t>(v);
+      return;
+    case 1:
+      if (v < 0 || v > 1) throw InputLogError("input log: bad thrust mode " + std::to_string(v));
+      s->thrust_mode = static_cast<ThrustMode>(v);
+      return;
+    case 2: s->insertion_m = static_cast<double>(v) * kLogLengthResolution_m; return;
+    case 3: s->push_force_N = static_cast<double>(v) * kLogForceResolution_N; return;
+    case 4: s->roll_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
+    case 5: s->knob_up_down_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
+    case 6: s->knob_left_right_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
+    case 7:
+      if (v < 0 || v > 2) throw InputLogError("input log: bad view mode " + std::to_string(v));
+      s->view_mode = static_cast<ViewMode>(v);
+      return;
+    default:
+      if (v < 0 || v > 1) {
+        throw InputLogError("input log: bad fluoroscopy flag " + std::to_string(v));
+      }
+      s->fluoroscopy_on = v == 1;
+      return;
+  }
+}
+
 InputSample FromColumns(const std::array<std::int64_t, kColumns>& c) {
-  if (c[0] < 0) throw InputLogError("input log: negative tick " + std::to_string(c[0]));
-  if (c[1] < 0 || c[1] > 1)
-    throw InputLogError("input log: bad thrust mode " + std::to_string(c[1]));
-  if (c[7] < 0 || c[7] > 2) throw InputLogError("input log: bad view mode " + std::to_string(c[7]));
-  if (c[8] < 0 || c[8] > 1)
-    throw InputLogError("input log: bad fluoroscopy flag " + std::to_string(c[8]));
   InputSample s;
-  s.tick = static_cast<std::uint64_t>(c[0]);
-  s.thrust_mode = static_cast<ThrustMode>(c[1]);
-  s.insertion_m = static_cast<double>(c[2]) * kLogLengthResolution_m;
-  s.push_force_N = static_cast<double>(c[3]) * kLogForceResolution_N;
-  s.roll_rad = static_cast<double>(c[4]) * kLogAngleResolution_rad;
-  s.knob_up_down_rad = static_cast<double>(c[5]) * kLogAngleResolution_rad;
-  s.knob_left_right_rad = static_cast<double>(c[6]) * kLogAngleResolution_rad;
-  s.view_mode = static_cast<ViewMode>(c[7]);
-  s.fluoroscopy_on = c[8] == 1;
+  for (int column = 0; column < kColumns; ++column) SetColumn(&s, column, c[column]);
   return s;
 }
 
@@ -143,14 +159,7 @@ std::string EncodeInputSamples(std::span<const InputSample> samples) {
 }
 
 std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
-  if (encoded.size() < kHeaderBytes) {
-    throw InputLogError("input log: truncated header (" + std::to_string(encoded.size()) +
-                        " bytes, need " + std::to_string(kHeaderBytes) + ")");
-  }
-  if (std::memcmp(encoded.data(), kMagic, sizeof(kMagic)) != 0) {
-    throw InputLogError("input log: not a delta-zlib-v1 log (bad magic)");
-  }
-  const std::uint64_t count = GetLe(encoded, 4, 8);
+  const std::uint64_t count = PeekInputSampleCount(encoded);
   const std::uint64_t raw_size = GetLe(encoded, 12, 4);
   const auto crc = static_cast<std::uint32_t>(GetLe(encoded, 16, 4));
   const auto packed_crc = static_cast<std::uint32_t>(GetLe(encoded, 20, 4));
@@ -183,26 +192,44 @@ std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
   }
   if (Crc32(raw) != crc) throw InputLogError("input log: CRC-32 mismatch (corrupted data)");
 
-  std::vector<std::array<std::int64_t, kColumns>> rows(count);
+  // Column by column straight into the samples: no second copy of the log.
+  std::vector<InputSample> samples(count);
   std::size_t pos = 0;
   for (int c = 0; c < kColumns; ++c) {
     std::int64_t value = 0;
-    for (auto& row : rows) {
+    for (InputSample& sample : samples) {
       const std::int64_t delta = GetVarint(raw, &pos);
       // Wrapping add: corrupted deltas must not be undefined behaviour.
       value = static_cast<std::int64_t>(static_cast<std::uint64_t>(value) +
                                         static_cast<std::uint64_t>(delta));
-      row[c] = value;
+      SetColumn(&sample, c, value);
     }
   }
   if (pos != raw.size()) {
     throw InputLogError("input log: " + std::to_string(raw.size() - pos) +
                         " unexpected bytes after the samples");
   }
-  std::vector<InputSample> samples;
-  samples.reserve(count);
-  for (const auto& row : rows) samples.push_back(FromColumns(row));
   return samples;
+}
+
+std::uint64_t PeekInputSampleCount(std::string_view encoded) {
+  if (encoded.size() < kHeaderBytes) {
+    throw InputLogError("input log: truncated header (" + std::to_string(encoded.size()) +
+                        " bytes, need " + std::to_string(kHeaderBytes) + ")");
+  }
+  if (std::memcmp(encoded.data(), kMagic, sizeof(kMagic)) != 0) {
+    throw InputLogError("input log: not a delta-zlib-v1 log (bad magic)");
+  }
+  return GetLe(encoded, 4, 8);
+}
+
+std::uint64_t MaxSessionSamples(double time_limit_s, double dt_s) {
+  if (!(time_limit_s > 0.0) || !(dt_s > 0.0) || !std::isfinite(time_limit_s / dt_s)) return 0;
+  // A session logs one sample per step and ends at the step reaching the
+  // limit (within half a step); one more for rounding.
+  const double steps = std::floor(time_limit_s / dt_s + 0.5) + 1.0;
+  return steps >= 1e18 ? std::numeric_limits<std::uint64_t>::max()
+                       : static_cast<std::uint64_t>(steps);
 }
 
 v1::InputLog MakeInputLog(std::span<const InputSample> samples, double dt_s) {

@@ -57,6 +57,15 @@ std::string EncodeInputSamples(std::span<const InputSample> samples);
 // Throws InputLogError when anything does not check out; never reads out of bounds.
 std::vector<InputSample> DecodeInputSamples(std::string_view encoded);
 
+// The sample count the header of an encoded log claims, read without
+// decompressing anything, so a caller can refuse a log before decoding it.
+// Throws InputLogError for a truncated header or a bad magic.
+std::uint64_t PeekInputSampleCount(std::string_view encoded);
+
+// Most samples a session with this time limit and step can log (one per step
+// until the limit); 0 for a non-positive limit or step.
+std::uint64_t MaxSessionSamples(double time_limit_s, double dt_s);
+
 v1::InputLog MakeInputLog(std::span<const InputSample> samples, double dt_s);
 // Checks format_version, encoding, dt_s and sample_count against the data.
 std::vector<InputSample> DecodeInputLog(const v1::InputLog& log);

@@ -2,8 +2,12 @@
 
 #include <google/protobuf/util/message_differencer.h>
 
+#include <time.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 
 #include "station/training/case_run.h"
 #include "station/training/session.h"
@@ -36,6 +40,53 @@ constexpr double kTolerance = 1e-6;
 // A session that used its whole time limit ends on the last step before it:
 // up to one model step (1 ms) short.
 constexpr double kFullTimeTolerance_s = 1.5e-3;
+
+struct BudgetExceeded : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+GateResult Rejected(GateResult so_far, const std::string& why) {
+  so_far.checks.push_back("rejected: " + why);
+  so_far.passed = false;
+  so_far.rejected = true;
+  return so_far;
+}
+
+// Empty when the log may be decoded and replayed within `budget`.
+std::string CheckJudgeBounds(const v1::Lesson& lesson, const v1::InputLog& log,
+                             const JudgeBudget& budget) {
+  const double dt_s = log.dt_s();
+  if (!(dt_s >= kMinJudgedDt_s && dt_s <= kMaxJudgedDt_s)) {
+    return "input_log.dt_s " + Num(dt_s) + " is outside [" + Num(kMinJudgedDt_s) + ", " +
+           Num(kMaxJudgedDt_s) + "] s";
+  }
+  std::uint64_t claimed = 0;
+  try {
+    claimed = std::max(PeekInputSampleCount(log.encoded()), log.sample_count());
+  } catch (const InputLogError& error) {
+    return error.what();
+  }
+  const std::uint64_t max_samples = MaxSessionSamples(lesson.time_limit_s(), dt_s);
+  if (claimed > max_samples) {
+    return "the input log claims " + std::to_string(claimed) + " samples, more than the " +
+           std::to_string(max_samples) + " of a " + Num(lesson.time_limit_s()) +
+           " s lesson at dt_s " + Num(dt_s);
+  }
+  if (claimed > budget.memory_bytes / kJudgedBytesPerSample) {
+    const double mib = 1.0 / (1 << 20);
+    return "judging " + std::to_string(claimed) + " samples takes about " +
+           Num(static_cast<double>(claimed * kJudgedBytesPerSample) * mib) +
+           " MiB, over the memory budget of " +
+           Num(static_cast<double>(budget.memory_bytes) * mib) + " MiB";
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -122,7 +173,8 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
 }
 
 GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& lesson_case,
-                              const v1::SessionRecord& record, const std::atomic<bool>* cancel) {
+                              const v1::SessionRecord& record, const std::atomic<bool>* cancel,
+                              const JudgeBudget& budget) {
   GateResult refused;
   Checks c(&refused);
   c.Rule(record.lesson_id() == lesson.lesson_id(),
@@ -137,6 +189,14 @@ GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& les
          "time limit " + Num(limit_s) + " s <= " + Num(lesson.time_limit_s()) + " s");
   if (c.failed()) return refused;
 
+  // Bounded before anything is decoded or run: the step, the sample count the
+  // log's header claims against the lesson's time limit, the memory it takes.
+  const std::string why_not = CheckJudgeBounds(lesson, record.input_log(), budget);
+  if (!why_not.empty()) return Rejected(std::move(refused), why_not);
+  const double cpu_budget_s = budget.cpu_base_s + budget.cpu_per_limit_s * lesson.time_limit_s();
+  const double cpu_start_s = ThreadCpuSeconds();
+  std::uint64_t steps = 0;
+
   // The authoritative run: the lesson's case, scope and time limit, the
   // record's inputs. Nothing the record claims about its results is read.
   v1::SessionRecord rerun = record;
@@ -150,9 +210,16 @@ GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& les
       if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) {
         throw JudgeCancelled("lesson judge: replay cancelled");
       }
+      // The clock read costs ~100 ns: every 256 steps is plenty.
+      if ((++steps & 0xff) == 0 && ThreadCpuSeconds() - cpu_start_s > cpu_budget_s) {
+        throw BudgetExceeded("the replay used more than its " + Num(cpu_budget_s) +
+                             " s CPU budget after " + std::to_string(steps) + " steps");
+      }
     });
   } catch (const JudgeCancelled&) {
     throw;
+  } catch (const BudgetExceeded& over) {
+    return Rejected(std::move(refused), over.what());
   } catch (const std::exception& error) {
     c.Rule(false, std::string("replay: ") + error.what());
     return refused;

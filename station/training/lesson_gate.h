@@ -1,10 +1,12 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "station/training/input_log.h"
 #include "station/training/replay.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
@@ -22,7 +24,28 @@ struct GateResult {
   bool passed{false};
   double score{0.0};                // the judged run's score
   std::vector<std::string> checks;  // one line per rule: "pain_s 0.4 <= 10: ok" / "...: FAILED"
+  // The judge refused to replay the record at all (over a budget, an input
+  // log that cannot belong to the lesson): a final verdict, never judged again.
+  bool rejected{false};
 };
+
+// What judging one session may cost (docs/lessons.md, "The judge's budgets").
+// Both are checked before the input log is decoded where they can be: its
+// sample count (from the log's header) against the lesson's time limit and
+// the memory decoding it takes; the CPU time while the replay runs.
+struct JudgeBudget {
+  double cpu_base_s{60.0};           // CPU seconds of the replay: base + ...
+  double cpu_per_limit_s{0.5};       // ... this much per second of the lesson's time limit
+  std::uint64_t memory_bytes{std::uint64_t{1} << 30};  // decoded log and its copy in the run
+};
+
+// Model steps a judged log may use (the station runs at 1 kHz; replay
+// re-runs at the log's own step, so the step is bounded too).
+inline constexpr double kMinJudgedDt_s = 1e-4;
+inline constexpr double kMaxJudgedDt_s = 1e-2;
+// Memory one logged sample takes while judged: decoded, held again by the
+// replayed session, and its worst-case raw varints.
+inline constexpr std::uint64_t kJudgedBytesPerSample = 2 * sizeof(InputSample) + 9 * 10;
 
 // One line per criterion, for the trainee before the start ("pain_s <= 10 s").
 std::vector<std::string> DescribePassCriteria(const v1::Lesson& lesson);
@@ -41,9 +64,14 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
 // that cannot be replayed fails with the reason. Costs about 1/25 of the
 // session's simulated time in CPU (docs/lessons.md). When `cancel` becomes true
 // the replay stops and JudgeCancelled is thrown (no verdict: judge it later).
+// A record over `budget` (or whose log claims more samples than the lesson's
+// time limit allows, or has a step outside [kMinJudgedDt_s, kMaxJudgedDt_s])
+// is refused before decoding or stopped mid-replay: `rejected`, not passed,
+// with the reason in `checks`.
 GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& lesson_case,
                               const v1::SessionRecord& record,
-                              const std::atomic<bool>* cancel = nullptr);
+                              const std::atomic<bool>* cancel = nullptr,
+                              const JudgeBudget& budget = {});
 
 class JudgeCancelled : public std::runtime_error {
  public:

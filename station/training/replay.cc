@@ -1,5 +1,6 @@
 #include "station/training/replay.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -61,11 +62,21 @@ RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig con
 
 RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
                  const v1::InputLog& log, const StepCallback& on_step) {
-  const std::vector<InputSample> inputs = DecodeInputLog(log);
   if (log.dt_s() != params.dt_s) {
     throw ReplayError("replay: log dt_s " + std::to_string(log.dt_s()) +
                       " differs from the model's " + std::to_string(params.dt_s));
   }
+  // Refused before decoding: a header claiming more samples than the time
+  // limit allows must not make the decoder allocate them.
+  const std::uint64_t max_samples = MaxSessionSamples(config.time_limit_s, params.dt_s);
+  const std::uint64_t claimed = std::max(PeekInputSampleCount(log.encoded()), log.sample_count());
+  if (claimed > max_samples) {
+    throw ReplayError("replay: the log claims " + std::to_string(claimed) +
+                      " samples, more than the " + std::to_string(max_samples) + " a " +
+                      std::to_string(config.time_limit_s) + " s session at dt_s " +
+                      std::to_string(params.dt_s) + " can hold");
+  }
+  const std::vector<InputSample> inputs = DecodeInputLog(log);
   SessionRunner runner(params, config);
   runner.Start(0);
   for (std::size_t i = 0; i < inputs.size(); ++i) {

@@ -11,6 +11,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "patient_db/case_format.h"
+#include "tests/integration/plaintext_probe.h"
 #include "tests/integration/test_server.h"
 
 namespace ves::server::testing {
@@ -127,9 +128,14 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   EXPECT_NE(raw.out.find("uuid: \"" + uuid + "\""), std::string::npos);
   AdminRun token = Admin(dir, "token create --role station" + remote);
   EXPECT_EQ(token.out.size(), 65u);
-  // Reads are audited through the group commit, a moment after the answer.
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  AdminRun audit = Admin(dir, "audit" + remote);
+  // Reads are audited through the group commit, a moment after the answer:
+  // polled until the last one is there, not a fixed wait.
+  AdminRun audit;
+  for (int i = 0; i < 500; ++i) {
+    audit = Admin(dir, "audit" + remote);
+    if (audit.out.find("session.read") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
   EXPECT_NE(audit.out.find("case.upload"), std::string::npos);
   EXPECT_NE(audit.out.find("session.read"), std::string::npos);
 }
@@ -153,6 +159,93 @@ TEST(AdminCli, ErrorsAreOneLineWithNonZeroStatus) {
   AdminRun no_server = Admin(dir, "scores --trainee x --token t");
   EXPECT_EQ(no_server.exit_status, 2);
   EXPECT_NE(no_server.err.find("server"), std::string::npos);
+}
+
+// A display name with an ANSI escape: the server refuses it now, and one
+// stored before (straight in the database) is printed escaped, not obeyed.
+TEST(AdminCli, ControlCharactersFromTheServerAreNeverPrintedRaw) {
+  TestServer server;
+  const auto& dir = server.dir();
+  const std::string remote =
+      " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kAdmin, "north");
+  // popen's /bin/sh: printf makes the escape byte.
+  AdminRun add =
+      Admin(dir, "trainee add --id mallory --name \"$(printf '\\033[2J\\033[31mred')\"" + remote);
+  EXPECT_EQ(add.exit_status, 1) << add.err;
+  EXPECT_NE(add.err.find("INVALID_ARGUMENT"), std::string::npos) << add.err;
+  EXPECT_NE(add.err.find("control character U+001B"), std::string::npos) << add.err;
+  ASSERT_TRUE(server.store().AddTrainee({"eve", "north", "\x1b[2J\x1b[31mred", 1}).ok());
+  AdminRun list = Admin(dir, "trainee list" + remote);
+  ASSERT_EQ(list.exit_status, 0) << list.err;
+  EXPECT_EQ(list.out.find('\x1b'), std::string::npos) << list.out;
+  EXPECT_NE(list.out.find("\\x1b[2J\\x1b[31mred"), std::string::npos) << list.out;
+}
+
+// More sessions than one page holds: `scores` walks every page.
+TEST(AdminCli, ScoresListsEverySessionAcrossPages) {
+  TestServer server;
+  server.AddTrainee("bulk", "north");
+  patient_db::WriteBatch batch;
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 1205; ++i) {
+    patient_db::SessionRow row;
+    row.uuid = NewUuid(rng);
+    row.trainee_id = "bulk";
+    row.institution = "north";
+    row.case_id = "standard-adult";
+    row.start_unix_ms = 1'700'000'000'000 + i;
+    row.body = "x";
+    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    batch.sessions.push_back(row);
+  }
+  ASSERT_TRUE(server.store().CommitBatch(batch).ok());
+  AdminRun scores = Admin(server.dir(), "scores --trainee bulk --server " + server.address() +
+                                            " --token " +
+                                            server.MakeToken(StoreRole::kSupervisor, "north"));
+  ASSERT_EQ(scores.exit_status, 0) << scores.err;
+  EXPECT_EQ(Lines(scores.out), 1 + 1205);  // header and every session
+}
+
+TEST(AdminCli, RefusesToSendTheTokenInPlaintextOffLoopback) {
+  const auto dir = MakeTempDir("admin_plaintext");
+  ves::testing::NonLoopbackListener listener;
+  const std::string address = listener.address().empty() ? "192.0.2.1:50051" : listener.address();
+  for (const std::string command :
+       {"trainee list", "scores --trainee x", "audit", "case list", "curriculum list"}) {
+    AdminRun r = Admin(dir, command + " --server " + address + " --token secret --deadline-s 2");
+    EXPECT_EQ(r.exit_status, 2) << command << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("refusing to send the token in plaintext to '" + address + "'"),
+              std::string::npos)
+        << r.err;
+  }
+  if (!listener.address().empty()) {
+    EXPECT_EQ(listener.Connections(), 0);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(AdminCli, FlagErrorsAreOneLineAndExitStatus2NeverAnAbort) {
+  const auto dir = MakeTempDir("admin_flags");
+  const std::string remote = " --server 127.0.0.1:1 --token t";
+  for (const std::string& args : {
+           "trainee list" + remote + " --tls-ca /nonexistent.pem",
+           "trainee list" + remote + " --tls-cert /nonexistent.pem",
+           "trainee list" + remote + " --tls-ca /etc/hostname --tls-key /nonexistent.pem",
+           "case list" + remote + " --tls-ca /nonexistent.pem",
+           "scores --trainee x" + remote + " --deadline-s 0",
+           "scores --trainee x" + remote + " --deadline-s -5",
+           "audit" + remote + " --limit many",
+       }) {
+    AdminRun r = Admin(dir, args);
+    EXPECT_EQ(r.exit_status, 2) << args << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+    EXPECT_EQ(r.err.find("terminate called"), std::string::npos) << r.err;
+  }
+  AdminRun ca = Admin(dir, "trainee list" + remote + " --tls-ca /nonexistent.pem");
+  EXPECT_NE(ca.err.find("--tls-ca /nonexistent.pem: cannot read the file"), std::string::npos)
+      << ca.err;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

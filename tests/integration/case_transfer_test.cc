@@ -107,6 +107,33 @@ TEST_F(CaseTransfer, HashMismatchesAreRefused) {
   EXPECT_TRUE(List({}, &listed).ok());
 }
 
+// 250 MiB announced, something else sent: the server answers after the first
+// chunk (its magic) instead of buffering the whole upload first.
+TEST_F(CaseTransfer, AnUploadThatIsNotABundleIsRefusedAtItsFirstBytes) {
+  constexpr uint64_t kAnnounced = 250ull << 20;
+  const std::string chunk(1 << 20, 'x');
+  auto stub = ves::v1::Cases::NewStub(MakeClientChannel(admin_));
+  grpc::ClientContext ctx;
+  PrepareContext(&ctx, admin_);
+  ves::v1::UploadCaseResponse up;
+  auto writer = stub->UploadCase(&ctx, &up);
+  ves::v1::UploadCaseRequest part;
+  part.mutable_header()->set_file_label("junk.vescase");
+  part.mutable_header()->set_total_bytes(kAnnounced);
+  part.mutable_header()->set_sha256_hex(std::string(64, '0'));
+  ASSERT_TRUE(writer->Write(part));
+  int written = 0;
+  part.set_chunk(chunk);
+  while (written < static_cast<int>(kAnnounced / chunk.size()) && writer->Write(part)) ++written;
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("junk.vescase: bundle.magic"), std::string::npos)
+      << status.error_message();
+  // What flow control let through before the answer, far from all 250 chunks.
+  EXPECT_LT(written, 64);
+}
+
 TEST_F(CaseTransfer, VersionsAreKeptAndAVersionCannotChangeContent) {
   auto v1 = SampleCase();
   v1.set_version(1);

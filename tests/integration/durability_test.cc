@@ -74,6 +74,7 @@ TEST(Durability, SigkillMidLoopLosesNoAcknowledgedRecordAndSigtermDrains) {
     auto store = patient_db::OpenStore("sqlite:" + (dir / "ves.db").string());
     store->AddInstitution("north", 1);
     store->AddTrainee({"t1", "north", "One", 1});
+    PutSampleCase(*store, "north");
     token = NewToken();
     store->AddToken({Sha256HexOf(token), StoreRole::kStation, "north", "", "station", 1});
   }

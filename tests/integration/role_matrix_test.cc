@@ -16,6 +16,8 @@ using patient_db::StoreRole;
 constexpr StatusCode OK = StatusCode::OK;
 constexpr StatusCode PD = StatusCode::PERMISSION_DENIED;
 constexpr StatusCode UA = StatusCode::UNAUTHENTICATED;
+constexpr StatusCode NF = StatusCode::NOT_FOUND;
+constexpr StatusCode FP = StatusCode::FAILED_PRECONDITION;
 
 class RoleMatrix : public ::testing::Test {
  protected:
@@ -133,15 +135,18 @@ TEST_F(RoleMatrix, EveryRoleGetsTheDocumentedStatusFromEveryMethod) {
       "AddTrainee",   "ListTrainees",     "ListSessions", "GetLearningCurve",
       "GetSession",   "CreateToken",      "ListAudit"};
   // Columns in the order of `methods`. The "north" trainee data (t1, the case)
-  // belongs to institution north; *_south callers are of another institution.
+  // belongs to institution north; *_south callers are of another institution:
+  // north's case, trainee and session answer them as absent ones do (NF; FP
+  // "no such trainee" for an upload), never PERMISSION_DENIED, which would
+  // tell that they exist.
   const std::map<std::string, std::vector<StatusCode>> expected = {
       {"admin", {OK, OK, OK, OK, OK, OK, OK, OK, OK, OK, OK}},
       {"supervisor", {OK, OK, PD, PD, PD, OK, OK, OK, OK, PD, PD}},
       {"station", {OK, OK, PD, OK, PD, OK, PD, PD, PD, PD, PD}},
       {"trainee", {PD, PD, PD, PD, PD, PD, OK, OK, OK, PD, PD}},
-      {"supervisor_south", {OK, PD, PD, PD, PD, PD, PD, PD, PD, PD, PD}},
-      {"station_south", {OK, PD, PD, PD, PD, PD, PD, PD, PD, PD, PD}},
-      {"trainee_south", {PD, PD, PD, PD, PD, PD, PD, PD, PD, PD, PD}},
+      {"supervisor_south", {OK, NF, PD, PD, PD, PD, NF, NF, NF, PD, PD}},
+      {"station_south", {OK, NF, PD, FP, PD, PD, PD, PD, PD, PD, PD}},
+      {"trainee_south", {PD, PD, PD, PD, PD, PD, NF, NF, NF, PD, PD}},
       {"none", {UA, UA, UA, UA, UA, UA, UA, UA, UA, UA, UA}},
       {"wrong", {UA, UA, UA, UA, UA, UA, UA, UA, UA, UA, UA}},
   };
@@ -155,7 +160,7 @@ TEST_F(RoleMatrix, EveryRoleGetsTheDocumentedStatusFromEveryMethod) {
 
 TEST_F(RoleMatrix, SouthStationSeesNorthCaseOnlyOnceShared) {
   const auto south = server_.Client(tokens_["station_south"]);
-  EXPECT_EQ(DownloadCase(south, case_id_, 0, 0).status.error_code(), PD);
+  EXPECT_EQ(DownloadCase(south, case_id_, 0, 0).status.error_code(), NF);
   // A second version shared with south: its stations may download that one.
   auto shared = BigCase(1000, 2);
   const std::string bundle = patient_db::EncodeCaseBundle(shared);
@@ -174,7 +179,57 @@ TEST_F(RoleMatrix, SouthStationSeesNorthCaseOnlyOnceShared) {
   writer->WritesDone();
   ASSERT_TRUE(writer->Finish().ok());
   EXPECT_EQ(DownloadCase(south, case_id_, 2, 0).status.error_code(), OK);
-  EXPECT_EQ(DownloadCase(south, case_id_, 1, 0).status.error_code(), PD);
+  EXPECT_EQ(DownloadCase(south, case_id_, 1, 0).status.error_code(), NF);
+}
+
+// What another institution learns about north's ids: exactly what it learns
+// about ids that do not exist (issue #20: NOT_FOUND vs PERMISSION_DENIED told
+// them apart, and a reused foreign uuid answered with its stored hash).
+TEST_F(RoleMatrix, AnotherInstitutionsIdsAnswerExactlyAsMissingOnes) {
+  const auto south = server_.Client(tokens_["supervisor_south"]);
+  auto get_session = [&](const std::string& uuid) {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, south);
+    ves::v1::GetSessionRequest q;
+    q.set_uuid(uuid);
+    ves::v1::GetSessionResponse r;
+    return ves::v1::Trainees::NewStub(MakeClientChannel(south))->GetSession(&ctx, q, &r);
+  };
+  const grpc::Status foreign = get_session(session_uuid_);
+  const std::string missing_uuid = NewUuid(rng_);
+  const grpc::Status missing = get_session(missing_uuid);
+  EXPECT_EQ(foreign.error_code(), missing.error_code());
+  EXPECT_EQ(foreign.error_message(), "no session '" + session_uuid_ + "'");
+  EXPECT_EQ(missing.error_message(), "no session '" + missing_uuid + "'");
+  auto list_sessions = [&](const std::string& trainee) {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, south);
+    ves::v1::ListSessionsRequest q;
+    q.set_trainee_id(trainee);
+    ves::v1::ListSessionsResponse r;
+    return ves::v1::Trainees::NewStub(MakeClientChannel(south))->ListSessions(&ctx, q, &r);
+  };
+  EXPECT_EQ(list_sessions("t1").error_message(), "no trainee 't1'");
+  EXPECT_EQ(list_sessions("nobody").error_message(), "no trainee 'nobody'");
+  const grpc::Status foreign_case = DownloadCase(south, case_id_, 1, 0).status;
+  const grpc::Status missing_case = DownloadCase(south, "no-such-case", 1, 0).status;
+  EXPECT_EQ(foreign_case.error_code(), missing_case.error_code());
+  EXPECT_EQ(foreign_case.error_message(), "no case '" + case_id_ + "' version 1");
+
+  // South's station reuses north's session uuid for its own trainee's record.
+  PutTestCase(server_.store(),
+              patient_db::LoadCaseFile(std::string(VES_SOURCE_DIR) +
+                                       "/patient_db/cases/paper-sigmoid.textproto"),
+              "south");
+  ves::v1::SessionRecord theirs = MakeRecord(session_uuid_, "t2", 5);
+  theirs.set_case_id("paper-sigmoid");
+  ves::v1::UploadSessionResponse ack;
+  const grpc::Status reuse = UploadSession(server_.Client(tokens_["station_south"]), theirs, &ack);
+  EXPECT_EQ(reuse.error_code(), StatusCode::ALREADY_EXISTS);
+  auto stored = server_.store().GetSession(session_uuid_);
+  ASSERT_TRUE(stored.ok());
+  EXPECT_EQ(reuse.error_message().find(stored.value.body_sha256_hex), std::string::npos)
+      << reuse.error_message();
 }
 
 TEST_F(RoleMatrix, AuditLogRecordsWhoWhatAndResult) {
@@ -193,7 +248,7 @@ TEST_F(RoleMatrix, AuditLogRecordsWhoWhatAndResult) {
       saw_download = true;
     }
     if (r.action == "session.read" && r.institution == "south" &&
-        r.result.rfind("PERMISSION_DENIED", 0) == 0) {
+        r.result.rfind("NOT_FOUND", 0) == 0) {
       saw_denied_read = true;
     }
   }

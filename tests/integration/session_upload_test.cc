@@ -5,12 +5,17 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <grpcpp/generic/generic_stub.h>
+
+#include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <limits>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "patient_db/case_format.h"
 #include "tests/integration/test_server.h"
 
 namespace ves::server::testing {
@@ -22,6 +27,7 @@ class SessionUpload : public ::testing::Test {
  protected:
   void SetUp() override {
     server_.AddTrainee("t1", "north");
+    PutSampleCase(server_.store(), "north");
     station_ = server_.Client(server_.MakeToken(StoreRole::kStation, "north"));
     supervisor_ = server_.Client(server_.MakeToken(StoreRole::kSupervisor, "north"));
   }
@@ -152,7 +158,94 @@ TEST_F(SessionUpload, GarbageBytesOnThePortDoNotStopTheServer) {
   EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
 }
 
+// Bytes no UploadSessionRequest parses from: gRPC's own answer was
+// UNIMPLEMENTED with no message; now INVALID_ARGUMENT saying why.
+TEST_F(SessionUpload, AMalformedRequestIsInvalidArgumentWithAMessage) {
+  // record { station_id: "\xff" }: field 1 (message) holding field 6 (string).
+  const std::string not_utf8("\x0a\x03\x32\x01\xff", 5);
+  const std::string not_protobuf("\xff\xff\xff\xff", 4);
+  for (const std::string& bytes : {not_utf8, not_protobuf}) {
+    grpc::GenericStub stub(MakeClientChannel(station_));
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, station_);
+    grpc::Slice slice(bytes);
+    grpc::ByteBuffer request(&slice, 1), reply;
+    grpc::Status status;
+    std::mutex mutex;
+    std::condition_variable done_cv;
+    bool done = false;
+    stub.UnaryCall(&ctx, "/ves.v1.Sessions/UploadSession", grpc::StubOptions(), &request, &reply,
+                   [&](grpc::Status s) {
+                     std::lock_guard lock(mutex);
+                     status = s;
+                     done = true;
+                     done_cv.notify_one();
+                   });
+    std::unique_lock lock(mutex);
+    done_cv.wait(lock, [&] { return done; });
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(status.error_message().find("/ves.v1.Sessions/UploadSession: malformed protobuf"),
+              std::string::npos)
+        << status.error_message();
+    if (bytes == not_utf8) {
+      EXPECT_NE(status.error_message().find("ves.v1.SessionRecord.station_id"), std::string::npos)
+          << status.error_message();
+    }
+  }
+  EXPECT_EQ(server_.store().CountSessions().value, 0);
+}
+
+// Issue #20: one trainee's sessions made ListSessions outgrow the message
+// limit for good. Replies are pages now: walked with next_page_token they
+// give every session once, in order; a token of another listing is refused.
+TEST_F(SessionUpload, ListSessionsComesInPages) {
+  patient_db::WriteBatch batch;
+  for (int i = 0; i < 250; ++i) {
+    patient_db::SessionRow row;
+    row.uuid = NewUuid(rng_);
+    row.trainee_id = "t1";
+    row.institution = "north";
+    row.case_id = "standard-adult";
+    row.start_unix_ms = 1'700'000'000'000 + i / 3;  // ties broken by uuid
+    row.body = "x";
+    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    batch.sessions.push_back(row);
+  }
+  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  auto stub = ves::v1::Trainees::NewStub(MakeClientChannel(supervisor_));
+  ves::v1::ListSessionsRequest q;
+  q.set_trainee_id("t1");
+  q.set_page_size(100);
+  std::vector<std::pair<int64_t, std::string>> seen;
+  int pages = 0;
+  do {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, supervisor_);
+    ves::v1::ListSessionsResponse r;
+    ASSERT_TRUE(stub->ListSessions(&ctx, q, &r).ok());
+    EXPECT_LE(r.sessions_size(), 100);
+    for (const auto& s : r.sessions()) seen.emplace_back(s.start_unix_ms(), s.uuid());
+    q.set_page_token(r.next_page_token());
+    ++pages;
+  } while (!q.page_token().empty());
+  EXPECT_EQ(pages, 3);
+  ASSERT_EQ(seen.size(), 250u);
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_EQ(std::set(seen.begin(), seen.end()).size(), 250u);
+  grpc::ClientContext ctx;
+  PrepareContext(&ctx, supervisor_);
+  q.set_page_token("cases:1:standard-adult");
+  ves::v1::ListSessionsResponse r;
+  const grpc::Status bad = stub->ListSessions(&ctx, q, &r);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.error_message().find("page_token"), std::string::npos);
+}
+
 TEST_F(SessionUpload, SupervisorSeesScoresAndLearningCurvePerCase) {
+  PutTestCase(server_.store(),
+              patient_db::LoadCaseFile(std::string(VES_SOURCE_DIR) +
+                                       "/patient_db/cases/paper-sigmoid.textproto"),
+              "north");
   ves::v1::UploadSessionResponse r;
   for (int i = 0; i < 3; ++i) {
     auto record = MakeRecord(NewUuid(rng_), "t1", i);

@@ -2,9 +2,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <stdexcept>
 
 #include "patient_db/case_format.h"
+#include "station/training/input_log.h"
 
 namespace ves::server::testing {
 
@@ -92,13 +95,38 @@ ves::v1::SessionRecord MakeRecord(const std::string& uuid, const std::string& tr
     e->set_kind(ves::v1::EVENT_KIND_LOOP);
     e->set_value(seed + i);
   }
-  r.mutable_input_log()->set_format_version(1);
-  r.mutable_input_log()->set_dt_s(0.001);
-  r.mutable_input_log()->set_sample_count(1000);
-  r.mutable_input_log()->set_encoded(std::string(512, static_cast<char>('a' + seed % 26)));
-  r.mutable_input_log()->set_encoding("delta-zlib-v1");
+  // A well-formed log (its header is checked at upload) of 1000 idle steps.
+  std::vector<training::InputSample> samples(1000);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    samples[i].tick = i;
+    samples[i].push_force_N = 0.001 * (seed % 100);
+  }
+  *r.mutable_input_log() = training::MakeInputLog(samples, 0.001);
   r.set_operator_kind("human");
   return r;
+}
+
+void PutSampleCase(patient_db::Store& store, const std::string& owner,
+                   const std::vector<std::string>& share_with) {
+  PutTestCase(store, SampleCase(), owner, share_with);
+}
+
+void PutTestCase(patient_db::Store& store, const ves::v1::ColonCase& colon_case,
+                 const std::string& owner, const std::vector<std::string>& share_with) {
+  const std::string bundle = patient_db::EncodeCaseBundle(colon_case);
+  patient_db::CaseRow row;
+  row.case_id = colon_case.id();
+  row.version = colon_case.version();
+  row.title = colon_case.title();
+  row.institution = owner;
+  row.sha256_hex = Sha256HexOf(bundle);
+  row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
+  row.shared_with = share_with;
+  std::sort(row.shared_with.begin(), row.shared_with.end());
+  store.AddInstitution(owner, 1);
+  for (const auto& i : share_with) store.AddInstitution(i, 1);
+  auto put = store.PutCase(row, bundle);
+  if (!put.ok()) throw std::runtime_error("PutTestCase: " + put.status.message);
 }
 
 ves::v1::ColonCase SampleCase() {

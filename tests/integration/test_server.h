@@ -4,6 +4,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "server/client.h"
 #include "server/server.h"
@@ -50,6 +51,14 @@ ves::v1::SessionRecord MakeRecord(const std::string& uuid, const std::string& tr
 
 // The repository's sample case standard-adult (valid), loaded from its textproto.
 ves::v1::ColonCase SampleCase();
+// Stores SampleCase() (version 1) owned by `owner` and shared with `share_with`:
+// records from MakeRecord name it, and the server refuses sessions of a case
+// the trainee's institution cannot see.
+void PutSampleCase(patient_db::Store& store, const std::string& owner,
+                   const std::vector<std::string>& share_with = {});
+// The same for any case.
+void PutTestCase(patient_db::Store& store, const ves::v1::ColonCase& colon_case,
+                 const std::string& owner, const std::vector<std::string>& share_with = {});
 // SampleCase() with a PNG-tagged mucosa texture of `texture_bytes` seeded
 // pseudo-random bytes, to make a bundle of about that size.
 ves::v1::ColonCase BigCase(size_t texture_bytes, uint32_t version = 1);

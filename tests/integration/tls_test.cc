@@ -113,5 +113,22 @@ TEST(ServerCredentials, CertificateWithoutKeyIsRefused) {
   EXPECT_THROW(MakeServerCredentials(o), std::invalid_argument);  // unreadable
 }
 
+// A key that is not the certificate's: one line saying so, not "address in
+// use" when gRPC later fails to listen (issue #20).
+TEST_F(Tls, AKeyThatIsNotTheCertificatesIsNamed) {
+  ServerOptions o;
+  o.tls_cert_file = File("server.pem");
+  o.tls_key_file = File("client.key");
+  try {
+    MakeServerCredentials(o);
+    ADD_FAILURE() << "accepted a mismatched key";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "--tls-key " + File("client.key") +
+                                         " is not the key of --tls-cert " + File("server.pem"));
+  }
+  o.tls_key_file = File("san.ext");  // not a key at all
+  EXPECT_THROW(MakeServerCredentials(o), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace ves::server::testing

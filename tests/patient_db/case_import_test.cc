@@ -71,6 +71,38 @@ TEST(CaseImportCsv, WithoutRegionColumnTheOptionGivesOneRegion) {
   EXPECT_EQ(c.id(), "chosen-id");
 }
 
+// A NaN in one row is one problem, on that row: not one more for every
+// radius sample and region span derived from it (issue #20 saw ~150).
+TEST(CaseImportCsv, ANonFiniteCoordinateIsOneProblemOnItsRow) {
+  std::string csv = "x_mm,y_mm,z_mm,radius_mm,region\n";
+  for (int i = 0; i < 100; ++i) {
+    csv += std::string(i == 50 ? "nan" : "0") + ",0," + std::to_string(15 * i) + ",20," +
+           (i < 30 ? "rectum" : "sigmoid") + "\n";
+  }
+  const auto problems = ImportProblems(csv);
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_EQ(problems[0].ToString(), "in.csv: csv.x_mm[52] = nan: not a finite number");
+  csv = "x_mm,y_mm,z_mm,radius_mm\n0,0,0,inf\n0,0,30,20\n0,0,60,20\n0,0,90,20\n";
+  ImportOptions options;
+  options.region = ves::v1::REGION_SIGMOID;
+  EXPECT_EQ(ImportProblems(csv, options).size(), 1u);
+}
+
+// Binary data given as a CSV: one problem that says so, not a "header" of
+// raw bytes printed to the terminal.
+TEST(CaseImportCsv, BinaryDataIsOneProblemSayingItIsNotText) {
+  std::string garbage = "\x89PNG\r\n\x1a\n";
+  for (int i = 0; i < 64; ++i) garbage += static_cast<char>((i * 37) & 0xff);
+  const auto problems = ImportProblems(garbage);
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_EQ(problems[0].ToString(),
+            "in.csv: csv = byte 0x1a at offset 6: not a text CSV file (a control byte: binary "
+            "data?)");
+  const auto latin1 = ImportProblems("x_mm,y_mm,z_mm,radius_mm,r\xe9gion\n");
+  ASSERT_EQ(latin1.size(), 1u) << JoinProblems(latin1);
+  EXPECT_NE(latin1[0].message.find("not valid UTF-8"), std::string::npos);
+}
+
 TEST(CaseImportCsv, ByteOrderMarkAndCrLfFromSpreadsheetsAccepted) {
   std::string csv = "\xEF\xBB\xBFx_mm,y_mm,z_mm,radius_mm,region\r\n";
   for (int i = 0; i < 4; ++i) csv += "0,0," + std::to_string(30 * i) + ",20,rectum\r\n";
@@ -303,6 +335,23 @@ TEST(CaseImport, IdFromFileName) {
   EXPECT_EQ(CaseIdFromFileName("Case 07.mrk.json"), "case-07");
   EXPECT_EQ(CaseIdFromFileName("__x__.csv"), "x");
   EXPECT_EQ(CaseIdFromFileName("???.csv"), "imported-case");
+}
+
+// A member of the wrong JSON type aborted the process (uncaught
+// nlohmann::json::type_error); now it is one problem naming the file.
+TEST(CaseImportMarkups, AMemberOfTheWrongTypeIsAProblemNotAnAbort) {
+  for (const char* text : {R"({"markups":[{"coordinateSystem":5,"controlPoints":[]}]})",
+                           R"({"markups":[{"coordinateUnits":[],"controlPoints":[]}]})"}) {
+    try {
+      ImportSlicerMarkups(text, std::nullopt, "m.mrk.json");
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const CaseError& e) {
+      ASSERT_EQ(e.problems().size(), 1u) << e.what();
+      EXPECT_EQ(e.problems()[0].field, "json");
+      EXPECT_NE(e.problems()[0].message.find("type must be string"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -1,8 +1,13 @@
 // Every validation rule of docs/case-format.md, each with a broken file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "patient_db/case_format.h"
 #include "tests/patient_db/case_test_util.h"
@@ -141,6 +146,135 @@ TEST(CaseValidate, CenterlineCloserToItselfThanSumOfRadiiRejected) {
   EXPECT_EQ(problems.size(), 1u) << JoinProblems(problems);
   EXPECT_NE(problems[0].message.find("sum of radii 0.04"), std::string::npos)
       << problems[0].message;
+}
+
+// A colon of `points` control points on a helix along z (radius `helix_m`,
+// `pitch_m` per turn), lumen radius 2 cm, one region over its length.
+ves::v1::ColonCase MakeHelix(int points, double step_rad, double helix_m, double pitch_m) {
+  auto c = MakeValidCase();
+  c.clear_centerline();
+  for (int i = 0; i < points; ++i) {
+    const double a = step_rad * i;
+    auto* p = c.add_centerline();
+    p->set_x_m(helix_m * std::cos(a) - helix_m);
+    p->set_y_m(helix_m * std::sin(a));
+    p->set_z_m(pitch_m * a / (2 * std::numbers::pi));
+  }
+  const double length_m = CalcCenterlineLength_m(c);
+  c.clear_regions();
+  auto* span = c.add_regions();
+  span->set_region(ves::v1::REGION_SIGMOID);
+  span->set_end_arc_m(length_m);
+  *span->mutable_tissue() = DefaultTissue(ves::v1::REGION_SIGMOID);
+  c.mutable_radius_profile(0)->set_arc_m(0.0);
+  while (c.radius_profile_size() > 1) c.mutable_radius_profile()->RemoveLast();
+  return c;
+}
+
+// The self-crossing rule as it was first written: every pair of 5 mm samples.
+// The grid must find exactly the same stretches and closest pairs.
+std::vector<std::string> QuadraticSelfProximity(const ves::v1::ColonCase& c) {
+  struct S {
+    double x, y, z, arc, r;
+    int control;
+  };
+  const auto arcs = CalcControlPointArcs_m(c);
+  std::vector<S> s;
+  for (int i = 0; i + 1 < c.centerline_size(); ++i) {
+    const auto& a = c.centerline(i);
+    const auto& b = c.centerline(i + 1);
+    const int pieces = std::max(1, static_cast<int>(std::ceil((arcs[i + 1] - arcs[i]) / 0.005)));
+    for (int k = 0; k < pieces; ++k) {
+      const double t = static_cast<double>(k) / pieces;
+      const double arc = arcs[i] + t * (arcs[i + 1] - arcs[i]);
+      s.push_back({a.x_m() + t * (b.x_m() - a.x_m()), a.y_m() + t * (b.y_m() - a.y_m()),
+                   a.z_m() + t * (b.z_m() - a.z_m()), arc, CalcRadiusAt_m(c, arc), i});
+    }
+  }
+  const auto& e = c.centerline(c.centerline_size() - 1);
+  s.push_back({e.x_m(), e.y_m(), e.z_m(), arcs.back(), CalcRadiusAt_m(c, arcs.back()),
+               c.centerline_size() - 1});
+  std::vector<std::string> runs;
+  bool in_run = false;
+  int wi = -1, wj = -1;
+  double worst = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    bool violates = false;
+    for (size_t j = i + 1; j < s.size(); ++j) {
+      const double sum = s[i].r + s[j].r;
+      if (s[j].arc - s[i].arc <= std::numbers::pi / 2 * sum) continue;
+      const double d = std::hypot(s[i].x - s[j].x, s[i].y - s[j].y, s[i].z - s[j].z);
+      if (d >= sum) continue;
+      violates = true;
+      if (wi < 0 || d / sum < worst) {
+        worst = d / sum;
+        wi = static_cast<int>(i);
+        wj = static_cast<int>(j);
+      }
+    }
+    if (!violates && in_run && wi >= 0) {
+      runs.push_back(std::to_string(s[wi].control) + "/" + std::to_string(s[wj].control));
+      wi = wj = -1;
+    }
+    in_run = violates;
+  }
+  if (wi >= 0) runs.push_back(std::to_string(s[wi].control) + "/" + std::to_string(s[wj].control));
+  return runs;
+}
+
+TEST(CaseValidate, SelfProximityOnAGridFindsWhatEveryPairFinds) {
+  // Helices whose turns come closer than the lumen (pitch 3 cm < 4 cm) or not.
+  for (const auto& [pitch_m, helix_m] : {std::pair{0.03, 0.05}, std::pair{0.06, 0.05},
+                                         std::pair{0.035, 0.02}, std::pair{0.02, 0.08}}) {
+    const auto c = MakeHelix(100, 0.3, helix_m, pitch_m);
+    std::vector<std::string> found;
+    for (const auto& p : ValidateCase(c, "helix")) {
+      ASSERT_EQ(p.field, "centerline") << p.ToString();
+      const size_t at = p.message.find("(control point ");
+      ASSERT_NE(at, std::string::npos) << p.ToString();
+      found.push_back(std::to_string(p.index) + "/" +
+                      std::to_string(std::stoi(p.message.substr(at + 15))));
+    }
+    const auto expected = QuadraticSelfProximity(c);
+    const size_t reported = std::min<size_t>(20, expected.size());  // the first 20 are named
+    EXPECT_EQ(found, std::vector<std::string>(expected.begin(), expected.begin() + reported))
+        << "pitch " << pitch_m << " helix " << helix_m;
+    if (pitch_m < 0.04) {
+      EXPECT_FALSE(expected.empty());
+    }
+  }
+}
+
+// Found by probing (issue #20): a 40 m colon of 40,000 points passed, and the
+// crossing test took 15 s on it. A case is at most 5000 points and 3 m now,
+// each said in one problem.
+TEST(CaseValidate, TooManyPointsOrTooLongIsOneProblem) {
+  auto many = MakeHelix(40000, 0.001, 0.05, 0.5);
+  auto problems = ValidateCase(many, "big");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_EQ(problems[0].ToString(),
+            "big: centerline = 40000 points: more than 5000 control points");
+  auto long_one = MakeHelix(200, 0.1, 0.3, 0.1);  // 6 m coiled within 0.6 m
+  problems = ValidateCase(long_one, "long");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_NE(problems[0].message.find("longer than 3 m"), std::string::npos) << problems[0].message;
+}
+
+// Found by fuzzing (tests/fuzz/regressions/textproto): text format escapes
+// can put bytes that are not UTF-8 in a string; such a case passed validation
+// and then could not be read back from its own bundle.
+TEST(CaseValidate, TextThatIsNotUtf8OrHasControlCharactersIsRejected) {
+  auto c = MakeValidCase();
+  c.mutable_provenance()->set_notes("scanned \xff\xfe");
+  auto problems = ValidateCase(c, "x");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_EQ(problems[0].ToString(),
+            "x: provenance.notes = \"scanned \\xff\\xfe\": not valid UTF-8 (byte 8)");
+  c = MakeValidCase();
+  c.set_title("red \x1b[31m");
+  problems = ValidateCase(c, "x");
+  ASSERT_EQ(problems.size(), 1u) << JoinProblems(problems);
+  EXPECT_NE(problems[0].message.find("control character U+001B"), std::string::npos);
 }
 
 TEST(CaseValidate, RegionsOverlappingRejected) {

@@ -128,6 +128,19 @@ TEST_P(LessonStore, AssignmentsReachTraineesDirectlyAndThroughTheirGroup) {
   ASSERT_TRUE(store_->AddAssignment({"b", false, "t1", "north", "tok", 400}).ok());  // again
   // A group of the same name in another institution is another group.
   ASSERT_TRUE(store_->SetTraineeGroup("s1", "residents").ok());
+  // Curricula come in pages by id (docs/server.md, "Limits").
+  ListPage page;
+  page.limit = 1;
+  auto first = store_->ListCurricula("north", page);
+  ASSERT_EQ(first.value.size(), 1u);
+  EXPECT_EQ(first.value[0].curriculum_id, "a");
+  page.has_after = true;
+  page.after_text = "a";
+  auto second = store_->ListCurricula("north", page);
+  ASSERT_EQ(second.value.size(), 1u);
+  EXPECT_EQ(second.value[0].curriculum_id, "b");
+  page.after_text = "b";
+  EXPECT_TRUE(store_->ListCurricula("north", page).value.empty());
 
   auto t1 = store_->ListAssignments("t1");
   ASSERT_TRUE(t1.ok()) << t1.status.message;

@@ -122,7 +122,13 @@ TEST_F(PgStoreTest, PoolLendsAtMostItsSizeAndReusesConnections) {
     // The connection handed back by `a`, not a new one.
     EXPECT_EQ(c.conn().backendpid(), backend_a);
   });
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // Polled until the third caller is inside Acquire, waiting: only then does
+  // "not acquired yet" say anything (a fixed sleep could pass before the
+  // thread even ran).
+  for (int i = 0; i < 5000 && pool.waiting() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_EQ(pool.waiting(), 1u);
   EXPECT_FALSE(third_acquired) << "a third lease while two were out";
   a.reset();
   t.join();

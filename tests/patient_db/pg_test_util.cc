@@ -63,7 +63,10 @@ class SkippedStore final : public Store {
   StoreResult<TokenRow> FindToken(const std::string&) override { return Skipped(); }
   StoreStatus AddTrainee(const TraineeRow&) override { return {}; }
   StoreResult<TraineeRow> GetTrainee(const std::string&) override { return Skipped(); }
-  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string&) override { return {}; }
+  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string&,
+                                                    const ListPage&) override {
+    return {};
+  }
   StoreResult<PutCaseResult> PutCase(const CaseRow&, const std::string&) override {
     return Skipped();
   }
@@ -74,15 +77,16 @@ class SkippedStore final : public Store {
     return Skipped();
   }
   StoreResult<SessionRow> GetSession(const std::string&) override { return Skipped(); }
-  StoreResult<std::vector<SessionRow>> ListSessions(const std::string&,
-                                                    const std::string&) override {
+  StoreResult<std::vector<SessionRow>> ListSessions(const std::string&, const std::string&,
+                                                    const ListPage&) override {
     return {};
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
-  StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int) override { return {}; }
+  StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int, int64_t) override { return {}; }
   StoreResult<bool> PutCurriculum(const CurriculumRow&) override { return Skipped(); }
   StoreResult<CurriculumRow> GetCurriculum(const std::string&) override { return Skipped(); }
-  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string&) override {
+  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string&,
+                                                        const ListPage&) override {
     return {};
   }
   StoreResult<std::string> FindLessonCurriculum(const std::string&) override { return Skipped(); }
@@ -107,6 +111,7 @@ class SkippedStore final : public Store {
                                                                    int) override {
     return {};
   }
+  StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
 
  private:
   static StoreStatus Skipped() {

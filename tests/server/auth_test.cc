@@ -1,6 +1,8 @@
 // Tokens, authentication and the access rules, without gRPC.
 #include "server/auth.h"
 
+#include "patient_db/net_address.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -94,15 +96,21 @@ TEST(AccessRules, RolesAndInstitutions) {
 }
 
 TEST(Loopback, OnlyLoopbackAddressesQualify) {
-  EXPECT_TRUE(IsLoopbackListenAddress("127.0.0.1:50051"));
-  EXPECT_TRUE(IsLoopbackListenAddress("127.1.2.3:0"));
-  EXPECT_TRUE(IsLoopbackListenAddress("localhost:50051"));
-  EXPECT_TRUE(IsLoopbackListenAddress("[::1]:50051"));
-  EXPECT_FALSE(IsLoopbackListenAddress("0.0.0.0:50051"));
-  EXPECT_FALSE(IsLoopbackListenAddress("[::]:50051"));
-  EXPECT_FALSE(IsLoopbackListenAddress("10.0.0.1:50051"));
-  EXPECT_FALSE(IsLoopbackListenAddress("127.0.0.1.evil.com:50051"));
-  EXPECT_FALSE(IsLoopbackListenAddress("127.0.0.1"));  // no port
+  EXPECT_TRUE(patient_db::IsLoopbackAddress("127.0.0.1:50051"));
+  EXPECT_TRUE(patient_db::IsLoopbackAddress("127.1.2.3:0"));
+  EXPECT_TRUE(patient_db::IsLoopbackAddress("localhost:50051"));
+  EXPECT_TRUE(patient_db::IsLoopbackAddress("[::1]:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("0.0.0.0:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("[::]:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("10.0.0.1:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127.0.0.1.evil.com:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127.0.0.1"));  // no port
+  EXPECT_TRUE(patient_db::IsLoopbackAddress("ipv4:127.0.0.1:50051"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127.0.0.1:"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127.0.0.1:80x"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127.0.0.1111:80"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("127..0.1:80"));
+  EXPECT_FALSE(patient_db::IsLoopbackAddress("ves.example.org:50051"));
 }
 
 }  // namespace

@@ -25,6 +25,7 @@ using patient_db::StoreRole;
 constexpr StatusCode OK = StatusCode::OK;
 constexpr StatusCode PD = StatusCode::PERMISSION_DENIED;
 constexpr StatusCode UA = StatusCode::UNAUTHENTICATED;
+constexpr StatusCode NF = StatusCode::NOT_FOUND;
 constexpr char kFirstLesson[] = "x-ray-free-1-gentle-minute";
 constexpr char kSecondLesson[] = "x-ray-free-2-cecum-with-aids";
 // The first lesson's time limit; scripted sessions run all of it.
@@ -83,6 +84,7 @@ class Lessons : public ::testing::Test {
     server_.AddTrainee("s1", "south");
     PutShippedCase(server_.store(), "paper-sigmoid", "north");
     PutShippedCase(server_.store(), "redundant-sigmoid", "north");
+    PutShippedCase(server_.store(), "standard-adult", "north");  // MakeRecord's case
     admin_ = server_.MakeToken(StoreRole::kAdmin, "north");
     supervisor_ = server_.MakeToken(StoreRole::kSupervisor, "north");
     station_ = server_.MakeToken(StoreRole::kStation, "north");
@@ -263,14 +265,16 @@ TEST_F(Lessons, RoleMatrix) {
                                         "trainee",       "supervisor_south", "station_south",
                                         "trainee_south", "none",          "wrong"};
   const std::map<std::string, std::vector<StatusCode>> expected = {
+      // Another institution's trainee, session or curriculum answers NOT_FOUND,
+      // as one that does not exist (NF): its existence is not told.
       {"CreateCurriculum", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
       {"ListCurricula", {OK, OK, OK, PD, PD, PD, PD, UA, UA}},
-      {"AssignCurriculum", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"SetTraineeGroup", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"GetNextLesson", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
-      {"GetProgress(trainee)", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
+      {"AssignCurriculum", {OK, OK, PD, PD, NF, PD, PD, UA, UA}},
+      {"SetTraineeGroup", {OK, OK, PD, PD, NF, PD, PD, UA, UA}},
+      {"GetNextLesson", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
+      {"GetProgress(trainee)", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
       {"GetProgress(group)", {OK, OK, PD, PD, PD, PD, PD, UA, UA}},
-      {"GetLessonVerdict", {OK, OK, OK, OK, PD, PD, PD, UA, UA}},
+      {"GetLessonVerdict", {OK, OK, OK, OK, NF, NF, NF, UA, UA}},
   };
   for (const auto& [method, codes] : expected) {
     for (size_t i = 0; i < who.size(); ++i) {
@@ -402,6 +406,76 @@ TEST_F(Lessons, AStoredSessionWithoutAVerdictIsJudgedOnStart) {
   ASSERT_TRUE(verdict.ok()) << verdict.status.message;
   EXPECT_EQ(verdict.value.lesson_id, kFirstLesson);
   EXPECT_TRUE(server_.store().ListUnjudgedLessonSessions("", 10).value.empty());
+}
+
+// A replay that kills the server (as an unbounded one once could) must not
+// run again on every restart: after kMaxJudgeStarts unfinished starts the
+// session gets a final rejected verdict without a replay, and stays judged.
+TEST_F(Lessons, ASessionWhoseReplayNeverFinishedIsRejectedNotReplayedAgain) {
+  ves::v1::CreateCurriculumResponse created;
+  ves::v1::Curriculum c = ShippedCurriculum();
+  c.mutable_lessons(0)->set_time_limit_s(3);
+  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
+  const ves::v1::SessionRecord r =
+      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
+  patient_db::SessionRow row;
+  row.uuid = r.uuid();
+  row.trainee_id = "t1";
+  row.institution = "north";
+  row.case_id = r.case_id();
+  row.body = r.SerializeAsString();
+  row.body_sha256_hex = Sha256HexOf(row.body);
+  row.lesson_id = r.lesson_id();
+  patient_db::WriteBatch batch;
+  batch.sessions.push_back(row);
+  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  // Two starts that never finished: the server died twice during this replay.
+  for (int i = 1; i <= kMaxJudgeStarts; ++i) {
+    EXPECT_EQ(server_.store().AddJudgeStarts(r.uuid(), 1).value, i);
+  }
+  LessonJudge judge(&server_.store());
+  auto verdict = judge.JudgeStored(r.uuid());
+  ASSERT_TRUE(verdict.ok()) << verdict.status.message;
+  EXPECT_TRUE(verdict.value.rejected);
+  EXPECT_FALSE(verdict.value.passed);
+  EXPECT_NE(verdict.value.detail.find("never finished"), std::string::npos)
+      << verdict.value.detail;
+  EXPECT_TRUE(server_.store().ListUnjudgedLessonSessions("", 10).value.empty());
+  const ves::v1::LessonVerdict served = WaitForVerdict(r.uuid());
+  EXPECT_TRUE(served.rejected());
+  EXPECT_FALSE(served.passed());
+  ASSERT_TRUE(Assign(supervisor_, created.curriculum().curriculum_id(), "t1").ok());
+  const ves::v1::TraineeProgress progress = ProgressOf("t1");
+  ASSERT_GT(progress.lessons_size(), 0);
+  EXPECT_EQ(progress.lessons(0).attempts(), 1u);
+  EXPECT_EQ(progress.lessons(0).passes(), 0u);
+}
+
+// A cancelled replay (the server stopping cleanly) does not count as a start
+// that never finished.
+TEST_F(Lessons, AReplayCancelledByAStopIsNotCountedAsUnfinished) {
+  ves::v1::CreateCurriculumResponse created;
+  ves::v1::Curriculum c = ShippedCurriculum();
+  c.mutable_lessons(0)->set_time_limit_s(3);
+  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
+  const ves::v1::SessionRecord r =
+      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
+  patient_db::SessionRow row;
+  row.uuid = r.uuid();
+  row.trainee_id = "t1";
+  row.institution = "north";
+  row.case_id = r.case_id();
+  row.body = r.SerializeAsString();
+  row.body_sha256_hex = Sha256HexOf(row.body);
+  row.lesson_id = r.lesson_id();
+  patient_db::WriteBatch batch;
+  batch.sessions.push_back(row);
+  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  LessonJudge judge(&server_.store());
+  judge.Stop();  // cancels any replay: JudgeStored now stops at its first step
+  EXPECT_FALSE(judge.JudgeStored(r.uuid()).ok());
+  EXPECT_EQ(server_.store().AddJudgeStarts(r.uuid(), 0).value, 0);
+  EXPECT_EQ(server_.store().ListUnjudgedLessonSessions("", 10).value.size(), 1u);
 }
 
 }  // namespace

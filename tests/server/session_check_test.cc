@@ -4,50 +4,169 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <vector>
+
+#include "station/training/input_log.h"
 
 namespace ves::server {
 namespace {
 
+constexpr int64_t kNow = 1'750'000'000'000;  // 2025-06
+
+// A plausible record: 300 s, cecum reached at 200 s, a 1000-step log.
 ves::v1::SessionRecord Valid() {
   ves::v1::SessionRecord r;
   r.set_uuid("0f8fad5b-d9cb-469f-a165-70867728950e");
   r.set_trainee_id("t1");
   r.set_case_id("standard-adult");
-  r.set_start_unix_ms(1000);
-  r.set_end_unix_ms(2000);
+  r.set_case_version(1);
+  r.set_station_id("station-1");
+  r.set_start_unix_ms(kNow - 3'600'000);
+  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
+  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
   r.set_score(80);
-  r.mutable_metrics()->set_pain_s(3);
-  r.add_events()->set_value(1);
+  auto* m = r.mutable_metrics();
+  m->set_duration_s(300);
+  m->set_completed(true);
+  m->set_time_to_cecum_s(200);
+  m->set_pain_s(3);
+  m->set_peak_insertion_force_n(9);
+  m->set_mean_insertion_force_n(2);
+  m->set_mucosa_seen_fraction(0.7);
+  auto* e = r.add_events();
+  e->set_kind(ves::v1::EVENT_KIND_LOOP);
+  e->set_t_s(12);
+  e->set_value(1);
+  std::vector<training::InputSample> samples(1000);
+  for (size_t i = 0; i < samples.size(); ++i) samples[i].tick = i;
+  *r.mutable_input_log() = training::MakeInputLog(samples, 0.001);
   return r;
 }
 
-TEST(CheckSessionRecord, ValidRecordPasses) { EXPECT_EQ(CheckSessionRecord(Valid()), ""); }
+std::string Check(const ves::v1::SessionRecord& r) { return CheckSessionRecord(r, kNow); }
+
+TEST(CheckSessionRecord, ValidRecordPasses) { EXPECT_EQ(Check(Valid()), ""); }
 
 TEST(CheckSessionRecord, NonFiniteValuesAreNamedWithTheirPath) {
   auto r = Valid();
   r.mutable_metrics()->set_pain_s(std::numeric_limits<double>::quiet_NaN());
-  EXPECT_EQ(CheckSessionRecord(r), "record.metrics.pain_s = nan: must be finite");
+  EXPECT_EQ(Check(r), "record.metrics.pain_s = nan: must be finite");
   r = Valid();
   r.add_events()->set_arc_m(-std::numeric_limits<double>::infinity());
-  EXPECT_EQ(CheckSessionRecord(r), "record.events[1].arc_m = -inf: must be finite");
+  EXPECT_EQ(Check(r), "record.events[1].arc_m = -inf: must be finite");
   r = Valid();
   r.mutable_scope()->set_outer_diameter_m(std::numeric_limits<double>::infinity());
-  EXPECT_EQ(CheckSessionRecord(r), "record.scope.outer_diameter_m = inf: must be finite");
+  EXPECT_EQ(Check(r), "record.scope.outer_diameter_m = inf: must be finite");
 }
 
 TEST(CheckSessionRecord, IdentityAndRangesAreChecked) {
   auto r = Valid();
   r.set_uuid("0F8FAD5B-D9CB-469F-A165-70867728950E");  // upper case
-  EXPECT_NE(CheckSessionRecord(r).find("record.uuid"), std::string::npos);
+  EXPECT_NE(Check(r).find("record.uuid"), std::string::npos);
   r = Valid();
   r.set_trainee_id("");
-  EXPECT_NE(CheckSessionRecord(r).find("record.trainee_id"), std::string::npos);
+  EXPECT_NE(Check(r).find("record.trainee_id"), std::string::npos);
   r = Valid();
   r.set_score(100.5);
-  EXPECT_NE(CheckSessionRecord(r).find("record.score"), std::string::npos);
+  EXPECT_NE(Check(r).find("record.score"), std::string::npos);
   r = Valid();
-  r.set_end_unix_ms(999);
-  EXPECT_NE(CheckSessionRecord(r).find("record.end_unix_ms"), std::string::npos);
+  r.set_end_unix_ms(r.start_unix_ms() - 1);
+  EXPECT_NE(Check(r).find("record.end_unix_ms"), std::string::npos);
+}
+
+// What a probe stored before these checks existed (issue #20, finding 5).
+TEST(CheckSessionRecord, ImplausibleRecordsAreRefusedNamingTheField) {
+  struct Case {
+    const char* expect;
+    void (*edit)(ves::v1::SessionRecord*);
+  };
+  const Case cases[] = {
+      {"record.metrics.pain_s = -5: must be in [0, 300.001]",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_pain_s(-5); }},
+      {"record.metrics.duration_s = -1: must be in [0, 14400] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_duration_s(-1); }},
+      {"record.metrics.time_to_cecum_s = -1: must be in (0, duration_s 300] when completed",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_time_to_cecum_s(-1); }},
+      {"record.outcome = 99: must be OUTCOME_CECUM_REACHED, OUTCOME_ABORTED or OUTCOME_TIMED_OUT",
+       [](ves::v1::SessionRecord* r) { r->set_outcome(static_cast<ves::v1::Outcome>(99)); }},
+      {"record.start_unix_ms = -999999999999999: must be between 2020-01-01",
+       [](ves::v1::SessionRecord* r) { r->set_start_unix_ms(-999'999'999'999'999); }},
+      {"record.start_unix_ms = ",
+       [](ves::v1::SessionRecord* r) {
+         r->set_start_unix_ms(kNow + 2 * kMaxClockSkewMs);
+         r->set_end_unix_ms(r->start_unix_ms() + 300'000);
+       }},
+      {"record.metrics.completed = false: contradicts outcome OUTCOME_CECUM_REACHED",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_completed(false); }},
+      {"record.metrics.duration_s = 300: end_unix_ms - start_unix_ms is 3600 s",
+       [](ves::v1::SessionRecord* r) { r->set_end_unix_ms(r->start_unix_ms() + 3'600'000); }},
+      {"record.metrics.mucosa_seen_fraction = 1.5: must be in [0, 1]",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_mucosa_seen_fraction(1.5); }},
+      {"record.metrics.mean_insertion_force_N = 10: more than peak_insertion_force_N 9",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_mean_insertion_force_n(10); }},
+      {"record.events[0].kind = 0: not an EventKind",
+       [](ves::v1::SessionRecord* r) { r->mutable_events(0)->set_kind({}); }},
+      {"record.events[0].t_s = 400: must be in [0, 300.001] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_events(0)->set_t_s(400); }},
+      {"record.case_version = 0: must be >= 1",
+       [](ves::v1::SessionRecord* r) { r->set_case_version(0); }},
+      {"record.station_id = '': must be 1..128 bytes of printable UTF-8",
+       [](ves::v1::SessionRecord* r) { r->set_station_id(""); }},
+      {"record.input_log: missing",
+       [](ves::v1::SessionRecord* r) { r->clear_input_log(); }},
+      {"record.input_log.dt_s = 1e-06: must be in [0.0001, 0.01] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_input_log()->set_dt_s(1e-6); }},
+  };
+  for (const Case& c : cases) {
+    auto r = Valid();
+    c.edit(&r);
+    EXPECT_EQ(Check(r).rfind(c.expect, 0), 0u) << "got: " << Check(r);
+  }
+}
+
+// Sample and event counts are bounded by the session's duration, before the
+// log is decoded: the header's count is read, not the data.
+TEST(CheckSessionRecord, CountsAreBoundedByTheDuration) {
+  auto r = Valid();
+  r.mutable_input_log()->set_sample_count(20'000'000);
+  EXPECT_EQ(Check(r).rfind("record.input_log.sample_count = 20000000: more than the 300002 steps "
+                           "of a 300 s session",
+                           0),
+            0u)
+      << Check(r);
+  r = Valid();
+  r.mutable_input_log()->set_sample_count(999);  // the header says 1000
+  EXPECT_EQ(Check(r), "record.input_log.sample_count = 999: the encoded log's header says 1000");
+  r = Valid();
+  r.mutable_input_log()->set_encoded("VIL1");
+  EXPECT_NE(Check(r).find("record.input_log.encoded: input log: truncated header"),
+            std::string::npos);
+  r = Valid();
+  r.mutable_metrics()->set_duration_s(1);
+  r.mutable_metrics()->set_time_to_cecum_s(1);
+  r.mutable_metrics()->set_pain_s(0);
+  r.set_end_unix_ms(r.start_unix_ms() + 1000);
+  r.clear_events();
+  for (int i = 0; i < 121; ++i) r.add_events()->set_kind(ves::v1::EVENT_KIND_PAIN);
+  r.mutable_input_log()->set_sample_count(1000);
+  EXPECT_EQ(Check(r).rfind("record.events: 121 events, more than 120 for a 1 s session", 0), 0u)
+      << Check(r);
+}
+
+TEST(CheckSessionRecord, StringsAreBoundedAndPrintable) {
+  auto r = Valid();
+  r.set_station_id(std::string(9 << 20, 's'));  // 9 MiB
+  EXPECT_EQ(Check(r).rfind("record.station_id = 'ssss", 0), 0u) << Check(r).substr(0, 200);
+  EXPECT_NE(Check(r).find(": 9437184 bytes, more than 128"), std::string::npos);
+  EXPECT_LT(Check(r).size(), 200u);  // the message does not echo the value
+  r = Valid();
+  r.set_station_id("st\xff\xfe");
+  EXPECT_NE(Check(r).find("record.station_id = 'st\\xff\\xfe': not valid UTF-8"),
+            std::string::npos)
+      << Check(r);
+  r = Valid();
+  r.set_trainee_id("t\x1b[31mred");
+  EXPECT_NE(Check(r).find("control character U+001B"), std::string::npos) << Check(r);
 }
 
 TEST(IsLowerCaseUuid, Shape) {

@@ -70,5 +70,49 @@ TEST_F(StationOffline, AStationKilledBetweenCommitAndUploadDeliversOnRestartExac
   EXPECT_EQ(SessionsOnServer(), 2);
 }
 
+// A session the server refuses for good (here: its case was never uploaded,
+// so it is not visible to the trainee's institution) is set aside, listed by
+// `status` with the reason, and delivers nothing in the way of the others.
+TEST_F(StationOffline, ARecordTheServerRefusesIsSetAsideAndTheOthersArrive) {
+  const fs::path data = dir_ / "station";
+  for (const std::string id : {"paper-sigmoid", "standard-adult"}) {  // both run offline
+    const fs::path bundle = dir_ / (id + ".vescase");
+    ASSERT_EQ(Admin({"case", "convert",
+                     std::string(VES_SOURCE_DIR) + "/patient_db/cases/" + id + ".textproto",
+                     bundle.string()})
+                  .exit_code,
+              0);
+    ASSERT_EQ(Station({"import-case", bundle.string(), "--data-dir", data.string()}).exit_code, 0);
+  }
+  auto refused_args = RunArgs("novice", data, dir_ / "out-1", /*with_server=*/false);
+  for (size_t i = 0; i + 1 < refused_args.size(); ++i) {
+    if (refused_args[i] == "--case") refused_args[i + 1] = "paper-sigmoid";
+  }
+  const ProcessResult refused_run = Station(refused_args);
+  ASSERT_TRUE(refused_run.exit_code == 0 || refused_run.exit_code == 3) << refused_run.err;
+  const std::string refused = CommittedUuid(refused_run.out);
+  const ProcessResult good_run = Station(RunArgs("expert", data, dir_ / "out-2", false));
+  ASSERT_TRUE(good_run.exit_code == 0 || good_run.exit_code == 3) << good_run.err;
+  const std::string good = CommittedUuid(good_run.out);
+  ASSERT_FALSE(refused.empty() || good.empty());
+
+  const ProcessResult sync = Station(
+      {"sync", "--server", address_, "--token", station_token_, "--data-dir", data.string()});
+  EXPECT_EQ(sync.exit_code, 0) << sync.out << sync.err;
+  EXPECT_NE(sync.out.find("uploaded 1 session(s), 1 refused, 0 pending"), std::string::npos)
+      << sync.out;
+  EXPECT_TRUE(SessionOnServer(good));
+  const ProcessResult status = Station({"status", "--data-dir", data.string()});
+  EXPECT_EQ(PendingUploads(status.out), 0) << status.out;
+  EXPECT_NE(status.out.find("set aside: 1\n  " + refused), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("no such case visible to institution 'north'"), std::string::npos)
+      << status.out;
+  // Later syncs neither retry it nor stop on it.
+  const ProcessResult again = Station(
+      {"sync", "--server", address_, "--token", station_token_, "--data-dir", data.string()});
+  EXPECT_NE(again.out.find("uploaded 0 session(s), 0 refused, 0 pending"), std::string::npos)
+      << again.out;
+}
+
 }  // namespace
 }  // namespace ves::station::testing

@@ -173,6 +173,15 @@ class StationUi : public StationFixture {
     }
     return shot;
   }
+  // Polls the station's stdout until `text` appears (true) or 60 s pass.
+  bool WaitForOutput(const fs::path& stdout_file, const std::string& text) {
+    for (int i = 0; i < 600; ++i) {
+      if (ReadFile(stdout_file).find(text) != std::string::npos) return true;
+      if (!station_->Running()) return ReadFile(stdout_file).find(text) != std::string::npos;
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+    return false;
+  }
   // Waits (up to a minute on a loaded machine) until the training screen is
   // up: the window covers the screen with its background at the corners and
   // the endoscope image is drawn (not the black "starting" area).
@@ -375,8 +384,10 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   EXPECT_GT(ChangedShare(before, after, case_name), kTextChanged);
   EXPECT_LT(ChangedShare(before, after, layout_.fluoroscopy), kUnchanged);
   Keys({"r"});
-  // The new run brings up its window again; give it time, then quit it.
-  std::this_thread::sleep_for(kSettle);
+  // The new run brings up its window again: wait for it (not a fixed time;
+  // this test once failed under a full `ctest -j2`), then quit it.
+  ASSERT_TRUE(WaitForOutput(dir_ / "interactive.out", "switched to case paper-sigmoid"))
+      << ReadFile(dir_ / "interactive.out") << ReadFile(dir_ / "interactive.err");
   std::this_thread::sleep_for(kSettle);
   ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
   Keys({"q"});

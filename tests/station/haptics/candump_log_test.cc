@@ -91,5 +91,17 @@ TEST(CanFrameRecorder, CountsFramesThatDoNotFitInsteadOfBlocking) {
   std::filesystem::remove(path);
 }
 
+// Found by fuzzing (tests/fuzz/regressions/can_frame): lines whose frame or
+// time cannot be written back the same way are not candump lines.
+TEST(CandumpLog, LinesThatCannotBeWrittenBackAreRefused) {
+  EXPECT_FALSE(ParseCandumpLine("(1700002000000000.250000) vcan0 710#05"));  // year 53 million
+  EXPECT_FALSE(ParseCandumpLine("(1700000000.25) vcan0 710#05"));            // not six digits
+  EXPECT_FALSE(ParseCandumpLine("(1700000000.250000) vcan0 FFF#05"));        // 12-bit "standard" id
+  EXPECT_FALSE(ParseCandumpLine("(1700000000.250000) vcan0 C0000001#05"));   // EFF/RTR bits as id
+  const auto ok = ParseCandumpLine("(1700000000.250000) vcan0 7FF#05");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->frame.can_id, 0x7FFu);
+}
+
 }  // namespace
 }  // namespace ves::haptics

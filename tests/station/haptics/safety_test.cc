@@ -4,6 +4,7 @@
 // under 100 ms) clears by itself and fades the output back in. Stalls of the
 // station (its loop, or the whole process) are not silence of the device.
 #include <gtest/gtest.h>
+#include <sys/socket.h>
 
 #include <cmath>
 #include <limits>
@@ -304,6 +305,26 @@ TEST(Safety, BusOffErrorFrameGivesZeroOutputInTheSamePeriod) {
   EXPECT_TRUE(IsZeroOutput(rig, at_fault));
   ExpectEmcyAtDevice(rig, EmcyCode::kCanBusOff);
   ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kBusOff);
+}
+
+// Issue #20: no test tripped the safe state when the CAN transport itself
+// fails. The device's end of the bus goes away (a USB adapter unplugged, the
+// socket shut): the next read sees the link down and the output is zero in
+// that period, until an explicit re-arm once the link is back.
+TEST(Safety, TheTransportFailingGivesZeroOutputInTheSamePeriod) {
+  SimulatedRig rig(HoldingHand(ControlMode::kFree));
+  ASSERT_TRUE(rig.BringUp());
+  for (int i = 0; i < 20; ++i) ASSERT_EQ(rig.Step().fault, SafetyFault::kNone);
+  ASSERT_EQ(::shutdown(rig.device().bus_fd(), SHUT_RDWR), 0);
+  CycleOutput at_fault;
+  EXPECT_EQ(StepsUntilFault(rig, 10, &at_fault), 1);
+  EXPECT_EQ(at_fault.fault, SafetyFault::kLinkDown);
+  EXPECT_TRUE(IsZeroOutput(rig, at_fault));
+  for (int i = 0; i < kPeriodsAfterFaultCleared; ++i) {
+    const CycleOutput& output = rig.Step();
+    ASSERT_NE(output.fault, SafetyFault::kNone) << "left the safe state after " << i;
+    ASSERT_TRUE(IsZeroOutput(rig, output));
+  }
 }
 
 TEST(Safety, ErrorPassiveErrorFrameGivesZeroOutputInTheSamePeriod) {

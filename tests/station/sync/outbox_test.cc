@@ -5,8 +5,11 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 namespace ves::sync {
 namespace {
@@ -17,6 +20,13 @@ std::filesystem::path FreshDir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+std::string ReadLog(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 ves::v1::SessionRecord MakeRecord(const std::string& uuid, double score) {
@@ -65,6 +75,46 @@ TEST(Outbox, RejectedRecordLeavesPendingButIsKept) {
   outbox.MarkRejected("a", "metrics.pain_s is NaN");
   EXPECT_EQ(outbox.PendingCount(), 0u);
   EXPECT_TRUE(outbox.Find("a").has_value());
+  ASSERT_EQ(outbox.SetAside().size(), 1u);  // what `ves-station status` lists
+  EXPECT_EQ(outbox.SetAside()[0].reason, "metrics.pain_s is NaN");
+}
+
+// Issue #20: a record with a station id that is not UTF-8 was committed, could
+// not be read back, and every later run, status and sync failed on it.
+TEST(Outbox, ARecordThatWouldNotReadBackIsRefusedAtCommit) {
+  Outbox outbox(FreshDir("notutf8") / "outbox.db");
+  auto record = MakeRecord("a", 50);
+  record.set_station_id("st\xff\xfe");
+  EXPECT_THROW(outbox.Commit(record), std::invalid_argument);
+  EXPECT_EQ(outbox.PendingCount(), 0u);
+}
+
+// One stored just so (an outbox written before that check, or a damaged
+// row) is set aside, with its reason, and the others go on.
+TEST(Outbox, AnUnreadableStoredRecordIsSetAsideAndBlocksNothing) {
+  const auto path = FreshDir("unreadable") / "outbox.db";
+  {
+    Outbox outbox(path);
+    outbox.Commit(MakeRecord("a", 50));
+    outbox.Commit(MakeRecord("b", 60));
+    outbox.Commit(MakeRecord("c", 70));
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "UPDATE outbox SET record = x'0aff' WHERE uuid = 'b'", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  Outbox outbox(path);
+  const auto pending = outbox.Pending();
+  ASSERT_EQ(pending.size(), 2u);
+  EXPECT_EQ(pending[0].uuid, "a");
+  EXPECT_EQ(pending[1].uuid, "c");
+  const auto aside = outbox.SetAside();
+  ASSERT_EQ(aside.size(), 1u);
+  EXPECT_EQ(aside[0].uuid, "b");
+  EXPECT_NE(aside[0].reason.find("does not parse"), std::string::npos) << aside[0].reason;
+  EXPECT_EQ(outbox.PendingCount(), 2u);
 }
 
 TEST(Outbox, FailuresAreCountedWithTheirError) {
@@ -113,6 +163,41 @@ TEST(Outbox, CommitSurvivesSigkillOfTheStation) {
   ASSERT_TRUE(WIFSIGNALED(status));
   Outbox reopened(path);
   EXPECT_EQ(reopened.PendingCount(), 20u);
+}
+
+// SIGKILL (above) only shows the write reached the OS. Power loss needs it
+// on disk: between "commit begins" and "commit returned" the WAL holding the
+// commit is synced, and the folder holding the files' names was synced after
+// the WAL came to be. Observed with an LD_PRELOAD spy on fsync/fdatasync; with
+// synchronous=NORMAL the first would fail.
+TEST(Outbox, ACommitIsOnDiskFileAndFolderBeforeItReturns) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "a sanitizer runtime must come first: no LD_PRELOAD spy";
+#endif
+  const auto dir = std::filesystem::canonical(FreshDir("fsync"));
+  const auto db = dir / "outbox.db";
+  const auto log = dir / "spy.log";
+  const std::string command = "VES_FSYNC_SPY_LOG='" + log.string() + "' LD_PRELOAD='" +
+                              VES_FSYNC_SPY_PATH + "' '" + VES_OUTBOX_COMMIT_PROBE_PATH +
+                              "' '" + db.string() + "' '" + log.string() + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  std::ifstream in(log);
+  bool in_commit = false, done = false, wal_seen = false;
+  bool wal_synced_in_commit = false, folder_synced_after_wal = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line == "commit begins") in_commit = true;
+    if (line == "commit returned") done = true;
+    if (done) break;
+    const std::string path = line.substr(line.find(' ') + 1);
+    if (path == db.string() + "-wal") {
+      wal_seen = true;
+      if (in_commit) wal_synced_in_commit = true;
+    }
+    if (path == dir.string() && wal_seen) folder_synced_after_wal = true;
+  }
+  EXPECT_TRUE(done) << ReadLog(log);
+  EXPECT_TRUE(wal_synced_in_commit) << ReadLog(log);  // synchronous=FULL, not NORMAL
+  EXPECT_TRUE(folder_synced_after_wal) << ReadLog(log);
 }
 
 TEST(Outbox, UnopenablePathGivesAnErrorNamingIt) {

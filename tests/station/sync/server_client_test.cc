@@ -42,8 +42,21 @@ TEST(MakeChannel, MissingCaFileIsAClearError) {
   try {
     MakeChannel(endpoint);
     FAIL();
-  } catch (const std::runtime_error& error) {
-    EXPECT_NE(std::string(error.what()).find("/nonexistent/ca.pem"), std::string::npos);
+  } catch (const std::invalid_argument& error) {
+    EXPECT_EQ(std::string(error.what()),
+              "--tls-ca /nonexistent/ca.pem: cannot read the file (or it is empty)");
+  }
+}
+
+// The server's own rule for plaintext, on the station's side (issue #20).
+TEST(MakeChannel, PlaintextOffLoopbackIsRefusedBeforeAnyConnection) {
+  for (const char* address : {"ves.example.org:50051", "10.0.0.7:50051", "0.0.0.0:50051"}) {
+    ServerEndpoint endpoint{address, "token", "", {}};
+    EXPECT_THROW(CheckEndpoint(endpoint), std::invalid_argument) << address;
+    EXPECT_THROW(MakeChannel(endpoint), std::invalid_argument) << address;
+  }
+  for (const char* address : {"127.0.0.1:50051", "localhost:1", "[::1]:50051"}) {
+    EXPECT_NO_THROW(CheckEndpoint(ServerEndpoint{address, "token", "", {}})) << address;
   }
 }
 

@@ -8,9 +8,12 @@
 #include "patient_db/case_format.h"
 #include "station/training/case_model.h"
 #include "station/training/case_run.h"
+#include "station/training/input_log.h"
 
 namespace ves::training {
 namespace {
+
+using ::testing::PrintToString;
 
 bool HasCheck(const GateResult& g, const std::string& text) {
   for (const auto& c : g.checks) {
@@ -162,10 +165,71 @@ TEST_F(LessonJudge, TheLessonsCaseAndLimitsAreNotTheRecordsToChoose) {
 
 TEST_F(LessonJudge, ALogThatCannotBeReplayedFails) {
   v1::SessionRecord r = Record();
-  r.mutable_input_log()->set_encoded("garbage");
-  const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  r.mutable_input_log()->set_encoded("garbage");  // not even a header: refused unread
+  GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
   EXPECT_FALSE(g.passed);
-  EXPECT_TRUE(HasCheck(g, "replay:")) << ::testing::PrintToString(g.checks);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_TRUE(HasCheck(g, "rejected: input log: truncated header")) << PrintToString(g.checks);
+  r = Record();
+  std::string encoded = r.input_log().encoded();
+  encoded[encoded.size() / 2] ^= 0x20;  // a header that fits, data that does not
+  r.mutable_input_log()->set_encoded(encoded);
+  g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "replay: input log:")) << PrintToString(g.checks);
+}
+
+// The input log's header says how many samples follow. More than the lesson's
+// time limit allows is refused from the header alone: a 177 KB record claiming
+// 20 million samples once took the server to 2.8 GB while it decoded them.
+TEST_F(LessonJudge, ALogClaimingMoreSamplesThanTheTimeLimitAllowsIsRejectedUndecoded) {
+  v1::SessionRecord r = Record();
+  const std::vector<InputSample> idle(20000);  // 20 s of nothing on a 5 s lesson
+  std::vector<InputSample> ticked(idle);
+  for (std::size_t i = 0; i < ticked.size(); ++i) ticked[i].tick = i;
+  *r.mutable_input_log() = MakeInputLog(ticked, r.input_log().dt_s());
+  GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_TRUE(HasCheck(g, "rejected: the input log claims 20000 samples, more than the 5001 of "
+                          "a 5 s lesson")) << PrintToString(g.checks);
+  // The header's count alone decides: 20 million claimed in front of a short log.
+  std::string encoded = Record().input_log().encoded();
+  const std::uint64_t claimed = 20'000'000;
+  for (int i = 0; i < 8; ++i) encoded[4 + i] = static_cast<char>((claimed >> (8 * i)) & 0xff);
+  r.mutable_input_log()->set_encoded(encoded);
+  g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_TRUE(HasCheck(g, "claims 20000000 samples")) << PrintToString(g.checks);
+}
+
+TEST_F(LessonJudge, ARecordOverTheMemoryOrCpuBudgetIsRejected) {
+  const v1::SessionRecord r = Record();
+  const std::uint64_t samples = PeekInputSampleCount(r.input_log().encoded());
+  ASSERT_GT(samples, 4000u);
+  JudgeBudget small_memory;
+  small_memory.memory_bytes = 1000 * kJudgedBytesPerSample;
+  GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r, nullptr, small_memory);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "over the memory budget of")) << PrintToString(g.checks);
+  JudgeBudget no_cpu;
+  no_cpu.cpu_base_s = 0.0;
+  no_cpu.cpu_per_limit_s = 0.0;
+  g = JudgeLessonSession(LessonFor(r), *colon_case_, r, nullptr, no_cpu);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "CPU budget after 256 steps")) << PrintToString(g.checks);
+  // Within the default budgets the same record is judged as always.
+  EXPECT_FALSE(JudgeLessonSession(LessonFor(r), *colon_case_, r).rejected);
+}
+
+TEST_F(LessonJudge, AStepTheStationNeverUsesIsRejected) {
+  v1::SessionRecord r = Record();
+  r.mutable_input_log()->set_dt_s(1e-6);  // a million steps a second of lesson
+  const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_TRUE(g.rejected);
+  EXPECT_TRUE(HasCheck(g, "input_log.dt_s 1e-06 is outside")) << PrintToString(g.checks);
 }
 
 }  // namespace
