@@ -709,7 +709,8 @@ int RunSyncCommand(const CommandArgs& args) {
     if (attempts < 1 || attempts > 20) {
       throw UsageError("--attempts " + std::to_string(attempts) + " must be in [1, 20]");
     }
-    sync::CheckEndpoint(endpoint);
+    // Queuing only talks to no server: there is no endpoint to check.
+    if (!queue_only) sync::CheckEndpoint(endpoint);
   } catch (const std::exception& e) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;

@@ -95,9 +95,10 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   ves::v1::SessionRecord record = MakeRecord(uuid, "alice", 7);
   record.mutable_metrics()->set_max_tip_arc_m(1.23456);
   *record.mutable_replay_setup()->mutable_colon_case() = SampleCase();
-  ASSERT_TRUE(UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")),
-                            record, &r)
-                  .ok());
+  record.mutable_replay_setup()->set_time_limit_s(record.metrics().duration_s() + 60.0);
+  const grpc::Status uploaded =
+      UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")), record, &r);
+  ASSERT_TRUE(uploaded.ok()) << uploaded.error_message();
   AdminRun scores = Admin(dir, "scores --trainee alice" + remote);
   ASSERT_EQ(scores.exit_status, 0) << scores.err;
   EXPECT_EQ(Lines(scores.out), 2);  // header and one session
