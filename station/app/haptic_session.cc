@@ -59,8 +59,8 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
                                                      insertion_offset_m_,
                                                      runner_->state().inserted_m);
   sample.roll_rad = roll_rad + roll_offset_rad_;
-  sample.knob_up_down_rad = controls.knob_up_down_rad;
-  sample.knob_left_right_rad = controls.knob_left_right_rad;
+  sample.knob_up_rad = controls.knob_up_rad;
+  sample.knob_right_rad = controls.knob_right_rad;
   sample.view_mode = controls.view_mode;
   sample.fluoroscopy_on = controls.fluoroscopy_on;
   runner_->Step(sample);  // quantizes to the log's resolution first; cannot throw on finite input
@@ -74,7 +74,7 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   // the model's roll reaction is + when it resists +roll.
   const training::InputSample& logged = runner_->session().inputs().back();
   response.thrust_force_N = -logged.push_force_N;
-  response.roll_torque_Nm = -runner_->output().roll_torque_N_m;
+  response.roll_torque_Nm = -runner_->output().roll_torque_Nm;
   if (after_step_) after_step_(*runner_);
   return response;
 }

@@ -35,8 +35,8 @@ namespace ves::station {
 // copyable): what the hands do at the scope's control section, not at the
 // device.
 struct ModelControls {
-  double knob_up_down_rad{0.0};
-  double knob_left_right_rad{0.0};
+  double knob_up_rad{0.0};
+  double knob_right_rad{0.0};
   training::ViewMode view_mode{training::ViewMode::kTextured};
   bool fluoroscopy_on{false};
 };

@@ -37,8 +37,8 @@ void WriteCsvRow(std::ostream& out, const training::InputSample& in,
                 "%.3f,%.6f,%.6f,%.4f,%.4f,%.6f,%.6f,%d,%.6f,%.4f,%.6f,%.6f,%.6f,%d,%d\n", o.t_s,
                 o.inserted_m, o.tip_arc_m, o.base_force_N, o.max_wall_force_N, o.peak_stretch_m,
                 runner.session().accumulator().loop_index_m(), static_cast<int>(in.thrust_mode),
-                in.insertion_m, in.push_force_N, in.roll_rad, in.knob_up_down_rad,
-                in.knob_left_right_rad, static_cast<int>(in.view_mode), in.fluoroscopy_on ? 1 : 0);
+                in.insertion_m, in.push_force_N, in.roll_rad, in.knob_up_rad,
+                in.knob_right_rad, static_cast<int>(in.view_mode), in.fluoroscopy_on ? 1 : 0);
   out << row;
 }
 

@@ -357,7 +357,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
           o.lesson_plan ? ApplyLessonAids(o.lesson_plan->lesson.aids(), scripted->Act(perception))
                         : scripted->Act(perception);
       rig.device().set_hand(HandForSample(act, source.insertion_offset_m()));
-      controls.Store(ModelControls{act.knob_up_down_rad, act.knob_left_right_rad, act.view_mode,
+      controls.Store(ModelControls{act.knob_up_rad, act.knob_right_rad, act.view_mode,
                                    act.fluoroscopy_on});
       rig.Step();
       if (runner.diverged()) break;

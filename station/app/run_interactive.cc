@@ -480,7 +480,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       loop->Repeat(snapshot.fault);
     }
     hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
-    loop->SetControls(ModelControls{controls.knob_up_down_rad, controls.knob_left_right_rad,
+    loop->SetControls(ModelControls{controls.knob_up_rad, controls.knob_right_rad,
                                     controls.view_mode, controls.fluoroscopy_visible});
   }
   return {};

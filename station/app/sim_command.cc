@@ -181,7 +181,7 @@ model::StepInput InputAt(const SimOptions& o, double t_s) {
 void WriteRow(std::ostream& out, const model::ModelState& s, const model::StepOutput& o) {
   char row[256];
   std::snprintf(row, sizeof(row), "%.3f,%.6f,%.6f,%.5f,%.6f,%.6f,%.5f,%.5f\n", s.time_s,
-                o.inserted_m, o.tip_arc_m, o.base_force_N, o.roll_torque_N_m, o.peak_stretch_m,
+                o.inserted_m, o.tip_arc_m, o.base_force_N, o.roll_torque_Nm, o.peak_stretch_m,
                 o.peak_stretch_arc_m, o.peak_wall_force_N);
   out << row;
 }

@@ -38,7 +38,7 @@ BaseResponse ModelBaseResponse::Update(double insertion_m, double roll_rad, doub
   // On the scope along +insertion: the coupling pulls the device back by F_c.
   // The model's roll reaction is + when it resists +roll.
   response.thrust_force_N = -coupling_force_N;
-  response.roll_torque_Nm = -output_.roll_torque_N_m;
+  response.roll_torque_Nm = -output_.roll_torque_Nm;
   return response;
 }
 

@@ -148,7 +148,7 @@ struct Contact {
 
 struct StepOutput {
   double base_force_N{0.0};      // thrust reaction along the entry axis: + resists insertion
-  double roll_torque_N_m{0.0};   // reaction about the entry axis
+  double roll_torque_Nm{0.0};   // reaction about the entry axis
   Eigen::Isometry3d X_WTip{Eigen::Isometry3d::Identity()};
   double tip_arc_m{0.0};
   double inserted_m{0.0};

@@ -161,7 +161,7 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   // thrust and turns with the roll, so the hand holds e . sum F and the moment
   // about the entry axis (forces at the start of the step).
   out->base_force_N = -e.dot(force_sum_N);
-  out->roll_torque_N_m = -e.dot(moment_sum_N_m);
+  out->roll_torque_Nm = -e.dot(moment_sum_N_m);
   // Base to tip: joint increments and body displacements of the linearised
   // step with its force terms (u, bA and the hand's push) scaled by `scale`;
   // the prescribed roll (and thrust in kPosition) is never scaled. The lambda

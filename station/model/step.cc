@@ -32,7 +32,7 @@ void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelS
 // finite if any offset is not (the output loop computes the norms anyway).
 bool AllFinite(const ModelState& s, const StepOutput& out, double stretch_sum_m, bool axial) {
   if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
-      !std::isfinite(out.roll_torque_N_m) || !s.X_WTip.matrix().allFinite()) {
+      !std::isfinite(out.roll_torque_Nm) || !s.X_WTip.matrix().allFinite()) {
     return false;
   }
   for (const Eigen::Vector2d& q : s.bend_rad) {

@@ -34,8 +34,8 @@ std::array<std::int64_t, kColumns> ToColumns(const InputSample& s) {
           ToUnits(s.insertion_m, kLogLengthResolution_m, "insertion_m"),
           ToUnits(s.push_force_N, kLogForceResolution_N, "push_force_N"),
           ToUnits(s.roll_rad, kLogAngleResolution_rad, "roll_rad"),
-          ToUnits(s.knob_up_down_rad, kLogAngleResolution_rad, "knob_up_down_rad"),
-          ToUnits(s.knob_left_right_rad, kLogAngleResolution_rad, "knob_left_right_rad"),
+          ToUnits(s.knob_up_rad, kLogAngleResolution_rad, "knob_up_rad"),
+          ToUnits(s.knob_right_rad, kLogAngleResolution_rad, "knob_right_rad"),
           static_cast<std::int64_t>(s.view_mode),
           s.fluoroscopy_on ? 1 : 0};
 }
@@ -55,8 +55,8 @@ void SetColumn(InputSample* s, int c, std::int64_t v) {
     case 2: s->insertion_m = static_cast<double>(v) * kLogLengthResolution_m; return;
     case 3: s->push_force_N = static_cast<double>(v) * kLogForceResolution_N; return;
     case 4: s->roll_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
-    case 5: s->knob_up_down_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
-    case 6: s->knob_left_right_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
+    case 5: s->knob_up_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
+    case 6: s->knob_right_rad = static_cast<double>(v) * kLogAngleResolution_rad; return;
     case 7:
       if (v < 0 || v > 2) throw InputLogError("input log: bad view mode " + std::to_string(v));
       s->view_mode = static_cast<ViewMode>(v);

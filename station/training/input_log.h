@@ -25,8 +25,8 @@ struct InputSample {
   double insertion_m{0.0};   // used in kPosition
   double push_force_N{0.0};  // used in kForce
   double roll_rad{0.0};
-  double knob_up_down_rad{0.0};
-  double knob_left_right_rad{0.0};
+  double knob_up_rad{0.0};     // as model::StepInput: + up, - down
+  double knob_right_rad{0.0};  // + right, - left
   ViewMode view_mode{ViewMode::kTextured};
   bool fluoroscopy_on{false};
 

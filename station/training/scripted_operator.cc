@@ -100,8 +100,8 @@ InputSample ExpertOperator::Act(const Perception& p) {
     if (p.t_s < torque_until_s_) roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
   }
   in.roll_rad = roll_rad_;
-  in.knob_up_down_rad = knob_up_rad_;
-  in.knob_left_right_rad = knob_right_rad_;
+  in.knob_up_rad = knob_up_rad_;
+  in.knob_right_rad = knob_right_rad_;
   return in;
 }
 

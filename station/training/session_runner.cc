@@ -12,8 +12,8 @@ model::StepInput ToStepInput(const InputSample& in) {
   s.insertion_m = in.insertion_m;
   s.push_force_N = in.push_force_N;
   s.roll_rad = in.roll_rad;
-  s.knob_up_rad = in.knob_up_down_rad;
-  s.knob_right_rad = in.knob_left_right_rad;
+  s.knob_up_rad = in.knob_up_rad;
+  s.knob_right_rad = in.knob_right_rad;
   return s;
 }
 

@@ -32,22 +32,22 @@ bool ApplyKey(int key, const KeyboardHand& hand, ControlState* state) {
       state->hand_roll_rad += hand.roll_step_rad;
       return true;
     case 'i':
-      state->knob_up_down_rad = Clamp(state->knob_up_down_rad + hand.knob_step_rad, hand.max_knob_rad);
+      state->knob_up_rad = Clamp(state->knob_up_rad + hand.knob_step_rad, hand.max_knob_rad);
       return true;
     case 'k':
-      state->knob_up_down_rad = Clamp(state->knob_up_down_rad - hand.knob_step_rad, hand.max_knob_rad);
+      state->knob_up_rad = Clamp(state->knob_up_rad - hand.knob_step_rad, hand.max_knob_rad);
       return true;
     case 'j':
-      state->knob_left_right_rad =
-          Clamp(state->knob_left_right_rad - hand.knob_step_rad, hand.max_knob_rad);
+      state->knob_right_rad =
+          Clamp(state->knob_right_rad - hand.knob_step_rad, hand.max_knob_rad);
       return true;
     case 'l':
-      state->knob_left_right_rad =
-          Clamp(state->knob_left_right_rad + hand.knob_step_rad, hand.max_knob_rad);
+      state->knob_right_rad =
+          Clamp(state->knob_right_rad + hand.knob_step_rad, hand.max_knob_rad);
       return true;
     case 'c':
-      state->knob_up_down_rad = 0.0;
-      state->knob_left_right_rad = 0.0;
+      state->knob_up_rad = 0.0;
+      state->knob_right_rad = 0.0;
       return true;
     case '1': state->view_mode = ViewMode::kWireframe; return true;
     case '2': state->view_mode = ViewMode::kFlat; return true;

@@ -29,8 +29,8 @@ struct ControlState {
   // Simulated hand and the angulation knobs.
   double hand_insertion_m{0.0};
   double hand_roll_rad{0.0};
-  double knob_up_down_rad{0.0};
-  double knob_left_right_rad{0.0};
+  double knob_up_rad{0.0};
+  double knob_right_rad{0.0};
   bool operator==(const ControlState&) const = default;
 };
 

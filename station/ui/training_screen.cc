@@ -277,8 +277,8 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       Format("Inserted    %.2f m", model.inserted_m),
       Format("Tip depth   %.2f m", model.tip_arc_m) +
           (model.tip_region.empty() ? "" : "  " + model.tip_region),
-      Format("Knobs  U/D %+.0f  L/R %+.0f deg", Shown(controls.knob_up_down_rad * kDegPerRad, 1.0),
-             Shown(controls.knob_left_right_rad * kDegPerRad, 1.0)),
+      Format("Knobs  U/D %+.0f  L/R %+.0f deg", Shown(controls.knob_up_rad * kDegPerRad, 1.0),
+             Shown(controls.knob_right_rad * kDegPerRad, 1.0)),
       Format("Roll   %+.0f deg", Shown(model.roll_rad * kDegPerRad, 1.0)),
   };
   const std::string right[] = {

@@ -72,12 +72,12 @@ TEST_F(SessionModelSourceTest, LogsTheCouplingForceItPushedTheModelWithAndRender
   EXPECT_NEAR(logged.push_force_N, 3.0, kLogForceTolerance_N);
   EXPECT_NEAR(logged.insertion_m, model_start_m + 0.01, kLogLengthTolerance_m);
   EXPECT_NEAR(logged.roll_rad, model_roll_rad + 0.1, kLogAngleTolerance_rad);
-  EXPECT_NEAR(logged.knob_up_down_rad, 0.3, kLogAngleTolerance_rad);
-  EXPECT_NEAR(logged.knob_left_right_rad, -0.2, kLogAngleTolerance_rad);
+  EXPECT_NEAR(logged.knob_up_rad, 0.3, kLogAngleTolerance_rad);
+  EXPECT_NEAR(logged.knob_right_rad, -0.2, kLogAngleTolerance_rad);
   EXPECT_EQ(logged.view_mode, training::ViewMode::kWireframe);
   EXPECT_TRUE(logged.fluoroscopy_on);
   EXPECT_EQ(response.thrust_force_N, -logged.push_force_N);
-  EXPECT_EQ(response.roll_torque_Nm, -runner_.output().roll_torque_N_m);
+  EXPECT_EQ(response.roll_torque_Nm, -runner_.output().roll_torque_Nm);
   EXPECT_NEAR(source_.encoder_travel_m(), 0.0, 1e-12);  // one reading: no travel yet
 }
 

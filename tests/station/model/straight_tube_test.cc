@@ -37,7 +37,7 @@ TEST(StraightTube, ZeroReactionAtAnyInsertionSpeed) {
       in.insertion_m = speed_m_per_s * (sim.state.time_s + sim.params.dt_s);
       sim.StepOnce(in);
       peak_force_N = std::max(peak_force_N, std::abs(sim.out.base_force_N));
-      peak_torque_N_m = std::max(peak_torque_N_m, std::abs(sim.out.roll_torque_N_m));
+      peak_torque_N_m = std::max(peak_torque_N_m, std::abs(sim.out.roll_torque_Nm));
       EXPECT_EQ(sim.out.contact_count, 0);
     }
     EXPECT_LT(peak_force_N, kZeroForce_N) << "speed " << speed_m_per_s;

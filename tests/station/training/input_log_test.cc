@@ -28,8 +28,8 @@ std::vector<InputSample> HumanLikeSamples(std::size_t count, std::uint32_t seed)
     roll_rad += drift(rng);
     s.roll_rad = roll_rad;
     if (i % 500 == 0) knob_rad = std::uniform_real_distribution<double>(-1.0, 1.0)(rng);
-    s.knob_up_down_rad = knob_rad;
-    s.knob_left_right_rad = -0.5 * knob_rad;
+    s.knob_up_rad = knob_rad;
+    s.knob_right_rad = -0.5 * knob_rad;
     s.view_mode = (i / 100000) % 2 == 0 ? ViewMode::kTextured : ViewMode::kWireframe;
     s.fluoroscopy_on = (i / 20000) % 2 == 1;
   }

@@ -40,12 +40,12 @@ TEST(ApplyKey, KnobsMoveAndClampAndCenter) {
   hand.max_knob_rad = 0.1;
   ApplyKey('i', hand, &state);
   ApplyKey('i', hand, &state);
-  EXPECT_NEAR(state.knob_up_down_rad, 0.1, kTolerance);
+  EXPECT_NEAR(state.knob_up_rad, 0.1, kTolerance);
   ApplyKey('j', hand, &state);
-  EXPECT_NEAR(state.knob_left_right_rad, -hand.knob_step_rad, kTolerance);
+  EXPECT_NEAR(state.knob_right_rad, -hand.knob_step_rad, kTolerance);
   ApplyKey('c', hand, &state);
-  EXPECT_EQ(state.knob_up_down_rad, 0.0);
-  EXPECT_EQ(state.knob_left_right_rad, 0.0);
+  EXPECT_EQ(state.knob_up_rad, 0.0);
+  EXPECT_EQ(state.knob_right_rad, 0.0);
 }
 
 TEST(ApplyKey, ViewModeFluoroscopyDamageRepeatAndQuit) {
