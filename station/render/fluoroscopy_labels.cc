@@ -86,7 +86,11 @@ void DrawFluoroscopyLabels(const FluoroscopyLabels& labels, cv::Mat* bgr) {
   int baseline = 0;
   const cv::Size letter =
       cv::getTextSize("R", cv::FONT_HERSHEY_SIMPLEX, scale, 2, &baseline);
-  PutOutlined(bgr, labels.view, {margin, margin + letter.height}, scale);
+  // The view's name top right: a screen's caption goes top left.
+  const cv::Size view_size =
+      cv::getTextSize(labels.view, cv::FONT_HERSHEY_SIMPLEX, scale, 2, &baseline);
+  PutOutlined(bgr, labels.view, {bgr->cols - margin - view_size.width, margin + letter.height},
+              scale);
   const int mid_y = bgr->rows / 2 + letter.height / 2;
   PutOutlined(bgr, labels.left_edge, {margin, mid_y}, scale);
   PutOutlined(bgr, labels.right_edge, {bgr->cols - margin - letter.width, mid_y}, scale);

@@ -241,11 +241,14 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
                    model.fluoroscopy_allowed ? "X-ray off (f)" : "X-ray not allowed in this lesson",
                    layout.fluoroscopy, 0.9 * s, kDim, true);
   }
+  // The image names its view and tilt top right (render::DrawFluoroscopyLabels);
+  // the caption keeps to the left half so the two never overlap.
   PutCaption(canvas,
-             Format("Fluoroscopy - C-arm %+.0f deg, tilt %+.0f deg, zoom %.1fx",
-                    Shown(controls.fluoro_yaw_rad * kDegPerRad, 1.0),
-                    Shown(controls.fluoro_pitch_rad * kDegPerRad, 1.0), controls.fluoro_zoom),
-             layout.fluoroscopy, s);
+             Format("Fluoroscopy  C-arm %+.0f, zoom %.1fx",
+                    Shown(controls.fluoro_yaw_rad * kDegPerRad, 1.0), controls.fluoro_zoom),
+             cv::Rect(layout.fluoroscopy.x, layout.fluoroscopy.y, layout.fluoroscopy.width / 2,
+                      layout.fluoroscopy.height),
+             s);
   cv::rectangle(canvas, layout.endoscope, kFrame, std::max(1, px(2)));
   cv::rectangle(canvas, layout.fluoroscopy, kFrame, std::max(1, px(2)));
 

@@ -75,7 +75,8 @@ TEST(FluoroscopyLabels, DrawnAtTheCornersAndEdgesOnly) {
     cv::cvtColor(image(r), grey, cv::COLOR_BGR2GRAY);
     return cv::countNonZero(grey != 128);
   };
-  EXPECT_GT(changed({0, 0, 120, 60}), 50);                    // view name, top left
+  EXPECT_GT(changed({520, 0, 120, 60}), 50);                  // view name, top right
+  EXPECT_EQ(changed({0, 0, 400, 60}), 0);                     // top left: free for a caption
   EXPECT_GT(changed({0, 200, 60, 80}), 20);                   // R, left edge
   EXPECT_GT(changed({580, 200, 60, 80}), 20);                 // L, right edge
   EXPECT_GT(changed({0, 400, 160, 80}), 200);                 // scale bar
