@@ -19,7 +19,7 @@ build="${VES_BUILD_DIR:-$root/build-$sanitizer}"
 supp="$root/deploy/sanitizers"
 VES_BUILD_DIR="$build" "$root/deploy/build.sh" -DVES_SANITIZE="$sanitizer" -DVES_BUILD_BENCH=OFF
 
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=1:strict_string_checks=1"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:detect_stack_use_after_return=1:strict_string_checks=1:suppressions=$supp/asan.supp"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export TSAN_OPTIONS="suppressions=$supp/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
