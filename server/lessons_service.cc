@@ -8,6 +8,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "server/lesson_rules.h"
+#include "server/pipeline.h"
 #include "server/services.h"
 #include "station/training/case_run.h"
 
@@ -325,48 +326,54 @@ grpc::ServerUnaryReactor* LessonsService::GetNextLesson(
   return reactor;
 }
 
+Status GetProgressCall(const ServiceDeps& deps, const Principal& who,
+                       const ves::v1::GetProgressRequest& request,
+                       ves::v1::GetProgressResponse* response) {
+  const bool by_group = request.has_group();
+  const std::string institution =
+      request.institution().empty() ? who.institution : request.institution();
+  // Every reader of progress; a group's needs admin or supervisor (below).
+  static const CallSpec spec{"lesson.progress",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation,
+                              StoreRole::kTrainee},
+                             "read progress"};
+  return RunCall(
+      deps, who, spec,
+      by_group ? "group " + request.group() + "@" + institution : request.trainee_id(),
+      [&]() -> Status {
+        std::vector<std::string> trainees;
+        if (by_group) {
+          AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
+                                     "read a group's progress");
+          if (a.ok()) a = RequireInstitution(who, institution, "read the groups");
+          if (!a.ok()) return ToGrpcStatus(a);
+          auto members = deps.store->ListGroupTrainees(institution, request.group());
+          if (!members.ok()) return ToGrpcStatus(members.status);
+          if (members.value.empty()) {
+            return Status(StatusCode::NOT_FOUND, "group '" + request.group() +
+                                                     "' of institution '" + institution +
+                                                     "' has no trainees");
+          }
+          trainees = members.value;
+        } else {
+          patient_db::TraineeRow trainee;
+          Status s = LessonReader(deps, who, request.trainee_id(), "read progress", &trainee);
+          if (!s.ok()) return s;
+          trainees.push_back(trainee.trainee_id);
+        }
+        for (const std::string& id : trainees) {
+          Progress progress;
+          Status s = ProgressOf(deps, id, &progress, response->add_trainees());
+          if (!s.ok()) return s;
+        }
+        return Status::OK;
+      });
+}
+
 grpc::ServerUnaryReactor* LessonsService::GetProgress(grpc::CallbackServerContext* ctx,
                                                       const ves::v1::GetProgressRequest* request,
                                                       ves::v1::GetProgressResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const bool by_group = request->has_group();
-  const std::string institution =
-      request->institution().empty() ? who.institution : request->institution();
-  const Status status = [&]() -> Status {
-    std::vector<std::string> trainees;
-    if (by_group) {
-      AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
-                                 "read a group's progress");
-      if (a.ok()) a = RequireInstitution(who, institution, "read the groups");
-      if (!a.ok()) return ToGrpcStatus(a);
-      auto members = deps_.store->ListGroupTrainees(institution, request->group());
-      if (!members.ok()) return ToGrpcStatus(members.status);
-      if (members.value.empty()) {
-        return Status(StatusCode::NOT_FOUND, "group '" + request->group() +
-                                                 "' of institution '" + institution +
-                                                 "' has no trainees");
-      }
-      trainees = members.value;
-    } else {
-      patient_db::TraineeRow trainee;
-      Status s = LessonReader(deps_, who, request->trainee_id(), "read progress", &trainee);
-      if (!s.ok()) return s;
-      trainees.push_back(trainee.trainee_id);
-    }
-    for (const std::string& id : trainees) {
-      Progress progress;
-      Status s = ProgressOf(deps_, id, &progress, response->add_trainees());
-      if (!s.ok()) return s;
-    }
-    return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "lesson.progress",
-                by_group ? "group " + request->group() + "@" + institution
-                         : request->trainee_id(),
-                status);
-  return reactor;
+  return ServeUnary(ctx, deps_, request, response, &GetProgressCall);
 }
 
 grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
