@@ -142,7 +142,7 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
     const auto start = Clock::now();
     const HttpReply reply = api->Handle(ToRequest(req));
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
+    if (options.log_calls) spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
                  patient_db::PrintableExcerpt(std::string(req.target().substr(
                                                   0, req.target().find('?'))), 120),
                  reply.status, ms, peer);
