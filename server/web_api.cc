@@ -403,17 +403,18 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     // and session listings are read for the same page.
     json trainees = json::array();
     std::map<std::string, std::vector<std::string>> groups;
-    for (const auto& t : resp.trainees()) {
+    std::vector<std::string> ids;
+    for (const auto& t : resp.trainees()) ids.push_back(t.trainee_id());
+    auto activity = deps_.store->GetTraineeActivity(ids);
+    if (!activity.ok()) return ErrorOf(ToGrpcStatus(activity.status));
+    for (int i = 0; i < resp.trainees_size(); ++i) {
+      const auto& t = resp.trainees(i);
       json row = ProtoJson(t);
       auto group = deps_.store->GetTraineeGroup(t.trainee_id());
       row["group"] = group.ok() ? group.value : "";
       if (group.ok() && !group.value.empty()) groups[group.value].push_back(t.trainee_id());
-      auto sessions = deps_.store->ListSessions(t.trainee_id(), "");
-      if (!sessions.ok()) return ErrorOf(ToGrpcStatus(sessions.status));
-      int64_t last = 0;
-      for (const auto& r : sessions.value) last = std::max(last, r.end_unix_ms);
-      row["sessions"] = sessions.value.size();
-      row["last_activity_unix_ms"] = last;
+      row["sessions"] = activity.value[i].sessions;
+      row["last_activity_unix_ms"] = activity.value[i].last_end_unix_ms;
       trainees.push_back(std::move(row));
     }
     json group_list = json::array();
