@@ -578,6 +578,11 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
         return Status(StatusCode::FAILED_PRECONDITION,
                       "session " + req.uuid() + " cannot be replayed: " + e.what());
       }
+      if (!replay) {
+        return Status(StatusCode::RESOURCE_EXHAUSTED,
+                      std::to_string(kMaxConcurrentReplays) +
+                          " replays are running; ask again in a few seconds");
+      }
       return Status::OK;
     });
     if (!s.ok()) return ErrorOf(s);
@@ -643,8 +648,21 @@ std::shared_ptr<const SessionReplay> WebApi::CachedReplay(const std::string& uui
       }
     }
   }
-  auto replay = std::make_shared<const SessionReplay>(ReplaySession(record));
+  {
+    std::lock_guard lock(mutex_);
+    if (replays_running_ >= kMaxConcurrentReplays) return nullptr;
+    ++replays_running_;
+  }
+  std::shared_ptr<const SessionReplay> replay;
+  try {
+    replay = std::make_shared<const SessionReplay>(ReplaySession(record));
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    --replays_running_;
+    throw;
+  }
   std::lock_guard lock(mutex_);
+  --replays_running_;
   replays_.emplace_front(uuid, replay);
   if (replays_.size() > 8) replays_.pop_back();
   return replay;

@@ -23,6 +23,9 @@ inline constexpr size_t kMaxHttpHeaderBytes = 8 << 10;
 inline constexpr size_t kMaxHttpBodyBytes = 64 << 10;
 inline constexpr size_t kMaxHttpTargetBytes = 2048;
 inline constexpr size_t kMaxWebSessions = 10000;
+// Replays re-run the model (seconds of CPU each): at most this many at once,
+// more answer 429 rather than queue up on the connection threads.
+inline constexpr int kMaxConcurrentReplays = 2;
 
 struct HttpRequest {
   std::string method;         // "GET", "POST", ...
@@ -69,6 +72,7 @@ class WebApi {
   std::string AuthorizationOf(const HttpRequest& request, bool* csrf_ok, std::string* session_id);
   HttpReply Api(const HttpRequest& request, const std::string& path,
                 const std::map<std::string, std::string>& query);
+  // The replay (cached or computed); nullptr when kMaxConcurrentReplays run.
   std::shared_ptr<const SessionReplay> CachedReplay(const std::string& uuid,
                                                     const v1::SessionRecord& record);
 
@@ -78,6 +82,7 @@ class WebApi {
   std::map<std::string, WebSession> sessions_;  // by session id; guarded by mutex_
   // A few recent replays by uuid (a replay re-runs the model: seconds).
   std::list<std::pair<std::string, std::shared_ptr<const SessionReplay>>> replays_;
+  int replays_running_ = 0;  // guarded by mutex_
 };
 
 }  // namespace ves::server
