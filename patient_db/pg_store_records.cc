@@ -389,8 +389,7 @@ StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
     out.clear();
     for (const std::string& id : trainee_ids) {
       const auto r = tx.exec_params(
-          "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = $1",
-          id);
+          "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = $1", id);
       out.push_back({r[0][0].as<int64_t>(), r[0][1].as<int64_t>()});
     }
     return StoreStatus::Ok();

@@ -391,8 +391,7 @@ StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
-      "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = ?",
-      nullptr);
+      "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = ?", nullptr);
   if (!s) return Internal(r.db(), "trainee activity");
   std::vector<TraineeActivity> out;
   for (const std::string& id : trainee_ids) {

@@ -118,11 +118,11 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
     if (ec == http::error::header_limit || ec == http::error::body_limit ||
         ec == http::error::buffer_overflow) {
       const bool header = ec != http::error::body_limit;
-      const HttpReply reply = LimitReply(
-          header ? 431 : 413,
-          header ? "request header: over the limit of " + std::to_string(kMaxHttpHeaderBytes) +
-                       " bytes"
-                 : "body: over the limit of " + std::to_string(kMaxHttpBodyBytes) + " bytes");
+      const HttpReply reply =
+          LimitReply(header ? 431 : 413, header ? "request header: over the limit of " +
+                                                      std::to_string(kMaxHttpHeaderBytes) + " bytes"
+                                                : "body: over the limit of " +
+                                                      std::to_string(kMaxHttpBodyBytes) + " bytes");
       auto res = ToResponse(reply, 11, false, false, tls);
       http::write(stream, res, ec);
       return;
@@ -142,12 +142,13 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
     const auto start = Clock::now();
     const HttpReply reply = api->Handle(ToRequest(req));
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    if (options.log_calls) spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
-                 patient_db::PrintableExcerpt(std::string(req.target().substr(
-                                                  0, req.target().find('?'))), 120),
-                 reply.status, ms, peer);
-    auto res = ToResponse(reply, req.version(), req.keep_alive(),
-                          req.method() == http::verb::head, tls);
+    if (options.log_calls)
+      spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
+                   patient_db::PrintableExcerpt(
+                       std::string(req.target().substr(0, req.target().find('?'))), 120),
+                   reply.status, ms, peer);
+    auto res =
+        ToResponse(reply, req.version(), req.keep_alive(), req.method() == http::verb::head, tls);
     SetDeadline(impl, fd, timeout);
     http::write(stream, res, ec);
     if (ec || !res.keep_alive()) return;
@@ -177,9 +178,9 @@ void HttpServer::Start() {
       throw std::invalid_argument("HTTPS needs both --tls-cert and --tls-key");
     }
     impl_->ssl = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
-    impl_->ssl->set_options(asio::ssl::context::default_workarounds |
-                            asio::ssl::context::no_sslv2 | asio::ssl::context::no_sslv3 |
-                            asio::ssl::context::no_tlsv1 | asio::ssl::context::no_tlsv1_1);
+    impl_->ssl->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                            asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                            asio::ssl::context::no_tlsv1_1);
     beast::error_code ec;
     impl_->ssl->use_certificate_chain_file(options_.tls_cert_file, ec);
     if (!ec) impl_->ssl->use_private_key_file(options_.tls_key_file, asio::ssl::context::pem, ec);
@@ -206,7 +207,8 @@ void HttpServer::Start() {
   if (!ec) acceptor.bind(endpoint, ec);
   if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
   if (ec) {
-    throw std::runtime_error("cannot listen for HTTP on '" + options_.listen + "': " + ec.message());
+    throw std::runtime_error("cannot listen for HTTP on '" + options_.listen +
+                             "': " + ec.message());
   }
   port_ = acceptor.local_endpoint().port();
   impl_->reaper_thread = std::thread([impl = impl_.get()] {
@@ -244,8 +246,8 @@ void HttpServer::Start() {
         beast::error_code peer_ec;
         const auto remote = s.remote_endpoint(peer_ec);
         const std::string peer =
-            peer_ec ? std::string("?") : remote.address().to_string() + ":" +
-                                             std::to_string(remote.port());
+            peer_ec ? std::string("?")
+                    : remote.address().to_string() + ":" + std::to_string(remote.port());
         SetDeadline(impl, fd, std::chrono::seconds(options_.io_timeout_s));
         try {
           if (impl->ssl) {

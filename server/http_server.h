@@ -20,8 +20,8 @@ struct HttpOptions {
   std::string tls_cert_file;  // PEM; with tls_key_file: HTTPS
   std::string tls_key_file;
   int max_connections = 128;
-  int io_timeout_s = 30;      // a connection idle this long (or a slow request) is closed
-  bool log_calls = true;      // one spdlog line per request
+  int io_timeout_s = 30;  // a connection idle this long (or a slow request) is closed
+  bool log_calls = true;  // one spdlog line per request
 };
 
 class HttpServer {

@@ -1,13 +1,12 @@
 #pragma once
 
+#include <google/protobuf/message.h>
 #include <grpcpp/grpcpp.h>
 
 #include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <google/protobuf/message.h>
 
 #include "server/auth.h"
 #include "server/services.h"
@@ -23,13 +22,16 @@
 namespace ves::server {
 
 struct CallSpec {
-  const char* action;             // audit action, e.g. "trainee.list"
-  std::vector<StoreRole> roles;   // who may make the call at all
-  const char* what;               // names the call in a role refusal: "list trainees"
+  const char* action;            // audit action, e.g. "trainee.list"
+  std::vector<StoreRole> roles;  // who may make the call at all
+  const char* what;              // names the call in a role refusal: "list trainees"
   // false: only role refusals are audited (reading the audit log would
   // otherwise write to it on every page).
   bool audit_every_call = true;
 };
+
+// The "authorization" metadata of a gRPC call ("" when absent).
+std::string_view AuthorizationOf(grpc::CallbackServerContext* ctx);
 
 // Bounds first (INVALID_ARGUMENT naming the field; no store lookup), then the
 // principal from an "authorization" value ("Bearer <token>"; empty: missing).
@@ -45,10 +47,10 @@ grpc::Status RunCall(const ServiceDeps& deps, const Principal& who, const CallSp
 // The calls served by both transports: each is one RunCall.
 grpc::Status AddTraineeCall(const ServiceDeps&, const Principal&, const v1::AddTraineeRequest&,
                             v1::AddTraineeResponse*);
-grpc::Status ListTraineesCall(const ServiceDeps&, const Principal&,
-                              const v1::ListTraineesRequest&, v1::ListTraineesResponse*);
-grpc::Status ListSessionsCall(const ServiceDeps&, const Principal&,
-                              const v1::ListSessionsRequest&, v1::ListSessionsResponse*);
+grpc::Status ListTraineesCall(const ServiceDeps&, const Principal&, const v1::ListTraineesRequest&,
+                              v1::ListTraineesResponse*);
+grpc::Status ListSessionsCall(const ServiceDeps&, const Principal&, const v1::ListSessionsRequest&,
+                              v1::ListSessionsResponse*);
 grpc::Status GetLearningCurveCall(const ServiceDeps&, const Principal&,
                                   const v1::LearningCurveRequest&, v1::LearningCurveResponse*);
 grpc::Status GetSessionCall(const ServiceDeps&, const Principal&, const v1::GetSessionRequest&,
@@ -63,17 +65,13 @@ grpc::Status GetProgressCall(const ServiceDeps&, const Principal&, const v1::Get
 // A gRPC unary handler over one of the calls above: admit from the call's
 // metadata, run, finish.
 template <class Request, class Response>
-grpc::ServerUnaryReactor* ServeUnary(
-    grpc::CallbackServerContext* ctx, const ServiceDeps& deps, const Request* request,
-    Response* response,
-    grpc::Status (*call)(const ServiceDeps&, const Principal&, const Request&, Response*)) {
+grpc::ServerUnaryReactor* ServeUnary(grpc::CallbackServerContext* ctx, const ServiceDeps& deps,
+                                     const Request* request, Response* response,
+                                     grpc::Status (*call)(const ServiceDeps&, const Principal&,
+                                                          const Request&, Response*)) {
   auto* reactor = ctx->DefaultReactor();
-  const auto& md = ctx->client_metadata();
-  auto it = md.find("authorization");
-  const std::string_view authorization =
-      it == md.end() ? std::string_view() : std::string_view(it->second.data(), it->second.size());
   Principal who;
-  grpc::Status admitted = AdmitRequest(deps, authorization, *request, &who);
+  grpc::Status admitted = AdmitRequest(deps, AuthorizationOf(ctx), *request, &who);
   reactor->Finish(admitted.ok() ? call(deps, who, *request, response) : admitted);
   return reactor;
 }

@@ -46,14 +46,6 @@ Status ToGrpcStatus(const AuthStatus& s) {
   return Status(StatusCode::INTERNAL, "authentication failed: " + s.message);
 }
 
-AuthStatus AuthenticateCall(grpc::CallbackServerContext* ctx, Authenticator& auth,
-                            Principal* principal) {
-  const auto& md = ctx->client_metadata();
-  auto it = md.find("authorization");
-  if (it == md.end()) return auth.Authenticate({}, principal);
-  return auth.Authenticate(std::string_view(it->second.data(), it->second.size()), principal);
-}
-
 const char* StatusCodeName(grpc::StatusCode code) {
   static const char* const kNames[] = {
       "OK",           "CANCELLED",         "UNKNOWN",           "INVALID_ARGUMENT",
@@ -97,14 +89,16 @@ Status CheckRequestLimits(const google::protobuf::Message& request) {
   return Status(StatusCode::INVALID_ARGUMENT, problem);
 }
 
-bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who) {
+std::string_view AuthorizationOf(grpc::CallbackServerContext* ctx) {
   const auto& md = ctx->client_metadata();
   auto it = md.find("authorization");
-  const Status admitted = AdmitRequest(
-      deps,
-      it == md.end() ? std::string_view() : std::string_view(it->second.data(), it->second.size()),
-      request, who);
+  return it == md.end() ? std::string_view()
+                        : std::string_view(it->second.data(), it->second.size());
+}
+
+bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
+           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who) {
+  const Status admitted = AdmitRequest(deps, AuthorizationOf(ctx), request, who);
   if (admitted.ok()) return true;
   reactor->Finish(admitted);
   return false;
@@ -389,9 +383,9 @@ Status ListTraineesCall(const ServiceDeps& deps, const Principal& who,
                         ves::v1::ListTraineesResponse* response) {
   const std::string institution =
       request.institution().empty() ? who.institution : request.institution();
-  static const CallSpec spec{
-      "trainee.list", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation},
-      "list trainees"};
+  static const CallSpec spec{"trainee.list",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation},
+                             "list trainees"};
   return RunCall(deps, who, spec, institution, [&]() -> Status {
     AuthStatus a = RequireInstitution(who, institution, "list the trainees");
     if (!a.ok()) return ToGrpcStatus(a);
@@ -416,18 +410,18 @@ Status ListTraineesCall(const ServiceDeps& deps, const Principal& who,
   });
 }
 
-grpc::ServerUnaryReactor* TraineesService::ListTrainees(
-    grpc::CallbackServerContext* ctx, const ves::v1::ListTraineesRequest* request,
-    ves::v1::ListTraineesResponse* response) {
+grpc::ServerUnaryReactor* TraineesService::ListTrainees(grpc::CallbackServerContext* ctx,
+                                                        const ves::v1::ListTraineesRequest* request,
+                                                        ves::v1::ListTraineesResponse* response) {
   return ServeUnary(ctx, deps_, request, response, &ListTraineesCall);
 }
 
 Status ListSessionsCall(const ServiceDeps& deps, const Principal& who,
                         const ves::v1::ListSessionsRequest& request,
                         ves::v1::ListSessionsResponse* response) {
-  static const CallSpec spec{
-      "trainee.sessions", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
-      "list the sessions"};
+  static const CallSpec spec{"trainee.sessions",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "list the sessions"};
   return RunCall(deps, who, spec, request.trainee_id(), [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s = ReadableTrainee(deps, who, request.trainee_id(), "list the sessions", &trainee);
@@ -454,18 +448,18 @@ Status ListSessionsCall(const ServiceDeps& deps, const Principal& who,
   });
 }
 
-grpc::ServerUnaryReactor* TraineesService::ListSessions(
-    grpc::CallbackServerContext* ctx, const ves::v1::ListSessionsRequest* request,
-    ves::v1::ListSessionsResponse* response) {
+grpc::ServerUnaryReactor* TraineesService::ListSessions(grpc::CallbackServerContext* ctx,
+                                                        const ves::v1::ListSessionsRequest* request,
+                                                        ves::v1::ListSessionsResponse* response) {
   return ServeUnary(ctx, deps_, request, response, &ListSessionsCall);
 }
 
 Status GetLearningCurveCall(const ServiceDeps& deps, const Principal& who,
                             const ves::v1::LearningCurveRequest& request,
                             ves::v1::LearningCurveResponse* response) {
-  static const CallSpec spec{
-      "trainee.curve", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
-      "read the learning curve"};
+  static const CallSpec spec{"trainee.curve",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "read the learning curve"};
   return RunCall(deps, who, spec, request.trainee_id(), [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s =
@@ -501,9 +495,9 @@ grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
 Status GetSessionCall(const ServiceDeps& deps, const Principal& who,
                       const ves::v1::GetSessionRequest& request,
                       ves::v1::GetSessionResponse* response) {
-  static const CallSpec spec{
-      "session.read", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
-      "read sessions"};
+  static const CallSpec spec{"session.read",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "read sessions"};
   return RunCall(deps, who, spec, request.uuid(), [&]() -> Status {
     auto row = deps.store->GetSession(request.uuid());
     if (!row.ok()) return ToGrpcStatus(row.status);
@@ -588,7 +582,9 @@ grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext*
 Status ListAuditCall(const ServiceDeps& deps, const Principal& who,
                      const ves::v1::ListAuditRequest& request,
                      ves::v1::ListAuditResponse* response) {
-  static const CallSpec spec{"audit.list", {StoreRole::kAdmin}, "read the audit log",
+  static const CallSpec spec{"audit.list",
+                             {StoreRole::kAdmin},
+                             "read the audit log",
                              /*audit_every_call=*/false};
   return RunCall(deps, who, spec, "", [&]() -> Status {
     const int size = PageSizeOf(request.limit(), patient_db::kMaxPageSize);
@@ -610,7 +606,7 @@ Status ListAuditCall(const ServiceDeps& deps, const Principal& who,
       e->set_actor_label(r.actor_label);
       StoreRole role = StoreRole::kTrainee;
       e->set_role(patient_db::ParseRoleName(r.role, &role) ? ToProtoRole(role)
-                                                            : ves::v1::ROLE_UNSPECIFIED);
+                                                           : ves::v1::ROLE_UNSPECIFIED);
       e->set_institution(r.institution);
       e->set_action(r.action);
       e->set_target(r.target);

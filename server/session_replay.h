@@ -13,12 +13,12 @@ namespace ves::server {
 
 struct ReplayFrame {
   double t_s = 0;
-  double hand_force_N = 0;   // thrust at the base: what the hand feels
-  double stretch_m = 0;      // largest mesentery stretch
-  double tip_arc_m = 0;      // tip depth along the colon
+  double hand_force_N = 0;  // thrust at the base: what the hand feels
+  double stretch_m = 0;     // largest mesentery stretch
+  double tip_arc_m = 0;     // tip depth along the colon
   double inserted_m = 0;
-  bool pain = false;         // stretch over the pain threshold
-  bool loop = false;         // loop index over its enter threshold (until under its exit one)
+  bool pain = false;  // stretch over the pain threshold
+  bool loop = false;  // loop index over its enter threshold (until under its exit one)
   // AP fluoroscopy projection (image right = -x, up = +z of W), millimetres;
   // empty on frames between shape samples.
   std::vector<std::pair<int, int>> scope_mm;
@@ -26,11 +26,11 @@ struct ReplayFrame {
 };
 
 struct SessionReplay {
-  std::vector<ReplayFrame> frames;   // every 1/series_hz seconds, and the last step
+  std::vector<ReplayFrame> frames;  // every 1/series_hz seconds, and the last step
   double pain_stretch_m = 0;
   double cecum_arc_m = 0;
-  double final_tip_arc_m = 0;        // after the last logged step
-  std::string summary_line;          // training::SummaryLine of the replay
+  double final_tip_arc_m = 0;  // after the last logged step
+  std::string summary_line;    // training::SummaryLine of the replay
 };
 
 // Throws std::runtime_error (training::ReplayError, InputLogError, ...) when

@@ -1,11 +1,11 @@
 #include "server/web_api.h"
 
 #include <google/protobuf/util/json_util.h>
-#include <nlohmann/json.hpp>
 #include <openssl/crypto.h>
 
 #include <algorithm>
 #include <charconv>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "patient_db/limits.h"
@@ -25,19 +25,29 @@ constexpr const char* kCookieName = "ves_session";
 
 int HttpStatusOf(StatusCode code) {
   switch (code) {
-    case StatusCode::OK: return 200;
+    case StatusCode::OK:
+      return 200;
     case StatusCode::INVALID_ARGUMENT:
-    case StatusCode::OUT_OF_RANGE: return 400;
-    case StatusCode::UNAUTHENTICATED: return 401;
-    case StatusCode::PERMISSION_DENIED: return 403;
-    case StatusCode::NOT_FOUND: return 404;
+    case StatusCode::OUT_OF_RANGE:
+      return 400;
+    case StatusCode::UNAUTHENTICATED:
+      return 401;
+    case StatusCode::PERMISSION_DENIED:
+      return 403;
+    case StatusCode::NOT_FOUND:
+      return 404;
     case StatusCode::ALREADY_EXISTS:
     case StatusCode::FAILED_PRECONDITION:
-    case StatusCode::ABORTED: return 409;
-    case StatusCode::RESOURCE_EXHAUSTED: return 429;
-    case StatusCode::UNIMPLEMENTED: return 501;
-    case StatusCode::UNAVAILABLE: return 503;
-    default: return 500;
+    case StatusCode::ABORTED:
+      return 409;
+    case StatusCode::RESOURCE_EXHAUSTED:
+      return 429;
+    case StatusCode::UNIMPLEMENTED:
+      return 501;
+    case StatusCode::UNAVAILABLE:
+      return 503;
+    default:
+      return 500;
   }
 }
 
@@ -126,12 +136,13 @@ std::string CookieValue(const std::string& header, const std::string& name) {
 }
 
 // Unsigned query number in [0, max]; an error reply names the parameter.
-bool QueryNumber(const std::map<std::string, std::string>& q, const std::string& name,
-                 uint64_t max, uint64_t* value, HttpReply* error) {
+bool QueryNumber(const std::map<std::string, std::string>& q, const std::string& name, uint64_t max,
+                 uint64_t* value, HttpReply* error) {
   auto it = q.find(name);
   if (it == q.end()) return true;
   uint64_t v = 0;
-  const auto [end, ec] = std::from_chars(it->second.data(), it->second.data() + it->second.size(), v);
+  const auto [end, ec] =
+      std::from_chars(it->second.data(), it->second.data() + it->second.size(), v);
   if (it->second.empty() || ec != std::errc() || end != it->second.data() + it->second.size() ||
       v > max) {
     *error = Error(400, "INVALID_ARGUMENT",
@@ -162,10 +173,17 @@ std::string WebApi::HtmlSafeJson(std::string in) {
   out.reserve(in.size());
   for (char c : in) {
     switch (c) {
-      case '<': out += "\\u003c"; break;
-      case '>': out += "\\u003e"; break;
-      case '&': out += "\\u0026"; break;
-      default: out.push_back(c);
+      case '<':
+        out += "\\u003c";
+        break;
+      case '>':
+        out += "\\u003e";
+        break;
+      case '&':
+        out += "\\u0026";
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;
@@ -189,8 +207,8 @@ std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
   *session_id = sid;
   // A cookie rides along on any request the browser makes: a state change
   // must also carry the token only this origin's pages can read.
-  *csrf_ok = request.method == "GET" ||
-             ConstantTimeEquals(request.csrf_token, it->second.csrf_token);
+  *csrf_ok =
+      request.method == "GET" || ConstantTimeEquals(request.csrf_token, it->second.csrf_token);
   return "Bearer " + it->second.token;
 }
 
@@ -207,13 +225,12 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
   const AuthStatus a = deps_.auth->Authenticate("Bearer " + token, &who);
   if (!a.ok()) {
     return Error(a.code == AuthCode::kUnauthenticated ? 401 : 500,
-                 a.code == AuthCode::kUnauthenticated ? "UNAUTHENTICATED" : "INTERNAL",
-                 a.message);
+                 a.code == AuthCode::kUnauthenticated ? "UNAUTHENTICATED" : "INTERNAL", a.message);
   }
-  WebSession session{token, RandomHex(),
-                     NowUnixMs() + std::chrono::duration_cast<std::chrono::milliseconds>(
-                                       options_.session_ttl)
-                                       .count()};
+  WebSession session{
+      token, RandomHex(),
+      NowUnixMs() +
+          std::chrono::duration_cast<std::chrono::milliseconds>(options_.session_ttl).count()};
   const std::string sid = RandomHex();
   {
     std::lock_guard lock(mutex_);
@@ -232,10 +249,10 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
                                 {"institution", who.institution},
                                 {"label", who.label},
                                 {"expires_unix_ms", session.expires_unix_ms}});
-  r.headers.emplace_back(
-      "Set-Cookie", std::string(kCookieName) + "=" + sid + "; Path=/; Max-Age=" +
-                        std::to_string(options_.session_ttl.count()) + "; HttpOnly; SameSite=Strict" +
-                        (options_.secure_cookies ? "; Secure" : ""));
+  r.headers.emplace_back("Set-Cookie", std::string(kCookieName) + "=" + sid + "; Path=/; Max-Age=" +
+                                           std::to_string(options_.session_ttl.count()) +
+                                           "; HttpOnly; SameSite=Strict" +
+                                           (options_.secure_cookies ? "; Secure" : ""));
   return r;
 }
 
@@ -267,8 +284,8 @@ HttpReply WebApi::Handle(const HttpRequest& request) {
                      " bytes, over the limit of " + std::to_string(kMaxHttpTargetBytes));
   }
   if (request.body.size() > kMaxHttpBodyBytes) {
-    return Error(413, "INVALID_ARGUMENT", "body: over the limit of " +
-                                              std::to_string(kMaxHttpBodyBytes) + " bytes");
+    return Error(413, "INVALID_ARGUMENT",
+                 "body: over the limit of " + std::to_string(kMaxHttpBodyBytes) + " bytes");
   }
   const size_t qmark = request.target.find('?');
   const std::string raw_path = request.target.substr(0, qmark);
@@ -301,9 +318,8 @@ HttpReply WebApi::Handle(const HttpRequest& request) {
     return Error(405, "METHOD_NOT_ALLOWED", "pages answer GET only");
   }
   const WebAsset* asset = FindWebAsset(raw_path == "/" ? "/index.html" : raw_path);
-  if (asset == nullptr) return Error(404, "NOT_FOUND", "no page '" +
-                                                         patient_db::PrintableExcerpt(raw_path, 80) +
-                                                         "'");
+  if (asset == nullptr)
+    return Error(404, "NOT_FOUND", "no page '" + patient_db::PrintableExcerpt(raw_path, 80) + "'");
   HttpReply r;
   r.content_type = asset->content_type;
   r.body.assign(asset->data, asset->size);
@@ -418,7 +434,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       trainees.push_back(std::move(row));
     }
     json group_list = json::array();
-    for (auto& [name, members] : groups) group_list.push_back({{"group", name}, {"trainees", members}});
+    for (auto& [name, members] : groups)
+      group_list.push_back({{"group", name}, {"trainees", members}});
     return JsonReply(200, {{"trainees", trainees},
                            {"groups", group_list},
                            {"next_page_token", resp.next_page_token()}});
@@ -462,8 +479,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       auto rows = deps_.store->ListSessions(trainee_id, "");
       if (!rows.ok()) return ToGrpcStatus(rows.status);
       for (const auto& r : rows.value) {
-        Point p{r.uuid, r.case_id, r.lesson_id, r.start_unix_ms, r.score, r.time_to_cecum_s,
-                r.pain_s, 0, r.completed};
+        Point p{r.uuid,   r.case_id, r.lesson_id, r.start_unix_ms, r.score, r.time_to_cecum_s,
+                r.pain_s, 0,         r.completed};
         if (with_loop) {
           // Loop time is in the record only.
           auto full = deps_.store->GetSession(r.uuid);
@@ -520,7 +537,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       for (auto& [attempt, scores] : group_scores[case_id]) {
         median.push_back({{"attempt", attempt}, {"score", Median(scores)}});
       }
-      cases.push_back({{"case_id", case_id}, {"points", curve_json(pts)}, {"group_median", median}});
+      cases.push_back(
+          {{"case_id", case_id}, {"points", curve_json(pts)}, {"group_median", median}});
     }
     json lessons = json::array();
     for (auto& [lesson_id, pts] : by_lesson) {
@@ -533,13 +551,15 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
         for (const auto& l : c.lessons()) {
           if (l.lesson_id() != lesson_id) continue;
           if (l.pass().has_min_score()) pass["score"] = l.pass().min_score();
-          if (l.pass().has_max_time_to_cecum_s()) pass["time_to_cecum_s"] = l.pass().max_time_to_cecum_s();
+          if (l.pass().has_max_time_to_cecum_s())
+            pass["time_to_cecum_s"] = l.pass().max_time_to_cecum_s();
           if (l.pass().has_max_pain_s()) pass["pain_s"] = l.pass().max_pain_s();
           if (l.pass().has_max_loop_s()) pass["loop_s"] = l.pass().max_loop_s();
           pass["title"] = l.title();
         }
       }
-      lessons.push_back({{"lesson_id", lesson_id}, {"points", curve_json(pts)}, {"pass_line", pass}});
+      lessons.push_back(
+          {{"lesson_id", lesson_id}, {"points", curve_json(pts)}, {"pass_line", pass}});
     }
     return JsonReply(200, {{"trainee_id", resp.trainee_id()},
                            {"group", group_name},
@@ -564,9 +584,9 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                              {"stored_unix_ms", resp.stored_unix_ms()},
                              {"input_samples", resp.record().input_log().sample_count()}});
     }
-    static const CallSpec spec{
-        "session.replay", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
-        "replay sessions"};
+    static const CallSpec spec{"session.replay",
+                               {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                               "replay sessions"};
     std::shared_ptr<const SessionReplay> replay;
     s = RunCall(deps_, who, spec, req.uuid(), [&]() -> Status {
       // The read rules of GetSession (its own audit row names the read).
@@ -588,9 +608,12 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     if (!s.ok()) return ErrorOf(s);
     json frames = json::array();
     for (const ReplayFrame& f : replay->frames) {
-      json j = {{"t_s", f.t_s},         {"hand_force_N", f.hand_force_N},
-                {"stretch_m", f.stretch_m}, {"tip_arc_m", f.tip_arc_m},
-                {"inserted_m", f.inserted_m}, {"pain", f.pain},
+      json j = {{"t_s", f.t_s},
+                {"hand_force_N", f.hand_force_N},
+                {"stretch_m", f.stretch_m},
+                {"tip_arc_m", f.tip_arc_m},
+                {"inserted_m", f.inserted_m},
+                {"pain", f.pain},
                 {"loop", f.loop}};
       if (!f.scope_mm.empty()) j["scope_mm"] = f.scope_mm;
       if (!f.colon_mm.empty()) j["colon_mm"] = f.colon_mm;

@@ -45,8 +45,8 @@ struct HttpReply {
 };
 
 struct WebOptions {
-  bool secure_cookies = false;                       // Secure flag: on over HTTPS
-  std::chrono::seconds session_ttl{8 * 3600};        // a browser session's life
+  bool secure_cookies = false;                 // Secure flag: on over HTTPS
+  std::chrono::seconds session_ttl{8 * 3600};  // a browser session's life
 };
 
 class WebApi {
@@ -60,7 +60,7 @@ class WebApi {
 
  private:
   struct WebSession {
-    std::string token;          // the bearer token it stands for (memory only)
+    std::string token;  // the bearer token it stands for (memory only)
     std::string csrf_token;
     int64_t expires_unix_ms = 0;
   };

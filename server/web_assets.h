@@ -8,7 +8,7 @@
 namespace ves::server {
 
 struct WebAsset {
-  const char* path;          // "/index.html"
+  const char* path;  // "/index.html"
   const char* content_type;
   const char* data;
   size_t size;

@@ -38,8 +38,8 @@ Stats Measure(const std::vector<std::string>& targets, int port, const std::stri
   for (int i = 0; i < requests; ++i) {
     const std::string& target = targets[i % targets.size()];
     const auto start = Clock::now();
-    const auto r = ves::server::testing::HttpCall(port, "GET", target,
-                                                  {{"Authorization", "Bearer " + token}});
+    const auto r =
+        ves::server::testing::HttpCall(port, "GET", target, {{"Authorization", "Bearer " + token}});
     ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
     if (r.status != 200) {
       std::fprintf(stderr, "web_bench: %s answered %d: %s\n", target.c_str(), r.status,
@@ -72,8 +72,8 @@ int main(int argc, char** argv) {
   }
   const int trainees = 100;
   const int per_trainee = total_sessions / trainees;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("ves-web-bench-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("ves-web-bench-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   ves::server::ServerOptions options;
   options.listen = "127.0.0.1:0";
@@ -133,8 +133,8 @@ int main(int argc, char** argv) {
     }
   }
   const std::string token = ves::server::NewToken();
-  store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kSupervisor,
-                  "north", "", "bench supervisor", 1});
+  store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kSupervisor, "north",
+                  "", "bench supervisor", 1});
   const double seed_s = std::chrono::duration<double>(Clock::now() - t_seed).count();
   server->Start();
   const int port = server->http_port();
@@ -157,12 +157,15 @@ int main(int argc, char** argv) {
   const Stats l = Measure(list, port, token, std::max(10, requests / 10));
   const double cpu = CpuSeconds() - cpu0;
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
-  std::printf("  GET trainees/{id}/curve     p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-              c.p50_ms, c.p99_ms, c.max_ms, requests);
-  std::printf("  GET trainees/{id}/sessions  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-              s.p50_ms, s.p99_ms, s.max_ms, requests);
-  std::printf("  GET trainees (list, 100)    p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-              l.p50_ms, l.p99_ms, l.max_ms, std::max(10, requests / 10));
+  std::printf(
+      "  GET trainees/{id}/curve     p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
+      c.p50_ms, c.p99_ms, c.max_ms, requests);
+  std::printf(
+      "  GET trainees/{id}/sessions  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
+      s.p50_ms, s.p99_ms, s.max_ms, requests);
+  std::printf(
+      "  GET trainees (list, 100)    p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
+      l.p50_ms, l.p99_ms, l.max_ms, std::max(10, requests / 10));
   std::printf("  process CPU (server and client) %.1f s over %.1f s wall\n", cpu, wall);
   server->Shutdown(std::chrono::milliseconds(0));
   server.reset();

@@ -2,16 +2,17 @@
 // on loopback: authentication on every route, the institution matrix of the
 // gRPC tests, CSRF, cookie flags, HTML-safe JSON, limits, and a session's
 // replay computed by the server from its input log.
+#include "server/web_api.h"
+
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "patient_db/case_bundle.h"
 #include "server/http_server.h"
-#include "server/web_api.h"
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
@@ -63,10 +64,10 @@ class WebApiTest : public ::testing::Test {
     return HttpCall(port(), "GET", target, h);
   }
   // Signs in with `token`; returns the cookie pair and the CSRF token.
-  std::pair<std::string, std::string> SignIn(const std::string& token, HttpResult* reply = nullptr) {
+  std::pair<std::string, std::string> SignIn(const std::string& token,
+                                             HttpResult* reply = nullptr) {
     HttpResult r = HttpCall(port(), "POST", "/api/v1/sign-in",
-                            {{"Content-Type", "application/json"}},
-                            json{{"token", token}}.dump());
+                            {{"Content-Type", "application/json"}}, json{{"token", token}}.dump());
     EXPECT_EQ(r.status, 200) << r.body;
     if (reply) *reply = r;
     const std::string set_cookie = r.Header("set-cookie");
@@ -109,10 +110,10 @@ TEST_F(WebApiTest, EveryApiRouteWithoutAuthenticationIs401) {
   const HttpResult post = HttpCall(port(), "POST", "/api/v1/trainees",
                                    {{"Content-Type", "application/json"}}, R"({"trainee_id":"x"})");
   EXPECT_EQ(post.status, 401) << post.body;
-  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/sign-out", {{"Content-Type", "application/json"}},
-                     "{}")
-                .status,
-            401);
+  EXPECT_EQ(
+      HttpCall(port(), "POST", "/api/v1/sign-out", {{"Content-Type", "application/json"}}, "{}")
+          .status,
+      401);
 }
 
 // The gRPC role matrix (tests/integration/role_matrix_test.cc) over HTTP:
@@ -128,7 +129,8 @@ TEST_F(WebApiTest, InstitutionMatrixMirrorsGrpc) {
         std::string("/api/v1/sessions/") + south_uuid_ + "/replay"}) {
     const HttpResult foreign = Get(target, supervisor_);
     EXPECT_EQ(foreign.status, 404) << target << ": " << foreign.body;
-    EXPECT_EQ(foreign.body.find("south"), std::string::npos) << "tells the institution: " << foreign.body;
+    EXPECT_EQ(foreign.body.find("south"), std::string::npos)
+        << "tells the institution: " << foreign.body;
   }
   // The same answer as for ids that do not exist at all.
   EXPECT_EQ(Get("/api/v1/trainees/nobody/curve", supervisor_).status, 404);
@@ -205,7 +207,8 @@ TEST_F(WebApiTest, SessionCookiesAreSecureOverHttps) {
   // Over HTTPS with the server's certificate (made here by openssl).
   const auto dir = MakeTempDir("web-tls");
   const std::string d = dir.string();
-  ASSERT_EQ(std::system(("cd '" + d + "' && openssl req -x509 -newkey ec -pkeyopt "
+  ASSERT_EQ(std::system(("cd '" + d +
+                         "' && openssl req -x509 -newkey ec -pkeyopt "
                          "ec_paramgen_curve:prime256v1 -nodes -keyout server.key -out server.pem "
                          "-days 2 -subj /CN=localhost >openssl.log 2>&1")
                             .c_str()),
@@ -216,9 +219,9 @@ TEST_F(WebApiTest, SessionCookiesAreSecureOverHttps) {
   tls.http_listen = "127.0.0.1:0";
   TestServer secure(tls);
   const std::string token = secure.MakeToken(StoreRole::kSupervisor, "north");
-  const HttpResult r = HttpCall(secure.server().http_port(), "POST", "/api/v1/sign-in",
-                                {{"Content-Type", "application/json"}},
-                                json{{"token", token}}.dump(), /*tls=*/true);
+  const HttpResult r =
+      HttpCall(secure.server().http_port(), "POST", "/api/v1/sign-in",
+               {{"Content-Type", "application/json"}}, json{{"token", token}}.dump(), /*tls=*/true);
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_NE(r.Header("set-cookie").find("; Secure"), std::string::npos) << r.Header("set-cookie");
   EXPECT_NE(r.Header("strict-transport-security").find("max-age"), std::string::npos);
@@ -229,9 +232,9 @@ TEST_F(WebApiTest, SessionCookiesAreSecureOverHttps) {
 TEST_F(WebApiTest, StateChangingRequestsNeedTheCsrfToken) {
   const auto [cookie, csrf] = SignIn(admin_);
   const std::string body = R"({"trainee_id":"t9","display_name":"Nine"})";
-  const HttpResult without = HttpCall(
-      port(), "POST", "/api/v1/trainees", {{"Cookie", cookie}, {"Content-Type", "application/json"}},
-      body);
+  const HttpResult without =
+      HttpCall(port(), "POST", "/api/v1/trainees",
+               {{"Cookie", cookie}, {"Content-Type", "application/json"}}, body);
   EXPECT_EQ(without.status, 403) << without.body;
   EXPECT_NE(without.body.find("CSRF"), std::string::npos) << without.body;
   const HttpResult wrong = HttpCall(port(), "POST", "/api/v1/trainees",
@@ -261,12 +264,12 @@ TEST_F(WebApiTest, StateChangingRequestsNeedTheCsrfToken) {
                 .status,
             200);
   // The role rule is the gRPC one: a supervisor may not add trainees.
-  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/trainees",
-                     {{"Authorization", "Bearer " + supervisor_},
-                      {"Content-Type", "application/json"}},
-                     R"({"trainee_id":"t11"})")
-                .status,
-            403);
+  EXPECT_EQ(
+      HttpCall(port(), "POST", "/api/v1/trainees",
+               {{"Authorization", "Bearer " + supervisor_}, {"Content-Type", "application/json"}},
+               R"({"trainee_id":"t11"})")
+          .status,
+      403);
 }
 
 TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
@@ -281,8 +284,8 @@ TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
     EXPECT_EQ(r.Header("content-type"), "application/json");
     EXPECT_EQ(r.Header("x-content-type-options"), "nosniff");
   }
-  const HttpResult sessions = Get(std::string("/api/v1/trainees/") + kXssPath + "/sessions",
-                                  supervisor_);
+  const HttpResult sessions =
+      Get(std::string("/api/v1/trainees/") + kXssPath + "/sessions", supervisor_);
   EXPECT_EQ(sessions.status, 200) << sessions.body;
   // And it decodes to the name as stored.
   const json list = json::parse(Get("/api/v1/trainees", supervisor_).body);
@@ -322,13 +325,14 @@ TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
                R"({"token": 5})");
   EXPECT_EQ(r.status, 400);
   // Oversized header and body: refused before any handler.
-  const std::string big_header = "GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " +
-                                 std::string(kMaxHttpHeaderBytes + 10, 'a') + "\r\n\r\n";
+  const std::string big_header =
+      "GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(kMaxHttpHeaderBytes + 10, 'a') +
+      "\r\n\r\n";
   EXPECT_EQ(HttpRaw(port(), big_header).status, 431);
-  const std::string big_body = "POST /api/v1/sign-in HTTP/1.1\r\nHost: x\r\nContent-Type: "
-                               "application/json\r\nContent-Length: " +
-                               std::to_string(kMaxHttpBodyBytes + 1) + "\r\n\r\n" +
-                               std::string(kMaxHttpBodyBytes + 1, ' ');
+  const std::string big_body =
+      "POST /api/v1/sign-in HTTP/1.1\r\nHost: x\r\nContent-Type: "
+      "application/json\r\nContent-Length: " +
+      std::to_string(kMaxHttpBodyBytes + 1) + "\r\n\r\n" + std::string(kMaxHttpBodyBytes + 1, ' ');
   EXPECT_EQ(HttpRaw(port(), big_body).status, 413);
   EXPECT_EQ(HttpRaw(port(), "NONSENSE\r\n\r\n").status, 400);
   // The server still answers.
@@ -413,8 +417,8 @@ TEST_F(WebApiTest, LearningCurveHasOnePointPerSessionAndTheGroupMedian) {
   std::mt19937_64 rng(11);
   ves::v1::UploadSessionResponse up;
   for (int i = 0; i < 3; ++i) {
-    ASSERT_TRUE(UploadSession(server_.Client(station_), MakeRecord(NewUuid(rng), "t2", 10 + i), &up)
-                    .ok());
+    ASSERT_TRUE(
+        UploadSession(server_.Client(station_), MakeRecord(NewUuid(rng), "t2", 10 + i), &up).ok());
   }
   const HttpResult r = Get("/api/v1/trainees/t2/curve", supervisor_);
   ASSERT_EQ(r.status, 200) << r.body;

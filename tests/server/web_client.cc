@@ -1,12 +1,12 @@
 #include "tests/server/web_client.h"
 
+#include <algorithm>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/ssl.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
-#include <algorithm>
 
 namespace ves::server::testing {
 
@@ -64,8 +64,8 @@ HttpResult HttpCall(int port, const std::string& method, const std::string& targ
 HttpResult HttpRaw(int port, const std::string& bytes) {
   asio::io_context io;
   tcp::socket socket(io);
-  socket.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"),
-                               static_cast<unsigned short>(port)));
+  socket.connect(
+      tcp::endpoint(asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)));
   beast::error_code ec;
   asio::write(socket, asio::buffer(bytes), ec);  // the server may stop reading early
   beast::flat_buffer buffer;

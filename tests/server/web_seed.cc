@@ -6,9 +6,8 @@
 //     a scripted operator's session on the sample case, uploaded as a station
 //     does; prints {"uuid": ..., "final_tip_arc_m": ...} (the recording run's
 //     own last tip depth, independent of the server's replay).
-#include <nlohmann/json.hpp>
-
 #include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "patient_db/case_bundle.h"
 #include "server/client.h"
@@ -23,8 +22,12 @@ namespace {
 
 std::string Token(ves::patient_db::Store& store, StoreRole role, const std::string& trainee = "") {
   const std::string token = ves::server::NewToken();
-  ves::patient_db::TokenRow row{ves::server::Sha256HexOf(token), role, "north", trainee,
-                                std::string(ves::patient_db::RoleName(role)) + " (web test)", 1};
+  ves::patient_db::TokenRow row{ves::server::Sha256HexOf(token),
+                                role,
+                                "north",
+                                trainee,
+                                std::string(ves::patient_db::RoleName(role)) + " (web test)",
+                                1};
   if (!store.AddToken(row).ok()) throw std::runtime_error("cannot add a token");
   return token;
 }
