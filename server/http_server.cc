@@ -58,6 +58,16 @@ std::pair<std::string, std::string> SplitHostPort(const std::string& listen) {
   return {host, listen.substr(colon + 1)};
 }
 
+// Forgets a connection's deadline when it goes out of scope.
+struct ForgetDeadline {
+  HttpServer::Impl* impl;
+  int fd;
+  ~ForgetDeadline() {
+    std::lock_guard lock(impl->mutex);
+    impl->deadlines.erase(fd);
+  }
+};
+
 HttpRequest ToRequest(const http::request<http::string_body>& r) {
   HttpRequest out;
   out.method = std::string(r.method_string());
@@ -224,7 +234,7 @@ void HttpServer::Start() {
       }
     }
   });
-  impl_->accept_thread = std::thread([this] {
+  impl_->accept_thread = std::thread([this, protocol = endpoint.protocol()] {
     Impl* impl = impl_.get();
     while (true) {
       tcp::socket socket(impl->io);
@@ -241,36 +251,49 @@ void HttpServer::Start() {
         }
         ++impl->active;
       }
-      std::thread([this, impl, s = std::move(socket)]() mutable {
-        const int fd = s.native_handle();
-        beast::error_code peer_ec;
-        const auto remote = s.remote_endpoint(peer_ec);
-        const std::string peer =
-            peer_ec ? std::string("?")
-                    : remote.address().to_string() + ":" + std::to_string(remote.port());
-        SetDeadline(impl, fd, std::chrono::seconds(options_.io_timeout_s));
-        try {
-          if (impl->ssl) {
-            beast::ssl_stream<tcp::socket> stream(std::move(s), *impl->ssl);
-            beast::error_code ec;
-            stream.handshake(asio::ssl::stream_base::server, ec);
-            if (!ec) {
-              ServeStream(stream, fd, impl, api_.get(), options_, true, peer);
-              stream.shutdown(ec);
+      // The thread gets the bare descriptor and owns its socket as a local,
+      // so every socket is closed before `active` drops and Stop may return.
+      beast::error_code release_ec;
+      const int fd = socket.release(release_ec);
+      if (release_ec) {
+        std::lock_guard lock(impl->mutex);
+        --impl->active;
+        continue;
+      }
+      std::thread([this, impl, fd, protocol] {
+        {
+          tcp::socket s(impl->io);
+          beast::error_code assign_ec;
+          s.assign(protocol, fd, assign_ec);
+          // Destroyed before the socket: the reaper never shuts down a
+          // descriptor number that has been closed (and maybe reused).
+          ForgetDeadline forget_plain{impl, fd};
+          beast::error_code peer_ec;
+          const auto remote = s.remote_endpoint(peer_ec);
+          const std::string peer =
+              peer_ec ? std::string("?")
+                      : remote.address().to_string() + ":" + std::to_string(remote.port());
+          SetDeadline(impl, fd, std::chrono::seconds(options_.io_timeout_s));
+          try {
+            if (assign_ec) {
+              spdlog::warn("http connection: {}", assign_ec.message());
+            } else if (impl->ssl) {
+              beast::ssl_stream<tcp::socket> stream(std::move(s), *impl->ssl);
+              ForgetDeadline forget_tls{impl, fd};
+              beast::error_code ec;
+              stream.handshake(asio::ssl::stream_base::server, ec);
+              if (!ec) {
+                ServeStream(stream, fd, impl, api_.get(), options_, true, peer);
+                stream.shutdown(ec);
+              }
+            } else {
+              ServeStream(s, fd, impl, api_.get(), options_, false, peer);
+              beast::error_code ec;
+              s.shutdown(tcp::socket::shutdown_both, ec);
             }
-            std::lock_guard lock(impl->mutex);
-            impl->deadlines.erase(fd);
-          } else {
-            ServeStream(s, fd, impl, api_.get(), options_, false, peer);
-            beast::error_code ec;
-            s.shutdown(tcp::socket::shutdown_both, ec);
-            std::lock_guard lock(impl->mutex);
-            impl->deadlines.erase(fd);
+          } catch (const std::exception& e) {
+            spdlog::warn("http connection from {}: {}", peer, e.what());
           }
-        } catch (const std::exception& e) {
-          spdlog::warn("http connection from {}: {}", peer, e.what());
-          std::lock_guard lock(impl->mutex);
-          impl->deadlines.erase(fd);
         }
         std::lock_guard lock(impl->mutex);
         --impl->active;

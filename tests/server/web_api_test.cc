@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include <boost/asio/ip/tcp.hpp>
+
 #include "patient_db/case_bundle.h"
 #include "server/http_server.h"
 #include "station/training/case_run.h"
@@ -442,6 +444,30 @@ TEST_F(WebApiTest, LearningCurveHasOnePointPerSessionAndTheGroupMedian) {
       EXPECT_EQ(t["group"], "g1");
     }
   }
+}
+
+}  // namespace
+}  // namespace ves::server::testing
+
+namespace ves::server::testing {
+namespace {
+
+// Shutdown does not wait for an idle browser connection: it is closed.
+TEST(WebServerShutdown, IdleConnectionsAreClosedOnShutdown) {
+  ServerOptions o;
+  o.http_listen = "127.0.0.1:0";
+  auto server = std::make_unique<TestServer>(o);
+  boost::asio::io_context io;
+  boost::asio::ip::tcp::socket idle(io);
+  idle.connect({boost::asio::ip::make_address("127.0.0.1"),
+                static_cast<unsigned short>(server->server().http_port())});
+  EXPECT_EQ(HttpCall(server->server().http_port(), "GET", "/healthz").status, 200);
+  server.reset();  // returns although `idle` never sent a request
+  char byte = 0;
+  boost::system::error_code ec;
+  idle.read_some(boost::asio::buffer(&byte, 1), ec);
+  EXPECT_TRUE(ec == boost::asio::error::eof || ec == boost::asio::error::connection_reset)
+      << ec.message();
 }
 
 }  // namespace
