@@ -19,6 +19,8 @@ PACKAGES=(
   xdotool x11-apps
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the web front end (ves-server --http): Chart.js embedded at build time; browser tests
+  libjs-chart.js chromium chromium-driver python3-selenium
   # fuzzing (libFuzzer) and the sanitized CI stage: deploy/fuzz.sh, deploy/ci-hardening.sh
   clang-14 libclang-rt-14-dev
 )

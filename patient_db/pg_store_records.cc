@@ -382,6 +382,22 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
   return out;
 }
 
+StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
+    const std::vector<std::string>& trainee_ids) {
+  std::vector<TraineeActivity> out;
+  StoreStatus st = Transact("trainee activity", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    for (const std::string& id : trainee_ids) {
+      const auto r = tx.exec_params(
+          "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = $1", id);
+      out.push_back({r[0][0].as<int64_t>(), r[0][1].as<int64_t>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
 StoreResult<int64_t> PgStore::CountSessions() {
   int64_t n = 0;
   StoreStatus st = Transact("count sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {

@@ -387,6 +387,25 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
   return out;
 }
 
+StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(
+    const std::vector<std::string>& trainee_ids) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = ?", nullptr);
+  if (!s) return Internal(r.db(), "trainee activity");
+  std::vector<TraineeActivity> out;
+  for (const std::string& id : trainee_ids) {
+    s->Bind(1, id);
+    int rc = SQLITE_OK;
+    TraineeActivity a;
+    if (s->Step(&rc)) a = {s->Int(0), s->Int(1)};
+    s->Reset();
+    if (rc != SQLITE_OK) return Internal(r.db(), "trainee activity");
+    out.push_back(a);
+  }
+  return out;
+}
+
 StoreResult<int64_t> SqliteStore::CountSessions() {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare("SELECT COUNT(*) FROM sessions", nullptr);

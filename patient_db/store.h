@@ -129,6 +129,13 @@ struct SessionRow {
   bool operator==(const SessionRow&) const = default;
 };
 
+// What a trainee list shows of each trainee's sessions.
+struct TraineeActivity {
+  int64_t sessions = 0;
+  int64_t last_end_unix_ms = 0;
+  bool operator==(const TraineeActivity&) const = default;
+};
+
 struct AuditRow {
   int64_t id = 0;  // assigned by the store
   int64_t at_unix_ms = 0;
@@ -235,6 +242,10 @@ class Store {
                                                             const std::string& case_id,
                                                             const ListPage& page = {}) = 0;
   virtual StoreResult<int64_t> CountSessions() = 0;
+  // The trainee's session count and latest end_unix_ms (0, 0 with none), for
+  // each of `trainee_ids` in order: one read, without listing the rows.
+  virtual StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
+      const std::vector<std::string>& trainee_ids) = 0;
 
   // Oldest first, at most `limit`, ids above `after_id`.
   virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,

@@ -72,7 +72,7 @@ AuthStatus Authenticator::Authenticate(std::string_view authorization, Principal
   return {};
 }
 
-AuthStatus RequireRole(const Principal& p, std::initializer_list<StoreRole> roles,
+AuthStatus RequireRole(const Principal& p, const std::vector<StoreRole>& roles,
                        const std::string& what) {
   for (StoreRole r : roles) {
     if (p.role == r) return {};

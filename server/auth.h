@@ -4,6 +4,7 @@
 #include <string>
 #include <string_view>
 #include <unordered_map>
+#include <vector>
 
 #include "patient_db/store.h"
 
@@ -50,7 +51,7 @@ class Authenticator {
 };
 
 // kPermissionDenied unless the principal has one of `roles` (`what` names the call).
-AuthStatus RequireRole(const Principal& p, std::initializer_list<StoreRole> roles,
+AuthStatus RequireRole(const Principal& p, const std::vector<StoreRole>& roles,
                        const std::string& what);
 // Admins reach every institution; everyone else only their own.
 AuthStatus RequireInstitution(const Principal& p, const std::string& institution,

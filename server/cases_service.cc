@@ -3,6 +3,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "patient_db/case_problem.h"
+#include "server/pipeline.h"
 #include "server/services.h"
 
 namespace ves::server {
@@ -235,27 +236,22 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
 
 }  // namespace
 
-grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* ctx,
-                                                  const ves::v1::ListCasesRequest* request,
-                                                  ves::v1::ListCasesResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
-    AuthStatus r = RequireRole(
-        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list cases");
-    if (!r.ok()) return ToGrpcStatus(r);
+Status ListCasesCall(const ServiceDeps& deps, const Principal& who,
+                     const ves::v1::ListCasesRequest& request, ves::v1::ListCasesResponse* response) {
+  static const CallSpec spec{
+      "case.list", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list cases"};
+  return RunCall(deps, who, spec, request.institution(), [&]() -> Status {
     patient_db::CaseFilter filter;
-    filter.region = request->region();
-    filter.difficulty = request->difficulty();
-    filter.institution = request->institution();
-    filter.all_versions = request->all_versions();
+    filter.region = request.region();
+    filter.difficulty = request.difficulty();
+    filter.institution = request.institution();
+    filter.all_versions = request.all_versions();
     if (who.role != StoreRole::kAdmin) filter.visible_to = who.institution;
-    const Status token = ReadPageToken(request->page_token(), "cases", &filter.page);
+    const Status token = ReadPageToken(request.page_token(), "cases", &filter.page);
     if (!token.ok()) return token;
-    const int size = PageSizeOf(request->page_size());
+    const int size = PageSizeOf(request.page_size());
     filter.page.limit = size + 1;  // one more tells whether a next page exists
-    auto rows = deps_.store->ListCases(filter);
+    auto rows = deps.store->ListCases(filter);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
     size_t bytes = 0;
     for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
@@ -269,26 +265,29 @@ grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* c
       }
     }
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "case.list", request->institution(), status);
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* CasesService::ListCases(grpc::CallbackServerContext* ctx,
+                                                  const ves::v1::ListCasesRequest* request,
+                                                  ves::v1::ListCasesResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &ListCasesCall);
 }
 
 grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     grpc::CallbackServerContext* ctx, const ves::v1::DownloadCaseRequest* request) {
   using Error = ErrorReactor<grpc::ServerWriteReactor<ves::v1::CaseChunk>>;
-  const Status limits = CheckRequestLimits(*request);
-  if (!limits.ok()) return new Error(limits);
   Principal who;
-  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
-  if (!a.ok()) return new Error(ToGrpcStatus(a));
+  const Status admitted = AdmitRequest(deps_, AuthorizationOf(ctx), *request, &who);
+  if (!admitted.ok()) return new Error(admitted);
+  // The audit row names the stored version once the body has found it.
   std::string target = CaseTarget(request->case_id(), request->version());
   std::shared_ptr<const std::string> bytes;
   ves::v1::CaseSummary summary;
-  const Status status = [&]() -> Status {
-    AuthStatus r = RequireRole(
-        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "download cases");
-    if (!r.ok()) return ToGrpcStatus(r);
+  static const CallSpec spec{
+      "case.download", {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation},
+      "download cases"};
+  const Status status = RunCall(deps_, who, spec, target, [&]() -> Status {
     auto row = deps_.store->GetCase(request->case_id(), request->version());
     if (!row.ok()) return ToGrpcStatus(row.status);
     target = CaseTarget(row.value.case_id, row.value.version);
@@ -313,8 +312,7 @@ grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
     }
     ToSummary(row.value, &summary);
     return Status::OK;
-  }();
-  deps_.writer->SubmitAudit(MakeAudit(who, "case.download", target, status));
+  });
   if (!status.ok()) return new Error(status);
   return new DownloadReactor(std::move(bytes), std::move(summary), request->offset());
 }
@@ -322,10 +320,12 @@ grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
 grpc::ServerReadReactor<ves::v1::UploadCaseRequest>* CasesService::UploadCase(
     grpc::CallbackServerContext* ctx, ves::v1::UploadCaseResponse* response) {
   using Error = ErrorReactor<grpc::ServerReadReactor<ves::v1::UploadCaseRequest>>;
+  // Admitted here; its audit row is written when the stream ends (UploadReactor).
   Principal who;
-  AuthStatus a = AuthenticateCall(ctx, *deps_.auth, &who);
-  if (!a.ok()) return new Error(ToGrpcStatus(a));
-  a = RequireRole(who, {StoreRole::kAdmin}, "upload cases");
+  const Status admitted =
+      AdmitRequest(deps_, AuthorizationOf(ctx), ves::v1::UploadCaseRequest(), &who);
+  if (!admitted.ok()) return new Error(admitted);
+  AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "upload cases");
   if (!a.ok()) {
     deps_.writer->SubmitAudit(MakeAudit(who, "case.upload", "?", ToGrpcStatus(a)));
     return new Error(ToGrpcStatus(a));

@@ -8,6 +8,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "server/lesson_rules.h"
+#include "server/pipeline.h"
 #include "server/services.h"
 #include "station/training/case_run.h"
 
@@ -133,24 +134,22 @@ void ToProtoVerdict(const patient_db::LessonVerdictRow& v, ves::v1::LessonVerdic
 
 }  // namespace
 
-grpc::ServerUnaryReactor* LessonsService::CreateCurriculum(
-    grpc::CallbackServerContext* ctx, const ves::v1::CreateCurriculumRequest* request,
-    ves::v1::CreateCurriculumResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
+Status CreateCurriculumCall(const ServiceDeps& deps, const Principal& who,
+                            const ves::v1::CreateCurriculumRequest& request_message,
+                            ves::v1::CreateCurriculumResponse* response) {
+  const ves::v1::CreateCurriculumRequest* request = &request_message;
   ves::v1::Curriculum c = request->curriculum();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
-                               "create curricula");
+  static const CallSpec spec{
+      "curriculum.create", {StoreRole::kAdmin, StoreRole::kSupervisor}, "create curricula"};
+  return RunCall(deps, who, spec, c.curriculum_id(), [&]() -> Status {
     const std::string institution = c.institution().empty() ? who.institution : c.institution();
-    if (a.ok()) a = RequireInstitution(who, institution, "create curricula for the institution");
+    AuthStatus a = RequireInstitution(who, institution, "create curricula for the institution");
     if (!a.ok()) return ToGrpcStatus(a);
     const std::string problem = CheckCurriculum(c);
     if (!problem.empty()) return Status(StatusCode::INVALID_ARGUMENT, "curriculum." + problem);
     c.set_institution(institution);
     for (int i = 0; i < c.lessons_size(); ++i) {
-      Status s = PinLesson(*deps_.store, institution, i, c.mutable_lessons(i));
+      Status s = PinLesson(*deps.store, institution, i, c.mutable_lessons(i));
       if (!s.ok()) return s;
     }
     patient_db::CurriculumRow row;
@@ -162,28 +161,31 @@ grpc::ServerUnaryReactor* LessonsService::CreateCurriculum(
     row.created_unix_ms = NowUnixMs();
     row.body = DeterministicBytes(c);
     row.body_sha256_hex = Sha256HexOf(row.body);
-    auto put = deps_.store->PutCurriculum(row);
+    auto put = deps.store->PutCurriculum(row);
     if (!put.ok()) return ToGrpcStatus(put.status);
     *response->mutable_curriculum() = c;
     response->set_already_stored(put.value);
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "curriculum.create", c.curriculum_id(), status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* LessonsService::ListCurricula(
-    grpc::CallbackServerContext* ctx, const ves::v1::ListCurriculaRequest* request,
-    ves::v1::ListCurriculaResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
+grpc::ServerUnaryReactor* LessonsService::CreateCurriculum(
+    grpc::CallbackServerContext* ctx, const ves::v1::CreateCurriculumRequest* request,
+    ves::v1::CreateCurriculumResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &CreateCurriculumCall);
+}
+
+Status ListCurriculaCall(const ServiceDeps& deps, const Principal& who,
+                         const ves::v1::ListCurriculaRequest& request_message,
+                         ves::v1::ListCurriculaResponse* response) {
+  const ves::v1::ListCurriculaRequest* request = &request_message;
   const std::string institution =
       request->institution().empty() ? who.institution : request->institution();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(
-        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list curricula");
-    if (a.ok()) a = RequireInstitution(who, institution, "list the curricula");
+  static const CallSpec spec{"curriculum.list",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation},
+                             "list curricula"};
+  return RunCall(deps, who, spec, institution, [&]() -> Status {
+    AuthStatus a = RequireInstitution(who, institution, "list the curricula");
     if (!a.ok()) return ToGrpcStatus(a);
     patient_db::ListPage page;
     const Status token = ReadPageToken(request->page_token(), "curricula", &page);
@@ -191,7 +193,7 @@ grpc::ServerUnaryReactor* LessonsService::ListCurricula(
     // Curricula are large (up to 200 lessons each): ten a page by default.
     const int size = PageSizeOf(request->page_size(), 10);
     page.limit = size + 1;
-    auto rows = deps_.store->ListCurricula(institution, page);
+    auto rows = deps.store->ListCurricula(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
     size_t bytes = 0;
     for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
@@ -208,24 +210,27 @@ grpc::ServerUnaryReactor* LessonsService::ListCurricula(
       }
     }
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "curriculum.list", institution, status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
-    grpc::CallbackServerContext* ctx, const ves::v1::AssignCurriculumRequest* request,
-    ves::v1::AssignCurriculumResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
+grpc::ServerUnaryReactor* LessonsService::ListCurricula(
+    grpc::CallbackServerContext* ctx, const ves::v1::ListCurriculaRequest* request,
+    ves::v1::ListCurriculaResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &ListCurriculaCall);
+}
+
+Status AssignCurriculumCall(const ServiceDeps& deps, const Principal& who,
+                            const ves::v1::AssignCurriculumRequest& request_message,
+                            ves::v1::AssignCurriculumResponse* response) {
+  const ves::v1::AssignCurriculumRequest* request = &request_message;
   const bool to_group = request->has_group();
   const std::string assignee = to_group ? request->group() : request->trainee_id();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
-                               "assign curricula");
-    if (!a.ok()) return ToGrpcStatus(a);
-    auto curriculum = deps_.store->GetCurriculum(request->curriculum_id());
+  static const CallSpec spec{
+      "curriculum.assign", {StoreRole::kAdmin, StoreRole::kSupervisor}, "assign curricula"};
+  const std::string target =
+      request->curriculum_id() + (to_group ? " group " : " trainee ") + assignee;
+  return RunCall(deps, who, spec, target, [&]() -> Status {
+    auto curriculum = deps.store->GetCurriculum(request->curriculum_id());
     if (!curriculum.ok()) return ToGrpcStatus(curriculum.status);
     const std::string& institution = curriculum.value.institution;
     // Another institution's curriculum answers as an absent one (no existence leak).
@@ -238,7 +243,7 @@ grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
                         "': give a trainee or a group (1..128 printable characters)");
     }
     if (!to_group) {
-      auto trainee = deps_.store->GetTrainee(assignee);
+      auto trainee = deps.store->GetTrainee(assignee);
       if (!trainee.ok()) return ToGrpcStatus(trainee.status);
       if (trainee.value.institution != institution) {
         return Status(StatusCode::FAILED_PRECONDITION,
@@ -247,35 +252,34 @@ grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
                           "'");
       }
     }
-    auto st = deps_.store->AddAssignment(
+    auto st = deps.store->AddAssignment(
         {request->curriculum_id(), to_group, assignee, institution, who.token_id, NowUnixMs()});
     if (!st.ok()) return ToGrpcStatus(st);
     if (to_group) {
-      auto members = deps_.store->ListGroupTrainees(institution, assignee);
+      auto members = deps.store->ListGroupTrainees(institution, assignee);
       if (!members.ok()) return ToGrpcStatus(members.status);
       for (const auto& m : members.value) response->add_trainee_ids(m);
     } else {
       response->add_trainee_ids(assignee);
     }
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "curriculum.assign",
-                request->curriculum_id() + (to_group ? " group " : " trainee ") + assignee,
-                status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* LessonsService::SetTraineeGroup(
-    grpc::CallbackServerContext* ctx, const ves::v1::SetTraineeGroupRequest* request,
-    ves::v1::SetTraineeGroupResponse* /*response*/) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
-                               "set trainee groups");
-    if (!a.ok()) return ToGrpcStatus(a);
-    auto trainee = deps_.store->GetTrainee(request->trainee_id());
+grpc::ServerUnaryReactor* LessonsService::AssignCurriculum(
+    grpc::CallbackServerContext* ctx, const ves::v1::AssignCurriculumRequest* request,
+    ves::v1::AssignCurriculumResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &AssignCurriculumCall);
+}
+
+Status SetTraineeGroupCall(const ServiceDeps& deps, const Principal& who,
+                           const ves::v1::SetTraineeGroupRequest& request_message,
+                           ves::v1::SetTraineeGroupResponse* /*response*/) {
+  const ves::v1::SetTraineeGroupRequest* request = &request_message;
+  static const CallSpec spec{
+      "trainee.group", {StoreRole::kAdmin, StoreRole::kSupervisor}, "set trainee groups"};
+  return RunCall(deps, who, spec, request->trainee_id(), [&]() -> Status {
+    auto trainee = deps.store->GetTrainee(request->trainee_id());
     if (!trainee.ok()) return ToGrpcStatus(trainee.status);
     if (!RequireInstitution(who, trainee.value.institution, "group").ok()) {
       return Status(StatusCode::NOT_FOUND, "no trainee '" + request->trainee_id() + "'");
@@ -284,25 +288,31 @@ grpc::ServerUnaryReactor* LessonsService::SetTraineeGroup(
       return Status(StatusCode::INVALID_ARGUMENT,
                     "group = '" + request->group() + "': must be 1..128 printable characters");
     }
-    return ToGrpcStatus(deps_.store->SetTraineeGroup(request->trainee_id(), request->group()));
-  }();
-  FinishAudited(reactor, deps_, who, "trainee.group", request->trainee_id(), status);
-  return reactor;
+    return ToGrpcStatus(deps.store->SetTraineeGroup(request->trainee_id(), request->group()));
+  });
 }
 
-grpc::ServerUnaryReactor* LessonsService::GetNextLesson(
-    grpc::CallbackServerContext* ctx, const ves::v1::GetNextLessonRequest* request,
-    ves::v1::GetNextLessonResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
+grpc::ServerUnaryReactor* LessonsService::SetTraineeGroup(
+    grpc::CallbackServerContext* ctx, const ves::v1::SetTraineeGroupRequest* request,
+    ves::v1::SetTraineeGroupResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &SetTraineeGroupCall);
+}
+
+Status GetNextLessonCall(const ServiceDeps& deps, const Principal& who,
+                         const ves::v1::GetNextLessonRequest& request_message,
+                         ves::v1::GetNextLessonResponse* response) {
+  const ves::v1::GetNextLessonRequest* request = &request_message;
+  static const CallSpec spec{
+      "lesson.next",
+      {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation, StoreRole::kTrainee},
+      "get lessons"};
+  return RunCall(deps, who, spec, request->trainee_id(), [&]() -> Status {
     patient_db::TraineeRow trainee;
-    Status s = LessonReader(deps_, who, request->trainee_id(), "get lessons", &trainee);
+    Status s = LessonReader(deps, who, request->trainee_id(), "get lessons", &trainee);
     if (!s.ok()) return s;
     Progress progress;
     ves::v1::TraineeProgress summary;
-    s = ProgressOf(deps_, trainee.trainee_id, &progress, &summary);
+    s = ProgressOf(deps, trainee.trainee_id, &progress, &summary);
     if (!s.ok()) return s;
     response->set_pending_verdicts(summary.pending_verdicts());
     if (!progress.has_next) {
@@ -320,74 +330,83 @@ grpc::ServerUnaryReactor* LessonsService::GetNextLesson(
     response->set_lesson_count(progress.next_count);
     response->set_passes(progress.next_passes);
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "lesson.next", request->trainee_id(), status);
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* LessonsService::GetNextLesson(
+    grpc::CallbackServerContext* ctx, const ves::v1::GetNextLessonRequest* request,
+    ves::v1::GetNextLessonResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &GetNextLessonCall);
+}
+
+Status GetProgressCall(const ServiceDeps& deps, const Principal& who,
+                       const ves::v1::GetProgressRequest& request,
+                       ves::v1::GetProgressResponse* response) {
+  const bool by_group = request.has_group();
+  const std::string institution =
+      request.institution().empty() ? who.institution : request.institution();
+  // Every reader of progress; a group's needs admin or supervisor (below).
+  static const CallSpec spec{
+      "lesson.progress",
+      {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation, StoreRole::kTrainee},
+      "read progress"};
+  return RunCall(deps, who, spec,
+                 by_group ? "group " + request.group() + "@" + institution : request.trainee_id(),
+                 [&]() -> Status {
+                   std::vector<std::string> trainees;
+                   if (by_group) {
+                     AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
+                                                "read a group's progress");
+                     if (a.ok()) a = RequireInstitution(who, institution, "read the groups");
+                     if (!a.ok()) return ToGrpcStatus(a);
+                     auto members = deps.store->ListGroupTrainees(institution, request.group());
+                     if (!members.ok()) return ToGrpcStatus(members.status);
+                     if (members.value.empty()) {
+                       return Status(StatusCode::NOT_FOUND, "group '" + request.group() +
+                                                                "' of institution '" + institution +
+                                                                "' has no trainees");
+                     }
+                     trainees = members.value;
+                   } else {
+                     patient_db::TraineeRow trainee;
+                     Status s =
+                         LessonReader(deps, who, request.trainee_id(), "read progress", &trainee);
+                     if (!s.ok()) return s;
+                     trainees.push_back(trainee.trainee_id);
+                   }
+                   for (const std::string& id : trainees) {
+                     Progress progress;
+                     Status s = ProgressOf(deps, id, &progress, response->add_trainees());
+                     if (!s.ok()) return s;
+                   }
+                   return Status::OK;
+                 });
 }
 
 grpc::ServerUnaryReactor* LessonsService::GetProgress(grpc::CallbackServerContext* ctx,
                                                       const ves::v1::GetProgressRequest* request,
                                                       ves::v1::GetProgressResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const bool by_group = request->has_group();
-  const std::string institution =
-      request->institution().empty() ? who.institution : request->institution();
-  const Status status = [&]() -> Status {
-    std::vector<std::string> trainees;
-    if (by_group) {
-      AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor},
-                                 "read a group's progress");
-      if (a.ok()) a = RequireInstitution(who, institution, "read the groups");
-      if (!a.ok()) return ToGrpcStatus(a);
-      auto members = deps_.store->ListGroupTrainees(institution, request->group());
-      if (!members.ok()) return ToGrpcStatus(members.status);
-      if (members.value.empty()) {
-        return Status(StatusCode::NOT_FOUND, "group '" + request->group() +
-                                                 "' of institution '" + institution +
-                                                 "' has no trainees");
-      }
-      trainees = members.value;
-    } else {
-      patient_db::TraineeRow trainee;
-      Status s = LessonReader(deps_, who, request->trainee_id(), "read progress", &trainee);
-      if (!s.ok()) return s;
-      trainees.push_back(trainee.trainee_id);
-    }
-    for (const std::string& id : trainees) {
-      Progress progress;
-      Status s = ProgressOf(deps_, id, &progress, response->add_trainees());
-      if (!s.ok()) return s;
-    }
-    return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "lesson.progress",
-                by_group ? "group " + request->group() + "@" + institution
-                         : request->trainee_id(),
-                status);
-  return reactor;
+  return ServeUnary(ctx, deps_, request, response, &GetProgressCall);
 }
 
-grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
-    grpc::CallbackServerContext* ctx, const ves::v1::GetLessonVerdictRequest* request,
-    ves::v1::GetLessonVerdictResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
-                                     StoreRole::kStation, StoreRole::kTrainee}, "read verdicts");
-    if (!a.ok()) return ToGrpcStatus(a);
-    auto session = deps_.store->GetSession(request->session_uuid());
+Status GetLessonVerdictCall(const ServiceDeps& deps, const Principal& who,
+                            const ves::v1::GetLessonVerdictRequest& request_message,
+                            ves::v1::GetLessonVerdictResponse* response) {
+  const ves::v1::GetLessonVerdictRequest* request = &request_message;
+  static const CallSpec spec{
+      "lesson.verdict",
+      {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation, StoreRole::kTrainee},
+      "read verdicts"};
+  return RunCall(deps, who, spec, request->session_uuid(), [&]() -> Status {
+    auto session = deps.store->GetSession(request->session_uuid());
     if (!session.ok()) return ToGrpcStatus(session.status);
     patient_db::TraineeRow trainee;
-    Status s = LessonReader(deps_, who, session.value.trainee_id, "read verdicts", &trainee);
+    Status s = LessonReader(deps, who, session.value.trainee_id, "read verdicts", &trainee);
     if (s.error_code() == StatusCode::NOT_FOUND) {
       return Status(StatusCode::NOT_FOUND, "no session '" + request->session_uuid() + "'");
     }
     if (!s.ok()) return s;
-    auto verdict = deps_.store->GetLessonVerdict(request->session_uuid());
+    auto verdict = deps.store->GetLessonVerdict(request->session_uuid());
     if (verdict.ok()) {
       response->set_judged(true);
       ToProtoVerdict(verdict.value, response->mutable_verdict());
@@ -404,9 +423,13 @@ grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
     }
     response->set_judged(false);  // stored; the judge has not reached it yet
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "lesson.verdict", request->session_uuid(), status);
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* LessonsService::GetLessonVerdict(
+    grpc::CallbackServerContext* ctx, const ves::v1::GetLessonVerdictRequest* request,
+    ves::v1::GetLessonVerdictResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &GetLessonVerdictCall);
 }
 
 }  // namespace ves::server

@@ -1,5 +1,6 @@
-// ves-server: the central gRPC server (docs/server.md).
-//   ves-server --listen 127.0.0.1:50051 --db sqlite:PATH|postgresql://URL
+// ves-server: the central gRPC server (docs/server.md) and, with --http, the
+// web front end (docs/web.md).
+//   ves-server --listen 127.0.0.1:50051 --db sqlite:PATH|postgresql://URL [--http HOST:PORT]
 //              [--tls-cert F --tls-key F [--tls-client-ca F] | --insecure-loopback]
 // SIGTERM or SIGINT drains in-flight calls, commits pending writes and exits 0.
 #include <spdlog/spdlog.h>
@@ -23,6 +24,10 @@ int main(int argc, char** argv) {
   po::options_description desc("ves-server options");
   desc.add_options()("help,h", "show this help")(
       "listen", po::value(&options.listen)->default_value(options.listen), "host:port to serve")(
+      "http", po::value(&options.http_listen),
+      "host:port of the web front end and JSON API (HTTPS with the TLS flags; plain HTTP "
+      "only on loopback)")(
+      "http-port-file", po::value<std::string>(), "write the bound HTTP port here (for --http ...:0)")(
       "db", po::value(&db_url)->required(),
       "database URL: sqlite:/var/lib/ves/ves.db or postgresql://USER@HOST/DB")(
       "tls-cert", po::value(&options.tls_cert_file), "server certificate chain (PEM)")(
@@ -84,6 +89,15 @@ int main(int argc, char** argv) {
     if (!port_file.empty()) {
       std::ofstream(port_file + ".tmp") << server.port() << "\n";
       std::rename((port_file + ".tmp").c_str(), port_file.c_str());
+    }
+    if (server.http_port() != 0) {
+      spdlog::info("ves-server web front end on port {} ({})", server.http_port(),
+                   options.tls_cert_file.empty() ? "plain HTTP, loopback" : "HTTPS");
+      if (vm.count("http-port-file")) {
+        const std::string f = vm["http-port-file"].as<std::string>();
+        std::ofstream(f + ".tmp") << server.http_port() << "\n";
+        std::rename((f + ".tmp").c_str(), f.c_str());
+      }
     }
     boost::asio::io_context io;
     boost::asio::signal_set signals(io, SIGTERM, SIGINT);

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "patient_db/limits.h"
+#include "server/pipeline.h"
 #include "server/services.h"
 #include "server/session_check.h"
 
@@ -43,14 +44,6 @@ Status ToGrpcStatus(const AuthStatus& s) {
     case AuthCode::kInternal: break;
   }
   return Status(StatusCode::INTERNAL, "authentication failed: " + s.message);
-}
-
-AuthStatus AuthenticateCall(grpc::CallbackServerContext* ctx, Authenticator& auth,
-                            Principal* principal) {
-  const auto& md = ctx->client_metadata();
-  auto it = md.find("authorization");
-  if (it == md.end()) return auth.Authenticate({}, principal);
-  return auth.Authenticate(std::string_view(it->second.data(), it->second.size()), principal);
 }
 
 const char* StatusCodeName(grpc::StatusCode code) {
@@ -96,17 +89,18 @@ Status CheckRequestLimits(const google::protobuf::Message& request) {
   return Status(StatusCode::INVALID_ARGUMENT, problem);
 }
 
+std::string_view AuthorizationOf(grpc::CallbackServerContext* ctx) {
+  const auto& md = ctx->client_metadata();
+  auto it = md.find("authorization");
+  return it == md.end() ? std::string_view()
+                        : std::string_view(it->second.data(), it->second.size());
+}
+
 bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
            const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who) {
-  // Bounded before anything looks at it: no store lookup, no audit row.
-  const Status limits = CheckRequestLimits(request);
-  if (!limits.ok()) {
-    reactor->Finish(limits);
-    return false;
-  }
-  AuthStatus a = AuthenticateCall(ctx, *deps.auth, who);
-  if (a.ok()) return true;
-  reactor->Finish(ToGrpcStatus(a));
+  const Status admitted = AdmitRequest(deps, AuthorizationOf(ctx), request, who);
+  if (admitted.ok()) return true;
+  reactor->Finish(admitted);
   return false;
 }
 
@@ -330,18 +324,34 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   return reactor;
 }
 
+// ---- The pipeline ------------------------------------------------------------
+
+Status AdmitRequest(const ServiceDeps& deps, std::string_view authorization,
+                    const google::protobuf::Message& request, Principal* who) {
+  // Bounded before anything looks at it: no store lookup, no audit row.
+  const Status limits = CheckRequestLimits(request);
+  if (!limits.ok()) return limits;
+  return ToGrpcStatus(deps.auth->Authenticate(authorization, who));
+}
+
+Status RunCall(const ServiceDeps& deps, const Principal& who, const CallSpec& spec,
+               const std::string& target, const std::function<Status()>& body) {
+  const AuthStatus role = RequireRole(who, spec.roles, spec.what);
+  const Status status = role.ok() ? body() : ToGrpcStatus(role);
+  if (spec.audit_every_call || !role.ok()) {
+    deps.writer->SubmitAudit(MakeAudit(who, spec.action, target, status));
+  }
+  return status;
+}
+
 // ---- Trainees --------------------------------------------------------------
 
-grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContext* ctx,
-                                                      const ves::v1::AddTraineeRequest* request,
-                                                      ves::v1::AddTraineeResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const ves::v1::Trainee& t = request->trainee();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "add trainees");
-    if (!a.ok()) return ToGrpcStatus(a);
+Status AddTraineeCall(const ServiceDeps& deps, const Principal& who,
+                      const ves::v1::AddTraineeRequest& request,
+                      ves::v1::AddTraineeResponse* response) {
+  const ves::v1::Trainee& t = request.trainee();
+  static const CallSpec spec{"trainee.add", {StoreRole::kAdmin}, "add trainees"};
+  return RunCall(deps, who, spec, t.trainee_id(), [&]() -> Status {
     if (!IsName(t.trainee_id())) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     "trainee.trainee_id = '" + t.trainee_id() + "': must be 1..128 printable "
@@ -354,35 +364,37 @@ grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContex
       return Status(StatusCode::INVALID_ARGUMENT,
                     "trainee.institution = '" + row.institution + "': not a valid name");
     }
-    auto st = deps_.store->AddInstitution(row.institution, row.created_unix_ms);
-    if (st.ok()) st = deps_.store->AddTrainee(row);
+    auto st = deps.store->AddInstitution(row.institution, row.created_unix_ms);
+    if (st.ok()) st = deps.store->AddTrainee(row);
     if (!st.ok()) return ToGrpcStatus(st);
     ToTrainee(row, response->mutable_trainee());
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "trainee.add", t.trainee_id(), status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* TraineesService::ListTrainees(
-    grpc::CallbackServerContext* ctx, const ves::v1::ListTraineesRequest* request,
-    ves::v1::ListTraineesResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
+grpc::ServerUnaryReactor* TraineesService::AddTrainee(grpc::CallbackServerContext* ctx,
+                                                      const ves::v1::AddTraineeRequest* request,
+                                                      ves::v1::AddTraineeResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &AddTraineeCall);
+}
+
+Status ListTraineesCall(const ServiceDeps& deps, const Principal& who,
+                        const ves::v1::ListTraineesRequest& request,
+                        ves::v1::ListTraineesResponse* response) {
   const std::string institution =
-      request->institution().empty() ? who.institution : request->institution();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(
-        who, {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation}, "list trainees");
-    if (a.ok()) a = RequireInstitution(who, institution, "list the trainees");
+      request.institution().empty() ? who.institution : request.institution();
+  static const CallSpec spec{"trainee.list",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kStation},
+                             "list trainees"};
+  return RunCall(deps, who, spec, institution, [&]() -> Status {
+    AuthStatus a = RequireInstitution(who, institution, "list the trainees");
     if (!a.ok()) return ToGrpcStatus(a);
     patient_db::ListPage page;
-    const Status token = ReadPageToken(request->page_token(), "trainees", &page);
+    const Status token = ReadPageToken(request.page_token(), "trainees", &page);
     if (!token.ok()) return token;
-    const int size = PageSizeOf(request->page_size());
+    const int size = PageSizeOf(request.page_size());
     page.limit = size + 1;  // one more tells whether a next page exists
-    auto rows = deps_.store->ListTrainees(institution, page);
+    auto rows = deps.store->ListTrainees(institution, page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
     size_t bytes = 0;
     for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
@@ -395,27 +407,31 @@ grpc::ServerUnaryReactor* TraineesService::ListTrainees(
       }
     }
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "trainee.list", institution, status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* TraineesService::ListSessions(
-    grpc::CallbackServerContext* ctx, const ves::v1::ListSessionsRequest* request,
-    ves::v1::ListSessionsResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
+grpc::ServerUnaryReactor* TraineesService::ListTrainees(grpc::CallbackServerContext* ctx,
+                                                        const ves::v1::ListTraineesRequest* request,
+                                                        ves::v1::ListTraineesResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &ListTraineesCall);
+}
+
+Status ListSessionsCall(const ServiceDeps& deps, const Principal& who,
+                        const ves::v1::ListSessionsRequest& request,
+                        ves::v1::ListSessionsResponse* response) {
+  static const CallSpec spec{"trainee.sessions",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "list the sessions"};
+  return RunCall(deps, who, spec, request.trainee_id(), [&]() -> Status {
     patient_db::TraineeRow trainee;
-    Status s = ReadableTrainee(deps_, who, request->trainee_id(), "list the sessions", &trainee);
+    Status s = ReadableTrainee(deps, who, request.trainee_id(), "list the sessions", &trainee);
     if (!s.ok()) return s;
     patient_db::ListPage page;
-    s = ReadPageToken(request->page_token(), "sessions", &page);
+    s = ReadPageToken(request.page_token(), "sessions", &page);
     if (!s.ok()) return s;
-    const int size = PageSizeOf(request->page_size());
+    const int size = PageSizeOf(request.page_size());
     page.limit = size + 1;
-    auto rows = deps_.store->ListSessions(trainee.trainee_id, request->case_id(), page);
+    auto rows = deps.store->ListSessions(trainee.trainee_id, request.case_id(), page);
     if (!rows.ok()) return ToGrpcStatus(rows.status);
     size_t bytes = 0;
     for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
@@ -429,23 +445,27 @@ grpc::ServerUnaryReactor* TraineesService::ListSessions(
       }
     }
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "trainee.sessions", request->trainee_id(), status);
-  return reactor;
+  });
 }
 
-grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
-    grpc::CallbackServerContext* ctx, const ves::v1::LearningCurveRequest* request,
-    ves::v1::LearningCurveResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
+grpc::ServerUnaryReactor* TraineesService::ListSessions(grpc::CallbackServerContext* ctx,
+                                                        const ves::v1::ListSessionsRequest* request,
+                                                        ves::v1::ListSessionsResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &ListSessionsCall);
+}
+
+Status GetLearningCurveCall(const ServiceDeps& deps, const Principal& who,
+                            const ves::v1::LearningCurveRequest& request,
+                            ves::v1::LearningCurveResponse* response) {
+  static const CallSpec spec{"trainee.curve",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "read the learning curve"};
+  return RunCall(deps, who, spec, request.trainee_id(), [&]() -> Status {
     patient_db::TraineeRow trainee;
     Status s =
-        ReadableTrainee(deps_, who, request->trainee_id(), "read the learning curve", &trainee);
+        ReadableTrainee(deps, who, request.trainee_id(), "read the learning curve", &trainee);
     if (!s.ok()) return s;
-    auto rows = deps_.store->ListSessions(trainee.trainee_id, "");
+    auto rows = deps.store->ListSessions(trainee.trainee_id, "");
     if (!rows.ok()) return ToGrpcStatus(rows.status);
     // Sessions come oldest first: attempts are numbered per case in that order.
     std::map<std::string, ves::v1::CaseCurve> curves;
@@ -463,53 +483,58 @@ grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
     response->set_trainee_id(trainee.trainee_id);
     for (auto& [id, curve] : curves) *response->add_curves() = std::move(curve);
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "trainee.curve", request->trainee_id(), status);
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* TraineesService::GetLearningCurve(
+    grpc::CallbackServerContext* ctx, const ves::v1::LearningCurveRequest* request,
+    ves::v1::LearningCurveResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &GetLearningCurveCall);
+}
+
+Status GetSessionCall(const ServiceDeps& deps, const Principal& who,
+                      const ves::v1::GetSessionRequest& request,
+                      ves::v1::GetSessionResponse* response) {
+  static const CallSpec spec{"session.read",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "read sessions"};
+  return RunCall(deps, who, spec, request.uuid(), [&]() -> Status {
+    auto row = deps.store->GetSession(request.uuid());
+    if (!row.ok()) return ToGrpcStatus(row.status);
+    patient_db::TraineeRow trainee;
+    Status s = ReadableTrainee(deps, who, row.value.trainee_id, "read the sessions", &trainee);
+    if (s.error_code() == StatusCode::NOT_FOUND) {
+      return Status(StatusCode::NOT_FOUND, "no session '" + request.uuid() + "'");
+    }
+    if (!s.ok()) return s;
+    if (!response->mutable_record()->ParseFromString(row.value.body)) {
+      return Status(StatusCode::DATA_LOSS, "stored session " + request.uuid() + " is corrupt");
+    }
+    response->set_stored_unix_ms(row.value.stored_unix_ms);
+    return Status::OK;
+  });
 }
 
 grpc::ServerUnaryReactor* TraineesService::GetSession(grpc::CallbackServerContext* ctx,
                                                       const ves::v1::GetSessionRequest* request,
                                                       ves::v1::GetSessionResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin, StoreRole::kSupervisor,
-                                     StoreRole::kTrainee}, "read sessions");
-    if (!a.ok()) return ToGrpcStatus(a);
-    auto row = deps_.store->GetSession(request->uuid());
-    if (!row.ok()) return ToGrpcStatus(row.status);
-    patient_db::TraineeRow trainee;
-    Status s = ReadableTrainee(deps_, who, row.value.trainee_id, "read the sessions", &trainee);
-    if (s.error_code() == StatusCode::NOT_FOUND) {
-      return Status(StatusCode::NOT_FOUND, "no session '" + request->uuid() + "'");
-    }
-    if (!s.ok()) return s;
-    if (!response->mutable_record()->ParseFromString(row.value.body)) {
-      return Status(StatusCode::DATA_LOSS, "stored session " + request->uuid() + " is corrupt");
-    }
-    response->set_stored_unix_ms(row.value.stored_unix_ms);
-    return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "session.read", request->uuid(), status);
-  return reactor;
+  return ServeUnary(ctx, deps_, request, response, &GetSessionCall);
 }
 
 // ---- Admin -----------------------------------------------------------------
 
-grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext* ctx,
-                                                    const ves::v1::CreateTokenRequest* request,
-                                                    ves::v1::CreateTokenResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
+Status CreateTokenCall(const ServiceDeps& deps, const Principal& who,
+                       const ves::v1::CreateTokenRequest& request,
+                       ves::v1::CreateTokenResponse* response) {
   const std::string institution =
-      request->institution().empty() ? who.institution : request->institution();
-  const Status status = [&]() -> Status {
-    AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "create tokens");
-    if (!a.ok()) return ToGrpcStatus(a);
-    const int role = request->role();
+      request.institution().empty() ? who.institution : request.institution();
+  static const CallSpec spec{"token.create", {StoreRole::kAdmin}, "create tokens"};
+  const std::string target =
+      std::string(patient_db::RoleName(static_cast<StoreRole>(
+          request.role() >= 1 && request.role() <= 4 ? request.role() : 4))) +
+      "@" + institution;
+  return RunCall(deps, who, spec, target, [&]() -> Status {
+    const int role = request.role();
     if (role < 1 || role > 4) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     "role = " + std::to_string(role) + ": must be admin, supervisor, station "
@@ -522,82 +547,79 @@ grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext*
     patient_db::TokenRow row;
     row.role = static_cast<StoreRole>(role);
     row.institution = institution;
-    row.label = request->label();
+    row.label = request.label();
     row.created_unix_ms = NowUnixMs();
     if (row.role == StoreRole::kTrainee) {
-      auto trainee = deps_.store->GetTrainee(request->trainee_id());
+      auto trainee = deps.store->GetTrainee(request.trainee_id());
       if (!trainee.ok()) {
         return Status(StatusCode::FAILED_PRECONDITION,
-                      "trainee_id = '" + request->trainee_id() + "': " + trainee.status.message);
+                      "trainee_id = '" + request.trainee_id() + "': " + trainee.status.message);
       }
       if (trainee.value.institution != institution) {
         return Status(StatusCode::INVALID_ARGUMENT,
-                      "trainee '" + request->trainee_id() + "' belongs to institution '" +
+                      "trainee '" + request.trainee_id() + "' belongs to institution '" +
                           trainee.value.institution + "', not '" + institution + "'");
       }
-      row.trainee_id = request->trainee_id();
+      row.trainee_id = request.trainee_id();
     }
-    auto st = deps_.store->AddInstitution(institution, row.created_unix_ms);
+    auto st = deps.store->AddInstitution(institution, row.created_unix_ms);
     const std::string token = NewToken();
     row.token_sha256_hex = Sha256HexOf(token);
-    if (st.ok()) st = deps_.store->AddToken(row);
+    if (st.ok()) st = deps.store->AddToken(row);
     if (!st.ok()) return ToGrpcStatus(st);
     response->set_token(token);
     response->set_token_id(TokenIdOf(row.token_sha256_hex));
     return Status::OK;
-  }();
-  FinishAudited(reactor, deps_, who, "token.create",
-                std::string(patient_db::RoleName(static_cast<StoreRole>(
-                    request->role() >= 1 && request->role() <= 4 ? request->role() : 4))) +
-                    "@" + institution,
-                status);
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* AdminService::CreateToken(grpc::CallbackServerContext* ctx,
+                                                    const ves::v1::CreateTokenRequest* request,
+                                                    ves::v1::CreateTokenResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &CreateTokenCall);
+}
+
+Status ListAuditCall(const ServiceDeps& deps, const Principal& who,
+                     const ves::v1::ListAuditRequest& request,
+                     ves::v1::ListAuditResponse* response) {
+  static const CallSpec spec{"audit.list",
+                             {StoreRole::kAdmin},
+                             "read the audit log",
+                             /*audit_every_call=*/false};
+  return RunCall(deps, who, spec, "", [&]() -> Status {
+    const int size = PageSizeOf(request.limit(), patient_db::kMaxPageSize);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request.page_token(), "audit", &page);
+    if (!token.ok()) return token;
+    auto rows = deps.store->ListAudit(request.since_unix_ms(), size + 1,
+                                      page.has_after ? page.after_number : 0);
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    if (static_cast<int>(rows.value.size()) > size) {
+      rows.value.resize(size);
+      response->set_next_page_token(MakePageToken("audit", rows.value.back().id, ""));
+    }
+    for (const auto& r : rows.value) {
+      auto* e = response->add_entries();
+      e->set_id(r.id);
+      e->set_at_unix_ms(r.at_unix_ms);
+      e->set_actor(r.actor);
+      e->set_actor_label(r.actor_label);
+      StoreRole role = StoreRole::kTrainee;
+      e->set_role(patient_db::ParseRoleName(r.role, &role) ? ToProtoRole(role)
+                                                           : ves::v1::ROLE_UNSPECIFIED);
+      e->set_institution(r.institution);
+      e->set_action(r.action);
+      e->set_target(r.target);
+      e->set_result(r.result);
+    }
+    return Status::OK;
+  });
 }
 
 grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* ctx,
                                                   const ves::v1::ListAuditRequest* request,
                                                   ves::v1::ListAuditResponse* response) {
-  auto* reactor = ctx->DefaultReactor();
-  Principal who;
-  if (!Admit(ctx, reactor, deps_, *request, &who)) return reactor;
-  AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "read the audit log");
-  if (!a.ok()) {
-    FinishAudited(reactor, deps_, who, "audit.list", "", ToGrpcStatus(a));
-    return reactor;
-  }
-  const int size = PageSizeOf(request->limit(), patient_db::kMaxPageSize);
-  patient_db::ListPage page;
-  const Status token = ReadPageToken(request->page_token(), "audit", &page);
-  if (!token.ok()) {
-    reactor->Finish(token);
-    return reactor;
-  }
-  auto rows = deps_.store->ListAudit(request->since_unix_ms(), size + 1,
-                                     page.has_after ? page.after_number : 0);
-  if (!rows.ok()) {
-    reactor->Finish(ToGrpcStatus(rows.status));
-    return reactor;
-  }
-  if (static_cast<int>(rows.value.size()) > size) {
-    rows.value.resize(size);
-    response->set_next_page_token(MakePageToken("audit", rows.value.back().id, ""));
-  }
-  for (const auto& r : rows.value) {
-    auto* e = response->add_entries();
-    e->set_id(r.id);
-    e->set_at_unix_ms(r.at_unix_ms);
-    e->set_actor(r.actor);
-    e->set_actor_label(r.actor_label);
-    StoreRole role = StoreRole::kTrainee;
-    e->set_role(patient_db::ParseRoleName(r.role, &role) ? ToProtoRole(role)
-                                                          : ves::v1::ROLE_UNSPECIFIED);
-    e->set_institution(r.institution);
-    e->set_action(r.action);
-    e->set_target(r.target);
-    e->set_result(r.result);
-  }
-  reactor->Finish(Status::OK);
-  return reactor;
+  return ServeUnary(ctx, deps_, request, response, &ListAuditCall);
 }
 
 }  // namespace ves::server

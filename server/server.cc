@@ -237,12 +237,29 @@ void VesServer::Start() {
     throw std::runtime_error("cannot listen on '" + options_.listen +
                              "' (address in use or invalid)");
   }
+  if (!options_.http_listen.empty()) {
+    HttpOptions http;
+    http.listen = options_.http_listen;
+    http.tls_cert_file = options_.tls_cert_file;
+    http.tls_key_file = options_.tls_key_file;
+    http.log_calls = options_.log_calls;
+    http_ = std::make_unique<HttpServer>(
+        http, ServiceDeps{store_.get(), writer_.get(), auth_.get(), judge_.get()});
+    try {
+      http_->Start();
+    } catch (...) {
+      server_->Shutdown();
+      server_.reset();
+      throw;
+    }
+  }
   judge_->Start();
 }
 
 void VesServer::Shutdown(std::chrono::milliseconds grace) {
   if (shut_down_) return;
   shut_down_ = true;
+  if (http_) http_->Stop();
   if (server_) {
     server_->Shutdown(std::chrono::system_clock::now() + grace);
     server_->Wait();

@@ -8,6 +8,7 @@
 
 #include "patient_db/store.h"
 #include "server/auth.h"
+#include "server/http_server.h"
 #include "server/services.h"
 #include "server/session_writer.h"
 
@@ -25,6 +26,9 @@ struct ServerOptions {
   int max_send_message_bytes = 16 << 20;
   bool log_calls = true;                   // one spdlog line per call
   training::JudgeBudget judge_budget;      // what judging one lesson session may cost
+  // host:port of the web front end and JSON API (docs/web.md); empty: none.
+  // HTTPS with the TLS files above; plain HTTP only on a loopback address.
+  std::string http_listen;
 };
 
 // Checks the TLS/plaintext choice and reads the PEM files. Throws
@@ -42,6 +46,7 @@ class VesServer {
   // cannot be bound, std::invalid_argument for refused options.
   void Start();
   int port() const { return port_; }
+  int http_port() const { return http_ ? http_->port() : 0; }
   patient_db::Store& store() { return *store_; }
   // Stops accepting calls, lets in-flight calls finish for up to `grace`
   // (then cancels them), commits what the writer holds. Idempotent.
@@ -61,6 +66,7 @@ class VesServer {
   std::unique_ptr<LessonJudge> judge_;
   std::unique_ptr<LessonsService> lessons_;
   std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<HttpServer> http_;
   int port_ = 0;
   bool shut_down_ = false;
 };

@@ -17,10 +17,11 @@
 #include "server/session_writer.h"
 #include "ves/v1/services.grpc.pb.h"
 
-// The gRPC services (callback API). Handlers are thin: authenticate, check
-// the role and institution, translate proto <-> store rows, call the Store,
-// map its status to grpc::Status, write the audit row. docs/server.md lists
-// who may call what.
+// The gRPC services (callback API). Handlers are thin: they run the request
+// pipeline of server/pipeline.h (admit, role, institution and store, audit),
+// which the HTTP API (docs/web.md) runs too. Uploads, whose audit row is
+// written when their stream or group commit ends, admit through the same
+// AdmitRequest. docs/server.md lists who may call what.
 namespace ves::server {
 
 inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
@@ -158,8 +159,6 @@ class LessonsService final : public ves::v1::Lessons::CallbackService {
 // Helpers shared by the handlers.
 grpc::Status ToGrpcStatus(const patient_db::StoreStatus& status);
 grpc::Status ToGrpcStatus(const AuthStatus& status);
-AuthStatus AuthenticateCall(grpc::CallbackServerContext* ctx, Authenticator& auth,
-                            Principal* principal);
 patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
                                const std::string& target, const grpc::Status& result);
 int64_t NowUnixMs();

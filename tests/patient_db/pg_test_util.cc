@@ -82,6 +82,10 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
+  StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
+      const std::vector<std::string>&) override {
+    return Skipped();
+  }
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int, int64_t) override { return {}; }
   StoreResult<bool> PutCurriculum(const CurriculumRow&) override { return Skipped(); }
   StoreResult<CurriculumRow> GetCurriculum(const std::string&) override { return Skipped(); }

@@ -226,6 +226,19 @@ TEST_P(StoreContract, SessionsSurviveReopenWithBodyAndOrder) {
   EXPECT_EQ(store_->GetSession("nope").status.code, StoreCode::kNotFound);
 }
 
+TEST_P(StoreContract, TraineeActivityCountsSessionsAndTheLatestEnd) {
+  ASSERT_TRUE(store_->AddTrainee({"t2", "north", "Trainee Two", 10}).ok());
+  WriteBatch b;
+  b.sessions = {Session("u1", "a", 300), Session("u2", "b", 100), Session("u3", "c", 200)};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  auto activity = store_->GetTraineeActivity({"t2", "t1", "nobody"});
+  ASSERT_TRUE(activity.ok()) << activity.status.message;
+  ASSERT_EQ(activity.value.size(), 3u);
+  EXPECT_EQ(activity.value[0], (TraineeActivity{0, 0}));
+  EXPECT_EQ(activity.value[1], (TraineeActivity{3, 1300}));  // Session(): end = start + 1000
+  EXPECT_EQ(activity.value[2], (TraineeActivity{0, 0}));
+}
+
 TEST_P(StoreContract, SessionForUnknownTraineeFailsWholeBatch) {
   WriteBatch b;
   SessionRow orphan = Session("u9", "x", 1);

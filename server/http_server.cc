@@ -1,0 +1,328 @@
+#include "server/http_server.h"
+
+#include <spdlog/spdlog.h>
+#include <sys/socket.h>
+
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
+#include <chrono>
+#include <map>
+#include <stdexcept>
+
+#include "patient_db/net_address.h"
+
+namespace ves::server {
+
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+using tcp = asio::ip::tcp;
+
+struct HttpServer::Impl {
+  asio::io_context io;
+  std::unique_ptr<asio::ssl::context> ssl;
+  tcp::acceptor acceptor{io};
+  std::thread accept_thread;
+  std::thread reaper_thread;
+  std::mutex mutex;
+  std::condition_variable cv;
+  // Open connections: native handle -> the time after which it is shut down
+  // (idle or too slow); guarded by mutex.
+  std::map<int, std::chrono::steady_clock::time_point> deadlines;
+  int active = 0;
+  bool stopping = false;
+};
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void SetDeadline(HttpServer::Impl* impl, int fd, std::chrono::seconds from_now) {
+  std::lock_guard lock(impl->mutex);
+  impl->deadlines[fd] = from_now.count() > 0 ? Clock::now() + from_now : Clock::time_point::max();
+}
+
+std::pair<std::string, std::string> SplitHostPort(const std::string& listen) {
+  const size_t colon = listen.rfind(':');
+  if (colon == std::string::npos) {
+    throw std::invalid_argument("--http '" + listen + "': must be HOST:PORT");
+  }
+  std::string host = listen.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  if (host == "localhost") host = "127.0.0.1";
+  return {host, listen.substr(colon + 1)};
+}
+
+// Forgets a connection's deadline when it goes out of scope.
+struct ForgetDeadline {
+  HttpServer::Impl* impl;
+  int fd;
+  ~ForgetDeadline() {
+    std::lock_guard lock(impl->mutex);
+    impl->deadlines.erase(fd);
+  }
+};
+
+HttpRequest ToRequest(const http::request<http::string_body>& r) {
+  HttpRequest out;
+  out.method = std::string(r.method_string());
+  out.target = std::string(r.target());
+  out.authorization = std::string(r[http::field::authorization]);
+  out.cookie = std::string(r[http::field::cookie]);
+  out.csrf_token = std::string(r["X-CSRF-Token"]);
+  out.content_type = std::string(r[http::field::content_type]);
+  out.body = r.body();
+  return out;
+}
+
+http::response<http::string_body> ToResponse(const HttpReply& reply, unsigned version,
+                                             bool keep_alive, bool head, bool tls) {
+  http::response<http::string_body> res{static_cast<http::status>(reply.status), version};
+  res.set(http::field::server, "ves-server");
+  res.set(http::field::content_type, reply.content_type);
+  // Pages use only their own scripts and styles; nothing may frame them.
+  res.set("Content-Security-Policy",
+          "default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+          "connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'self'");
+  res.set("X-Content-Type-Options", "nosniff");
+  res.set("Referrer-Policy", "no-referrer");
+  res.set("X-Frame-Options", "DENY");
+  if (tls) res.set("Strict-Transport-Security", "max-age=31536000");
+  for (const auto& [name, value] : reply.headers) res.insert(name, value);
+  res.keep_alive(keep_alive);
+  if (head) {
+    res.content_length(reply.body.size());
+  } else {
+    res.body() = reply.body;
+    res.prepare_payload();
+  }
+  return res;
+}
+
+HttpReply LimitReply(int status, const std::string& message) {
+  HttpReply r;
+  r.status = status;
+  r.body = WebApi::HtmlSafeJson("{\"error\":{\"code\":\"INVALID_ARGUMENT\",\"message\":\"" +
+                                message + "\"}}");
+  return r;
+}
+
+template <class Stream>
+void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
+                 const HttpOptions& options, bool tls, const std::string& peer) {
+  beast::flat_buffer buffer;
+  const auto timeout = std::chrono::seconds(options.io_timeout_s);
+  while (true) {
+    SetDeadline(impl, fd, timeout);
+    http::request_parser<http::string_body> parser;
+    parser.header_limit(kMaxHttpHeaderBytes);
+    parser.body_limit(kMaxHttpBodyBytes);
+    beast::error_code ec;
+    http::read(stream, buffer, parser, ec);
+    if (ec == http::error::end_of_stream || ec == asio::error::eof) return;
+    if (ec == http::error::header_limit || ec == http::error::body_limit ||
+        ec == http::error::buffer_overflow) {
+      const bool header = ec != http::error::body_limit;
+      const HttpReply reply =
+          LimitReply(header ? 431 : 413, header ? "request header: over the limit of " +
+                                                      std::to_string(kMaxHttpHeaderBytes) + " bytes"
+                                                : "body: over the limit of " +
+                                                      std::to_string(kMaxHttpBodyBytes) + " bytes");
+      auto res = ToResponse(reply, 11, false, false, tls);
+      http::write(stream, res, ec);
+      return;
+    }
+    if (ec) {
+      if (ec != asio::error::operation_aborted && ec != asio::error::connection_reset &&
+          ec != asio::error::bad_descriptor && ec != asio::error::shut_down) {
+        const HttpReply reply = LimitReply(400, "not an HTTP/1.1 request");
+        auto res = ToResponse(reply, 11, false, false, tls);
+        beast::error_code ignored;
+        http::write(stream, res, ignored);
+      }
+      return;
+    }
+    SetDeadline(impl, fd, std::chrono::seconds(0));  // a replay may take a while
+    const auto& req = parser.get();
+    const auto start = Clock::now();
+    const HttpReply reply = api->Handle(ToRequest(req));
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    if (options.log_calls)
+      spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
+                   patient_db::PrintableExcerpt(
+                       std::string(req.target().substr(0, req.target().find('?'))), 120),
+                   reply.status, ms, peer);
+    auto res =
+        ToResponse(reply, req.version(), req.keep_alive(), req.method() == http::verb::head, tls);
+    SetDeadline(impl, fd, timeout);
+    http::write(stream, res, ec);
+    if (ec || !res.keep_alive()) return;
+  }
+}
+
+}  // namespace
+
+HttpServer::HttpServer(HttpOptions options, ServiceDeps deps)
+    : options_(std::move(options)), impl_(std::make_unique<Impl>()) {
+  WebOptions web;
+  web.secure_cookies = !options_.tls_cert_file.empty();
+  api_ = std::make_unique<WebApi>(deps, web);
+}
+
+HttpServer::~HttpServer() { Stop(); }
+
+void HttpServer::Start() {
+  const bool tls = !options_.tls_cert_file.empty() || !options_.tls_key_file.empty();
+  if (!tls && !patient_db::IsLoopbackAddress(options_.listen)) {
+    throw std::invalid_argument("refusing plain HTTP on '" + options_.listen +
+                                "': without --tls-cert/--tls-key, --http needs a loopback "
+                                "address such as 127.0.0.1:8080");
+  }
+  if (tls) {
+    if (options_.tls_cert_file.empty() || options_.tls_key_file.empty()) {
+      throw std::invalid_argument("HTTPS needs both --tls-cert and --tls-key");
+    }
+    impl_->ssl = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
+    impl_->ssl->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                            asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                            asio::ssl::context::no_tlsv1_1);
+    beast::error_code ec;
+    impl_->ssl->use_certificate_chain_file(options_.tls_cert_file, ec);
+    if (!ec) impl_->ssl->use_private_key_file(options_.tls_key_file, asio::ssl::context::pem, ec);
+    if (ec) {
+      throw std::invalid_argument("--http with --tls-cert " + options_.tls_cert_file +
+                                  " --tls-key " + options_.tls_key_file + ": " + ec.message());
+    }
+  }
+  const auto [host, port_text] = SplitHostPort(options_.listen);
+  beast::error_code ec;
+  const auto address = asio::ip::make_address(host, ec);
+  int port = -1;
+  try {
+    port = std::stoi(port_text);
+  } catch (const std::exception&) {
+  }
+  if (ec || port < 0 || port > 65535) {
+    throw std::invalid_argument("--http '" + options_.listen + "': not a HOST:PORT address");
+  }
+  const tcp::endpoint endpoint(address, static_cast<unsigned short>(port));
+  auto& acceptor = impl_->acceptor;
+  acceptor.open(endpoint.protocol(), ec);
+  if (!ec) acceptor.set_option(asio::socket_base::reuse_address(true), ec);
+  if (!ec) acceptor.bind(endpoint, ec);
+  if (!ec) acceptor.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) {
+    throw std::runtime_error("cannot listen for HTTP on '" + options_.listen +
+                             "': " + ec.message());
+  }
+  port_ = acceptor.local_endpoint().port();
+  impl_->reaper_thread = std::thread([impl = impl_.get()] {
+    std::unique_lock lock(impl->mutex);
+    while (!impl->stopping) {
+      impl->cv.wait_for(lock, std::chrono::milliseconds(500));
+      const auto now = Clock::now();
+      for (auto& [fd, deadline] : impl->deadlines) {
+        if (impl->stopping || deadline <= now) {
+          ::shutdown(fd, SHUT_RDWR);  // the connection's blocking read or write returns
+          deadline = Clock::time_point::max();
+        }
+      }
+    }
+  });
+  impl_->accept_thread = std::thread([this, protocol = endpoint.protocol()] {
+    Impl* impl = impl_.get();
+    while (true) {
+      tcp::socket socket(impl->io);
+      beast::error_code accept_ec;
+      impl->acceptor.accept(socket, accept_ec);
+      {
+        std::unique_lock lock(impl->mutex);
+        if (impl->stopping) return;
+        if (accept_ec) continue;
+        if (impl->active >= options_.max_connections) {
+          lock.unlock();
+          socket.close(accept_ec);  // over the bound: refused, not queued
+          continue;
+        }
+        ++impl->active;
+      }
+      // The thread gets the bare descriptor and owns its socket as a local,
+      // so every socket is closed before `active` drops and Stop may return.
+      beast::error_code release_ec;
+      const int fd = socket.release(release_ec);
+      if (release_ec) {
+        std::lock_guard lock(impl->mutex);
+        --impl->active;
+        continue;
+      }
+      std::thread([this, impl, fd, protocol] {
+        {
+          tcp::socket s(impl->io);
+          beast::error_code assign_ec;
+          s.assign(protocol, fd, assign_ec);
+          // Destroyed before the socket: the reaper never shuts down a
+          // descriptor number that has been closed (and maybe reused).
+          ForgetDeadline forget_plain{impl, fd};
+          beast::error_code peer_ec;
+          const auto remote = s.remote_endpoint(peer_ec);
+          const std::string peer =
+              peer_ec ? std::string("?")
+                      : remote.address().to_string() + ":" + std::to_string(remote.port());
+          SetDeadline(impl, fd, std::chrono::seconds(options_.io_timeout_s));
+          try {
+            if (assign_ec) {
+              spdlog::warn("http connection: {}", assign_ec.message());
+            } else if (impl->ssl) {
+              beast::ssl_stream<tcp::socket> stream(std::move(s), *impl->ssl);
+              ForgetDeadline forget_tls{impl, fd};
+              beast::error_code ec;
+              stream.handshake(asio::ssl::stream_base::server, ec);
+              if (!ec) {
+                ServeStream(stream, fd, impl, api_.get(), options_, true, peer);
+                stream.shutdown(ec);
+              }
+            } else {
+              ServeStream(s, fd, impl, api_.get(), options_, false, peer);
+              beast::error_code ec;
+              s.shutdown(tcp::socket::shutdown_both, ec);
+            }
+          } catch (const std::exception& e) {
+            spdlog::warn("http connection from {}: {}", peer, e.what());
+          }
+        }
+        std::lock_guard lock(impl->mutex);
+        --impl->active;
+        impl->cv.notify_all();
+      }).detach();
+    }
+  });
+}
+
+void HttpServer::Stop() {
+  if (!impl_->accept_thread.joinable()) return;
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stopping = true;
+    for (auto& [fd, deadline] : impl_->deadlines) ::shutdown(fd, SHUT_RDWR);
+  }
+  ::shutdown(impl_->acceptor.native_handle(), SHUT_RDWR);  // wakes the blocking accept
+  impl_->accept_thread.join();
+  impl_->cv.notify_all();
+  impl_->reaper_thread.join();
+  std::unique_lock lock(impl_->mutex);
+  // A connection busy in a handler finishes it, then finds its socket shut.
+  impl_->cv.wait(lock, [&] {
+    for (auto& [fd, deadline] : impl_->deadlines) ::shutdown(fd, SHUT_RDWR);
+    return impl_->active == 0;
+  });
+  lock.unlock();
+  beast::error_code ec;
+  impl_->acceptor.close(ec);
+}
+
+}  // namespace ves::server

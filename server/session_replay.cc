@@ -1,0 +1,72 @@
+#include "server/session_replay.h"
+
+#include <cmath>
+
+#include "station/training/case_run.h"
+#include "station/training/replay.h"
+
+namespace ves::server {
+namespace {
+
+std::pair<int, int> ProjectAp(const Eigen::Vector3d& p_W) {
+  return {static_cast<int>(std::lround(-p_W.x() * 1000.0)),
+          static_cast<int>(std::lround(p_W.z() * 1000.0))};
+}
+
+template <class Points>
+std::vector<std::pair<int, int>> Polyline(const Points& points, size_t first, int max_points) {
+  std::vector<std::pair<int, int>> out;
+  if (first >= points.size()) return out;
+  const size_t n = points.size() - first;
+  const size_t stride = std::max<size_t>(1, (n + max_points - 1) / max_points);
+  for (size_t i = first; i < points.size(); i += stride) out.push_back(ProjectAp(points[i]));
+  if ((n - 1) % stride != 0) out.push_back(ProjectAp(points.back()));  // keep the tip / cecum
+  return out;
+}
+
+}  // namespace
+
+SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, double shape_hz,
+                            int max_points) {
+  SessionReplay out;
+  const double dt_s = record.input_log().dt_s();
+  const int64_t n_steps = static_cast<int64_t>(record.input_log().sample_count());
+  const int64_t series_every = std::max<int64_t>(1, std::llround(1.0 / (series_hz * dt_s)));
+  const int64_t shape_every =
+      series_every * std::max<int64_t>(1, std::llround(series_hz / shape_hz));
+  bool in_loop = false;
+  int64_t step = 0;
+  const training::StepCallback on_step = [&](const training::InputSample&,
+                                             const training::SessionRunner& runner) {
+    ++step;
+    const auto& th = runner.session().accumulator().thresholds();
+    const auto& obs = runner.observation();
+    const double loop_m = runner.session().accumulator().loop_index_m();
+    in_loop = in_loop ? loop_m > th.loop_exit_m : loop_m > th.loop_enter_m;
+    out.pain_stretch_m = th.pain_stretch_m;
+    out.cecum_arc_m = th.cecum_arc_m;
+    out.final_tip_arc_m = obs.tip_arc_m;
+    if (step % series_every != 0 && step != n_steps) return;
+    ReplayFrame f;
+    f.t_s = obs.t_s;
+    f.hand_force_N = obs.base_force_N;
+    f.stretch_m = obs.peak_stretch_m;
+    f.tip_arc_m = obs.tip_arc_m;
+    f.inserted_m = obs.inserted_m;
+    f.pain = obs.peak_stretch_m > th.pain_stretch_m;
+    f.loop = in_loop;
+    if (step % shape_every == 0 || step == n_steps) {
+      const auto& state = runner.state();
+      // The scope from just outside the anus to the tip.
+      const size_t first = static_cast<size_t>(std::max(0, state.first_inside_sample - 1));
+      f.scope_mm = Polyline(state.p_WSample, first, max_points);
+      f.colon_mm = Polyline(state.p_WColon, 0, max_points);
+    }
+    out.frames.push_back(std::move(f));
+  };
+  const training::RunResult result = training::ReplayRecord(record, on_step);
+  out.summary_line = training::SummaryLine(result);
+  return out;
+}
+
+}  // namespace ves::server

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ves/v1/session.pb.h"
+
+// What the web pages show of a stored session (docs/web.md): time series and
+// a replay of scope and colon shapes, recomputed by re-running the model from
+// the record's input log (training::ReplayRecord, the judge's replay).
+namespace ves::server {
+
+struct ReplayFrame {
+  double t_s = 0;
+  double hand_force_N = 0;  // thrust at the base: what the hand feels
+  double stretch_m = 0;     // largest mesentery stretch
+  double tip_arc_m = 0;     // tip depth along the colon
+  double inserted_m = 0;
+  bool pain = false;  // stretch over the pain threshold
+  bool loop = false;  // loop index over its enter threshold (until under its exit one)
+  // AP fluoroscopy projection (image right = -x, up = +z of W), millimetres;
+  // empty on frames between shape samples.
+  std::vector<std::pair<int, int>> scope_mm;
+  std::vector<std::pair<int, int>> colon_mm;
+};
+
+struct SessionReplay {
+  std::vector<ReplayFrame> frames;  // every 1/series_hz seconds, and the last step
+  double pain_stretch_m = 0;
+  double cecum_arc_m = 0;
+  double final_tip_arc_m = 0;  // after the last logged step
+  std::string summary_line;    // training::SummaryLine of the replay
+};
+
+// Throws std::runtime_error (training::ReplayError, InputLogError, ...) when
+// the record cannot be replayed. `series_hz` in 1..100; shapes at most
+// `shape_hz`, at most `max_points` per polyline.
+SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz = 10.0,
+                            double shape_hz = 5.0, int max_points = 80);
+
+}  // namespace ves::server

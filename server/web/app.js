@@ -1,0 +1,360 @@
+// The VES supervisors' pages (docs/web.md). Data is only ever put in the
+// page as text (textContent), never parsed as HTML.
+'use strict';
+
+const ves = {charts: {}};
+window.ves = ves;
+
+function $(id) { return document.getElementById(id); }
+
+function el(tag, text, attrs) {
+  const e = document.createElement(tag);
+  if (text !== undefined && text !== null) e.textContent = String(text);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  return e;
+}
+
+function row(cells) {
+  const tr = document.createElement('tr');
+  for (const c of cells) {
+    const td = document.createElement('td');
+    if (c instanceof Node) td.appendChild(c); else td.textContent = c === undefined ? '' : String(c);
+    tr.appendChild(td);
+  }
+  return tr;
+}
+
+function link(text, href) { return el('a', text, {href: href}); }
+
+function when(ms) {
+  const n = Number(ms);
+  return n > 0 ? new Date(n).toISOString().replace('T', ' ').slice(0, 19) + ' UTC' : '—';
+}
+
+function showError(message) {
+  const p = $('error');
+  p.textContent = message;
+  p.hidden = false;
+}
+
+async function api(path, options) {
+  const opts = Object.assign({credentials: 'same-origin', headers: {}}, options || {});
+  if (opts.method === 'POST') {
+    opts.headers['Content-Type'] = 'application/json';
+    const csrf = sessionStorage.getItem('ves_csrf');
+    if (csrf) opts.headers['X-CSRF-Token'] = csrf;
+  }
+  const res = await fetch('/api/v1/' + path, opts);
+  let body = null;
+  try { body = await res.json(); } catch (e) { body = null; }
+  if (res.status === 401 && document.body.dataset.page !== 'sign-in') {
+    location.href = '/index.html';
+    throw new Error('not signed in');
+  }
+  if (!res.ok) {
+    const message = body && body.error ? body.error.code + ': ' + body.error.message
+                                       : 'HTTP ' + res.status;
+    throw new Error(message);
+  }
+  return body;
+}
+
+function param(name) { return new URLSearchParams(location.search).get(name) || ''; }
+
+async function signedIn() {
+  const me = await api('me');
+  if (me.csrf_token) sessionStorage.setItem('ves_csrf', me.csrf_token);
+  $('nav').hidden = false;
+  $('who').textContent = me.label + ' (' + me.role + ', ' + me.institution + ')';
+  $('nav-audit').hidden = me.role !== 'admin';
+  $('sign-out').addEventListener('click', async () => {
+    try {
+      await api('sign-out', {method: 'POST', body: '{}'});
+    } finally {
+      sessionStorage.removeItem('ves_csrf');
+      location.href = '/index.html';
+    }
+  });
+  return me;
+}
+
+// ---- pages --------------------------------------------------------------
+
+async function signInPage() {
+  $('sign-in-form').addEventListener('submit', async (event) => {
+    event.preventDefault();
+    try {
+      const reply = await api('sign-in', {method: 'POST',
+                                          body: JSON.stringify({token: $('token').value})});
+      sessionStorage.setItem('ves_csrf', reply.csrf_token);
+      location.href = '/trainees.html';
+    } catch (e) {
+      showError(e.message);
+    }
+  });
+}
+
+async function traineesPage() {
+  const me = await signedIn();
+  $('institution').textContent = me.institution;
+  const body = $('trainees').querySelector('tbody');
+  let token = '';
+  const groups = new Set();
+  do {
+    const page = await api('trainees?page_size=500' +
+                           (token ? '&page_token=' + encodeURIComponent(token) : ''));
+    for (const t of page.trainees) {
+      body.appendChild(row([
+        link(t.trainee_id, '/trainee.html?id=' + encodeURIComponent(t.trainee_id)),
+        t.display_name,
+        t.group ? link(t.group, '/progress.html?group=' + encodeURIComponent(t.group)) : '—',
+        t.sessions, when(t.last_activity_unix_ms)]));
+      if (t.group) groups.add(t.group);
+    }
+    token = page.next_page_token;
+  } while (token);
+  for (const g of [...groups].sort()) {
+    const li = el('li');
+    li.appendChild(link(g, '/progress.html?group=' + encodeURIComponent(g)));
+    $('groups').appendChild(li);
+  }
+}
+
+function lineChart(canvas, title, yLabel, datasets) {
+  return new Chart(canvas, {
+    type: 'line',
+    data: {datasets: datasets},
+    options: {
+      animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
+      plugins: {title: {display: true, text: title}, legend: {display: datasets.length > 1}},
+      scales: {x: {type: 'linear', title: {display: true, text: 'attempt'}, ticks: {precision: 0}},
+               y: {title: {display: true, text: yLabel}, beginAtZero: true}}
+    }
+  });
+}
+
+function curveBlock(container, kind, name, points, median, pass) {
+  const block = el('section', null, {class: 'curve', id: 'curve-' + kind + '-' + name});
+  block.appendChild(el('h3', (kind === 'case' ? 'Case ' : 'Lesson ') + name));
+  const metrics = [['score', 'Score', '/100'], ['time_to_cecum_s', 'Time to cecum', 's'],
+                   ['pain_s', 'Pain', 's'], ['loop_s', 'Loop time', 's']];
+  const charts = [];
+  for (const [key, title, unit] of metrics) {
+    const div = el('div', null, {class: 'plot'});
+    const canvas = el('canvas', null, {'data-metric': key});
+    div.appendChild(canvas);
+    block.appendChild(div);
+    const sets = [{label: title, data: points.map((p) => ({x: p.attempt, y: p[key]})),
+                   borderColor: '#1f5fa8', backgroundColor: '#1f5fa8'}];
+    if (key === 'score' && median && median.length) {
+      sets.push({label: 'group median', data: median.map((m) => ({x: m.attempt, y: m.score})),
+                 borderColor: '#999', borderDash: [6, 4], backgroundColor: '#999'});
+    }
+    if (pass && pass[key] !== undefined && points.length) {
+      const last = points[points.length - 1].attempt;
+      sets.push({label: 'pass line', data: [{x: 1, y: pass[key]}, {x: Math.max(last, 2), y: pass[key]}],
+                 borderColor: '#2a2', pointRadius: 0, backgroundColor: '#2a2'});
+    }
+    container.appendChild(block);
+    charts.push(lineChart(canvas, title, unit, sets));
+  }
+  // The same points as a table, for reading and for screen readers.
+  const table = el('table', null, {class: 'points'});
+  table.appendChild(el('thead')).appendChild(row(['Attempt', 'Score', 'Time to cecum (s)',
+                                                  'Pain (s)', 'Loop (s)', 'Session']));
+  const tbody = table.appendChild(el('tbody'));
+  for (const p of points) {
+    tbody.appendChild(row([p.attempt, p.score.toFixed(1), p.time_to_cecum_s.toFixed(1),
+                           p.pain_s.toFixed(1), p.loop_s.toFixed(1),
+                           link('open', '/session.html?uuid=' + encodeURIComponent(p.uuid))]));
+  }
+  block.appendChild(table);
+  ves.charts[kind + ':' + name] = charts;
+}
+
+async function traineePage() {
+  await signedIn();
+  const id = param('id');
+  $('trainee-id').textContent = id;
+  const curve = await api('trainees/' + encodeURIComponent(id) + '/curve');
+  $('trainee-group').textContent = curve.group || '—';
+  for (const c of curve.cases) curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null);
+  for (const l of curve.lessons) curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line);
+  const sessions = await api('trainees/' + encodeURIComponent(id) + '/sessions?page_size=500');
+  const body = $('sessions').querySelector('tbody');
+  for (const s of sessions.sessions.slice().reverse()) {
+    body.appendChild(row([link(when(s.start_unix_ms), '/session.html?uuid=' + encodeURIComponent(s.uuid)),
+                          s.case_id, s.outcome, Number(s.score).toFixed(1),
+                          s.completed ? Number(s.time_to_cecum_s).toFixed(1) + ' s' : '—']));
+  }
+}
+
+// Shades the time spans where a frame flag (pain, loop) is set.
+const bandsPlugin = {
+  id: 'vesBands',
+  beforeDatasetsDraw(chart, args, opts) {
+    const frames = opts.frames;
+    if (!frames || !frames.length) return;
+    const {ctx, chartArea, scales} = chart;
+    ctx.save();
+    for (const [flag, color] of [['pain', 'rgba(220,0,0,0.18)'], ['loop', 'rgba(0,80,220,0.15)']]) {
+      ctx.fillStyle = color;
+      let start = null;
+      for (let i = 0; i <= frames.length; i++) {
+        const on = i < frames.length && frames[i][flag];
+        if (on && start === null) start = frames[i].t_s;
+        if (!on && start !== null) {
+          const end = frames[Math.min(i, frames.length - 1)].t_s;
+          const x0 = scales.x.getPixelForValue(start), x1 = scales.x.getPixelForValue(end);
+          ctx.fillRect(x0, chartArea.top, Math.max(1, x1 - x0), chartArea.bottom - chartArea.top);
+          start = null;
+        }
+      }
+    }
+    ctx.restore();
+  }
+};
+
+function timeChart(canvas, title, frames, series) {
+  return new Chart(canvas, {
+    type: 'line',
+    data: {datasets: series.map(([label, key, scale, color]) => ({
+      label: label, data: frames.map((f) => ({x: f.t_s, y: f[key] * scale})),
+      borderColor: color, backgroundColor: color, pointRadius: 0, borderWidth: 1.5}))},
+    options: {
+      animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
+      plugins: {title: {display: true, text: title}, vesBands: {frames: frames}},
+      scales: {x: {type: 'linear', title: {display: true, text: 's'}}}
+    },
+    plugins: [bandsPlugin]
+  });
+}
+
+function drawFrame(replay, index) {
+  const frames = replay.frames;
+  const f = frames[index];
+  let shape = null;
+  for (let i = index; i >= 0 && !shape; i--) if (frames[i].scope_mm) shape = frames[i];
+  const canvas = $('fluoro');
+  const ctx = canvas.getContext('2d');
+  ctx.fillStyle = '#8a8a8a';
+  ctx.fillRect(0, 0, canvas.width, canvas.height);
+  // As the fluoroscopy view: AP projection, image right = -x, up = +z; the
+  // box of every shape in the session fills the canvas.
+  const b = replay.bounds;
+  const scale = Math.min(canvas.width / (b.x1 - b.x0), canvas.height / (b.y1 - b.y0)) * 0.9;
+  const px = (p) => [canvas.width / 2 + (p[0] - (b.x0 + b.x1) / 2) * scale,
+                     canvas.height / 2 - (p[1] - (b.y0 + b.y1) / 2) * scale];
+  const path = (points, width, color) => {
+    ctx.beginPath();
+    points.forEach((p, i) => { const [x, y] = px(p); if (i) ctx.lineTo(x, y); else ctx.moveTo(x, y); });
+    ctx.lineWidth = width; ctx.strokeStyle = color; ctx.lineJoin = 'round'; ctx.lineCap = 'round';
+    ctx.stroke();
+  };
+  if (shape) {
+    path(shape.colon_mm, Math.max(4, 45 * scale), 'rgba(60,60,60,0.45)');
+    path(shape.scope_mm, Math.max(2, 12 * scale), '#1a1a1a');
+    const tip = px(shape.scope_mm[shape.scope_mm.length - 1]);
+    ctx.fillStyle = '#ffd24a';
+    ctx.beginPath(); ctx.arc(tip[0], tip[1], 4, 0, 2 * Math.PI); ctx.fill();
+  }
+  $('fig-t').textContent = f.t_s.toFixed(1) + ' s';
+  $('tip-depth').textContent = (f.tip_arc_m * 1000).toFixed(0) + ' mm';
+  $('fig-inserted').textContent = (f.inserted_m * 1000).toFixed(0) + ' mm';
+  $('fig-force').textContent = f.hand_force_N.toFixed(2) + ' N';
+  $('fig-stretch').textContent = (f.stretch_m * 1000).toFixed(1) + ' mm';
+  $('fig-pain').textContent = f.pain ? 'yes' : 'no';
+  $('fig-loop').textContent = f.loop ? 'yes' : 'no';
+}
+
+async function sessionPage() {
+  await signedIn();
+  const uuid = param('uuid');
+  $('session-uuid').textContent = uuid;
+  const s = await api('sessions/' + encodeURIComponent(uuid));
+  const r = s.record, m = r.metrics || {};
+  const summary = [['Trainee', r.trainee_id], ['Case', r.case_id + ' v' + r.case_version],
+                   ['Lesson', r.lesson_id || '—'], ['Station', r.station_id],
+                   ['Operator', r.operator_kind], ['Started', when(r.start_unix_ms)],
+                   ['Outcome', r.outcome], ['Score', Number(r.score).toFixed(1) + '/100'],
+                   ['Time to cecum', m.completed ? Number(m.time_to_cecum_s).toFixed(1) + ' s' : '—'],
+                   ['Pain', Number(m.pain_s || 0).toFixed(1) + ' s'],
+                   ['Loop', Number(m.loop_s || 0).toFixed(1) + ' s'],
+                   ['Deepest tip', (Number(m.max_tip_arc_m || 0) * 1000).toFixed(0) + ' mm']];
+  for (const [k, v] of summary) { $('summary').appendChild(el('dt', k)); $('summary').appendChild(el('dd', v)); }
+  const replay = await api('sessions/' + encodeURIComponent(uuid) + '/replay');
+  const b = {x0: Infinity, x1: -Infinity, y0: Infinity, y1: -Infinity};
+  for (const f of replay.frames) {
+    for (const p of (f.colon_mm || []).concat(f.scope_mm || [])) {
+      b.x0 = Math.min(b.x0, p[0]); b.x1 = Math.max(b.x1, p[0]);
+      b.y0 = Math.min(b.y0, p[1]); b.y1 = Math.max(b.y1, p[1]);
+    }
+  }
+  if (!(b.x1 > b.x0)) { b.x0 = -200; b.x1 = 200; b.y0 = -200; b.y1 = 200; }
+  replay.bounds = b;
+  ves.replay = replay;
+  $('replay-status').textContent = replay.summary;
+  $('replay').hidden = false;
+  const frames = replay.frames;
+  ves.charts.force = timeChart($('plot-force'), 'Hand force (N)', frames,
+                               [['hand force N', 'hand_force_N', 1, '#a33']]);
+  ves.charts.stretch = timeChart($('plot-stretch'), 'Colon stretch (mm)', frames,
+                                 [['stretch mm', 'stretch_m', 1000, '#a60']]);
+  ves.charts.depth = timeChart($('plot-depth'), 'Tip depth and inserted length (mm)', frames,
+                               [['tip depth mm', 'tip_arc_m', 1000, '#15a'],
+                                ['inserted mm', 'inserted_m', 1000, '#5a5']]);
+  const scrub = $('scrub');
+  scrub.max = String(frames.length - 1);
+  scrub.value = '0';
+  scrub.addEventListener('input', () => drawFrame(replay, Number(scrub.value)));
+  drawFrame(replay, 0);
+}
+
+async function progressPage() {
+  await signedIn();
+  const group = param('group');
+  $('group-name').textContent = group;
+  const progress = await api('groups/' + encodeURIComponent(group) + '/progress');
+  const lessons = [];
+  for (const t of progress.trainees) for (const l of t.lessons) if (!lessons.includes(l.lesson_id)) lessons.push(l.lesson_id);
+  $('progress').querySelector('thead').appendChild(row(['Trainee', 'Next lesson'].concat(lessons)));
+  const body = $('progress').querySelector('tbody');
+  for (const t of progress.trainees) {
+    const cells = [link(t.trainee_id, '/trainee.html?id=' + encodeURIComponent(t.trainee_id)),
+                   t.next_lesson_id || '—'];
+    for (const id of lessons) {
+      const l = t.lessons.find((x) => x.lesson_id === id);
+      cells.push(l ? (l.completed ? 'passed ' : '') + l.passes + '/' + l.required_passes +
+                     ' (' + l.attempts + ' tried)' : '—');
+    }
+    const tr = row(cells);
+    [...tr.children].slice(2).forEach((td) => { if (td.textContent.startsWith('passed')) td.className = 'passed'; });
+    body.appendChild(tr);
+  }
+}
+
+async function auditPage() {
+  await signedIn();
+  const body = $('audit').querySelector('tbody');
+  let token = '';
+  const more = async () => {
+    const page = await api('audit?limit=200' + (token ? '&page_token=' + encodeURIComponent(token) : ''));
+    for (const e of page.entries) {
+      body.appendChild(row([e.id, when(e.at_unix_ms), e.actor_label || e.actor, e.role,
+                            e.institution, e.action, e.target, e.result]));
+    }
+    token = page.next_page_token;
+    $('audit-more').hidden = !token;
+  };
+  $('audit-more').addEventListener('click', () => more().catch((e) => showError(e.message)));
+  await more();
+}
+
+const pages = {'sign-in': signInPage, trainees: traineesPage, trainee: traineePage,
+               session: sessionPage, progress: progressPage, audit: auditPage};
+
+document.addEventListener('DOMContentLoaded', () => {
+  const page = pages[document.body.dataset.page];
+  if (page) page().then(() => { document.body.dataset.ready = 'true'; })
+                  .catch((e) => { showError(e.message); document.body.dataset.ready = 'error'; });
+});

@@ -1,0 +1,694 @@
+#include "server/web_api.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <openssl/crypto.h>
+
+#include <algorithm>
+#include <charconv>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "patient_db/limits.h"
+#include "server/pipeline.h"
+#include "server/web_assets.h"
+#include "ves/v1/lesson.pb.h"
+
+namespace ves::server {
+
+using grpc::Status;
+using grpc::StatusCode;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kCookieName = "ves_session";
+
+int HttpStatusOf(StatusCode code) {
+  switch (code) {
+    case StatusCode::OK:
+      return 200;
+    case StatusCode::INVALID_ARGUMENT:
+    case StatusCode::OUT_OF_RANGE:
+      return 400;
+    case StatusCode::UNAUTHENTICATED:
+      return 401;
+    case StatusCode::PERMISSION_DENIED:
+      return 403;
+    case StatusCode::NOT_FOUND:
+      return 404;
+    case StatusCode::ALREADY_EXISTS:
+    case StatusCode::FAILED_PRECONDITION:
+    case StatusCode::ABORTED:
+      return 409;
+    case StatusCode::RESOURCE_EXHAUSTED:
+      return 429;
+    case StatusCode::UNIMPLEMENTED:
+      return 501;
+    case StatusCode::UNAVAILABLE:
+      return 503;
+    default:
+      return 500;
+  }
+}
+
+std::string Dump(const json& j) {
+  return WebApi::HtmlSafeJson(j.dump(-1, ' ', false, json::error_handler_t::replace));
+}
+
+HttpReply JsonReply(int status, const json& body) {
+  HttpReply r;
+  r.status = status;
+  r.body = Dump(body);
+  return r;
+}
+
+HttpReply Error(int status, const std::string& code, const std::string& message) {
+  return JsonReply(status, {{"error", {{"code", code}, {"message", message}}}});
+}
+
+HttpReply ErrorOf(const Status& s) {
+  return Error(HttpStatusOf(s.error_code()), StatusCodeName(s.error_code()), s.error_message());
+}
+
+// A proto message as JSON: field names as in the .proto, defaults printed.
+json ProtoJson(const google::protobuf::Message& m) {
+  google::protobuf::util::JsonPrintOptions o;
+  o.always_print_primitive_fields = true;
+  o.preserve_proto_field_names = true;
+  std::string text;
+  if (!google::protobuf::util::MessageToJsonString(m, &text, o).ok()) return json::object();
+  return json::parse(text, nullptr, false);
+}
+
+std::string RandomHex() { return NewToken(); }  // 256 bits from OpenSSL
+
+bool ConstantTimeEquals(const std::string& a, const std::string& b) {
+  return a.size() == b.size() && CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0;
+}
+
+int HexValue(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// Percent-decoding; false on a broken escape.
+bool Decode(std::string_view in, std::string* out, bool plus_is_space) {
+  out->clear();
+  for (size_t i = 0; i < in.size(); ++i) {
+    if (in[i] == '%') {
+      if (i + 2 >= in.size()) return false;
+      const int hi = HexValue(in[i + 1]);
+      const int lo = HexValue(in[i + 2]);
+      if (hi < 0 || lo < 0) return false;
+      out->push_back(static_cast<char>(hi * 16 + lo));
+      i += 2;
+    } else if (in[i] == '+' && plus_is_space) {
+      out->push_back(' ');
+    } else {
+      out->push_back(in[i]);
+    }
+  }
+  return true;
+}
+
+std::vector<std::string> Split(std::string_view s, char sep) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t end = s.find(sep, start);
+    parts.emplace_back(s.substr(start, end == std::string_view::npos ? s.npos : end - start));
+    if (end == std::string_view::npos) break;
+    start = end + 1;
+  }
+  return parts;
+}
+
+std::string CookieValue(const std::string& header, const std::string& name) {
+  for (std::string part : Split(header, ';')) {
+    const size_t b = part.find_first_not_of(' ');
+    if (b == std::string::npos) continue;
+    part = part.substr(b);
+    if (part.compare(0, name.size() + 1, name + "=") == 0) return part.substr(name.size() + 1);
+  }
+  return {};
+}
+
+// Unsigned query number in [0, max]; an error reply names the parameter.
+bool QueryNumber(const std::map<std::string, std::string>& q, const std::string& name, uint64_t max,
+                 uint64_t* value, HttpReply* error) {
+  auto it = q.find(name);
+  if (it == q.end()) return true;
+  uint64_t v = 0;
+  const auto [end, ec] =
+      std::from_chars(it->second.data(), it->second.data() + it->second.size(), v);
+  if (it->second.empty() || ec != std::errc() || end != it->second.data() + it->second.size() ||
+      v > max) {
+    *error = Error(400, "INVALID_ARGUMENT",
+                   "query " + name + " = '" + patient_db::PrintableExcerpt(it->second, 40) +
+                       "': must be a whole number in 0.." + std::to_string(max));
+    return false;
+  }
+  *value = v;
+  return true;
+}
+
+std::string QueryText(const std::map<std::string, std::string>& q, const std::string& name) {
+  auto it = q.find(name);
+  return it == q.end() ? std::string() : it->second;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+std::string WebApi::HtmlSafeJson(std::string in) {
+  std::string out;
+  out.reserve(in.size());
+  for (char c : in) {
+    switch (c) {
+      case '<':
+        out += "\\u003c";
+        break;
+      case '>':
+        out += "\\u003e";
+        break;
+      case '&':
+        out += "\\u0026";
+        break;
+      default:
+        out.push_back(c);
+    }
+  }
+  return out;
+}
+
+WebApi::WebApi(ServiceDeps deps, WebOptions options) : deps_(deps), options_(options) {}
+
+std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
+                                    std::string* session_id) {
+  *csrf_ok = true;
+  if (!request.authorization.empty()) return request.authorization;  // scripts: Bearer
+  const std::string sid = CookieValue(request.cookie, kCookieName);
+  if (sid.empty()) return {};
+  std::lock_guard lock(mutex_);
+  auto it = sessions_.find(sid);
+  if (it == sessions_.end()) return {};
+  if (it->second.expires_unix_ms <= NowUnixMs()) {
+    sessions_.erase(it);
+    return {};
+  }
+  *session_id = sid;
+  // A cookie rides along on any request the browser makes: a state change
+  // must also carry the token only this origin's pages can read.
+  *csrf_ok =
+      request.method == "GET" || ConstantTimeEquals(request.csrf_token, it->second.csrf_token);
+  return "Bearer " + it->second.token;
+}
+
+HttpReply WebApi::SignIn(const HttpRequest& request) {
+  json body = json::parse(request.body, nullptr, false);
+  if (!body.is_object() || !body.contains("token") || !body["token"].is_string()) {
+    return Error(400, "INVALID_ARGUMENT", "body: must be {\"token\": \"<token>\"}");
+  }
+  const std::string token = body["token"].get<std::string>();
+  if (token.empty() || token.size() > 128) {
+    return Error(400, "INVALID_ARGUMENT", "token: must be 1..128 characters");
+  }
+  Principal who;
+  const AuthStatus a = deps_.auth->Authenticate("Bearer " + token, &who);
+  if (!a.ok()) {
+    return Error(a.code == AuthCode::kUnauthenticated ? 401 : 500,
+                 a.code == AuthCode::kUnauthenticated ? "UNAUTHENTICATED" : "INTERNAL", a.message);
+  }
+  WebSession session{
+      token, RandomHex(),
+      NowUnixMs() +
+          std::chrono::duration_cast<std::chrono::milliseconds>(options_.session_ttl).count()};
+  const std::string sid = RandomHex();
+  {
+    std::lock_guard lock(mutex_);
+    const int64_t now = NowUnixMs();
+    for (auto it = sessions_.begin(); it != sessions_.end();) {
+      it = it->second.expires_unix_ms <= now ? sessions_.erase(it) : std::next(it);
+    }
+    if (sessions_.size() >= kMaxWebSessions) {
+      return Error(429, "RESOURCE_EXHAUSTED", "too many signed-in browsers; try again later");
+    }
+    sessions_[sid] = session;
+  }
+  deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_in", "", Status::OK));
+  HttpReply r = JsonReply(200, {{"csrf_token", session.csrf_token},
+                                {"role", patient_db::RoleName(who.role)},
+                                {"institution", who.institution},
+                                {"label", who.label},
+                                {"expires_unix_ms", session.expires_unix_ms}});
+  r.headers.emplace_back("Set-Cookie", std::string(kCookieName) + "=" + sid + "; Path=/; Max-Age=" +
+                                           std::to_string(options_.session_ttl.count()) +
+                                           "; HttpOnly; SameSite=Strict" +
+                                           (options_.secure_cookies ? "; Secure" : ""));
+  return r;
+}
+
+HttpReply WebApi::SignOut(const HttpRequest& request) {
+  bool csrf_ok = false;
+  std::string sid;
+  const std::string authorization = AuthorizationOf(request, &csrf_ok, &sid);
+  if (sid.empty()) return Error(401, "UNAUTHENTICATED", "not signed in");
+  if (!csrf_ok) return Error(403, "PERMISSION_DENIED", "X-CSRF-Token header missing or wrong");
+  Principal who;
+  if (deps_.auth->Authenticate(authorization, &who).ok()) {
+    deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_out", "", Status::OK));
+  }
+  {
+    std::lock_guard lock(mutex_);
+    sessions_.erase(sid);
+  }
+  HttpReply r = JsonReply(200, {{"signed_out", true}});
+  r.headers.emplace_back("Set-Cookie", std::string(kCookieName) +
+                                           "=; Path=/; Max-Age=0; HttpOnly; SameSite=Strict" +
+                                           (options_.secure_cookies ? "; Secure" : ""));
+  return r;
+}
+
+HttpReply WebApi::Handle(const HttpRequest& request) {
+  if (request.target.size() > kMaxHttpTargetBytes) {
+    return Error(414, "INVALID_ARGUMENT",
+                 "request target: " + std::to_string(request.target.size()) +
+                     " bytes, over the limit of " + std::to_string(kMaxHttpTargetBytes));
+  }
+  if (request.body.size() > kMaxHttpBodyBytes) {
+    return Error(413, "INVALID_ARGUMENT",
+                 "body: over the limit of " + std::to_string(kMaxHttpBodyBytes) + " bytes");
+  }
+  const size_t qmark = request.target.find('?');
+  const std::string raw_path = request.target.substr(0, qmark);
+  std::map<std::string, std::string> query;
+  if (qmark != std::string::npos) {
+    for (const std::string& pair : Split(std::string_view(request.target).substr(qmark + 1), '&')) {
+      if (pair.empty()) continue;
+      const size_t eq = pair.find('=');
+      std::string key, value;
+      if (!Decode(pair.substr(0, eq), &key, true) ||
+          !Decode(eq == std::string::npos ? "" : pair.substr(eq + 1), &value, true)) {
+        return Error(400, "INVALID_ARGUMENT", "query: a broken %-escape");
+      }
+      if (query.size() >= 16) return Error(400, "INVALID_ARGUMENT", "query: over 16 parameters");
+      query[key] = value;
+    }
+  }
+  if (raw_path == "/healthz") {
+    if (request.method != "GET" && request.method != "HEAD") {
+      return Error(405, "METHOD_NOT_ALLOWED", "/healthz answers GET only");
+    }
+    return JsonReply(200, {{"status", "ok"}});
+  }
+  if (raw_path.rfind("/api/v1/", 0) == 0) {
+    HttpReply r = Api(request, raw_path.substr(8), query);
+    r.headers.emplace_back("Cache-Control", "no-store");
+    return r;
+  }
+  if (request.method != "GET" && request.method != "HEAD") {
+    return Error(405, "METHOD_NOT_ALLOWED", "pages answer GET only");
+  }
+  const WebAsset* asset = FindWebAsset(raw_path == "/" ? "/index.html" : raw_path);
+  if (asset == nullptr)
+    return Error(404, "NOT_FOUND", "no page '" + patient_db::PrintableExcerpt(raw_path, 80) + "'");
+  HttpReply r;
+  r.content_type = asset->content_type;
+  r.body.assign(asset->data, asset->size);
+  r.headers.emplace_back("Cache-Control", "no-cache");
+  return r;
+}
+
+HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
+                      const std::map<std::string, std::string>& query) {
+  std::vector<std::string> path;
+  for (const std::string& part : Split(raw_path, '/')) {
+    std::string decoded;
+    if (!Decode(part, &decoded, false)) {
+      return Error(400, "INVALID_ARGUMENT", "path: a broken %-escape");
+    }
+    path.push_back(std::move(decoded));
+  }
+  const bool get = request.method == "GET";
+  const bool post = request.method == "POST";
+  if (post && request.content_type.rfind("application/json", 0) != 0) {
+    // Forms cannot send JSON across origins without a preflight.
+    return Error(415, "INVALID_ARGUMENT", "Content-Type: must be application/json");
+  }
+  if (path.size() == 1 && path[0] == "sign-in") {
+    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-in: POST only");
+    return SignIn(request);
+  }
+  if (path.size() == 1 && path[0] == "sign-out") {
+    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-out: POST only");
+    return SignOut(request);
+  }
+  if (!get && !post) return Error(405, "METHOD_NOT_ALLOWED", "the API answers GET and POST");
+
+  bool csrf_ok = true;
+  std::string sid;
+  const std::string authorization = AuthorizationOf(request, &csrf_ok, &sid);
+  HttpReply bad;
+  uint64_t page_size = 0;
+  if (!QueryNumber(query, "page_size", patient_db::kMaxPageSize, &page_size, &bad)) return bad;
+  const std::string page_token = QueryText(query, "page_token");
+  const std::string institution = QueryText(query, "institution");
+
+  // Admits the request (bounds, then authentication) and, for a
+  // state-changing one from a browser, its CSRF token.
+  Principal who;
+  const auto admit = [&](const google::protobuf::Message& m) -> Status {
+    Status s = AdmitRequest(deps_, authorization, m, &who);
+    if (s.ok() && !csrf_ok) {
+      return Status(StatusCode::PERMISSION_DENIED, "X-CSRF-Token header missing or wrong");
+    }
+    return s;
+  };
+
+  // GET me
+  if (get && path.size() == 1 && path[0] == "me") {
+    v1::ListTraineesRequest empty;
+    Status s = admit(empty);
+    if (!s.ok()) return ErrorOf(s);
+    json j = {{"role", patient_db::RoleName(who.role)},
+              {"institution", who.institution},
+              {"label", who.label},
+              {"trainee_id", who.trainee_id}};
+    if (!sid.empty()) {
+      std::lock_guard lock(mutex_);
+      auto it = sessions_.find(sid);
+      if (it != sessions_.end()) j["csrf_token"] = it->second.csrf_token;
+    }
+    return JsonReply(200, j);
+  }
+
+  // trainees (GET list with groups and last activity; POST add)
+  if (path.size() == 1 && path[0] == "trainees") {
+    if (post) {
+      v1::AddTraineeRequest req;
+      if (!google::protobuf::util::JsonStringToMessage(request.body, req.mutable_trainee()).ok()) {
+        return Error(400, "INVALID_ARGUMENT",
+                     "body: must be {\"trainee_id\": ..., \"display_name\": ..., "
+                     "\"institution\": ...}");
+      }
+      Status s = admit(req);
+      if (!s.ok()) return ErrorOf(s);
+      v1::AddTraineeResponse resp;
+      s = AddTraineeCall(deps_, who, req, &resp);
+      if (!s.ok()) return ErrorOf(s);
+      return JsonReply(200, ProtoJson(resp));
+    }
+    v1::ListTraineesRequest req;
+    req.set_institution(institution);
+    req.set_page_size(static_cast<uint32_t>(page_size));
+    req.set_page_token(page_token);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::ListTraineesResponse resp;
+    s = ListTraineesCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    // The call admitted reading this institution's trainees: their groups
+    // and session listings are read for the same page.
+    json trainees = json::array();
+    std::map<std::string, std::vector<std::string>> groups;
+    std::vector<std::string> ids;
+    for (const auto& t : resp.trainees()) ids.push_back(t.trainee_id());
+    auto activity = deps_.store->GetTraineeActivity(ids);
+    if (!activity.ok()) return ErrorOf(ToGrpcStatus(activity.status));
+    for (int i = 0; i < resp.trainees_size(); ++i) {
+      const auto& t = resp.trainees(i);
+      json row = ProtoJson(t);
+      auto group = deps_.store->GetTraineeGroup(t.trainee_id());
+      row["group"] = group.ok() ? group.value : "";
+      if (group.ok() && !group.value.empty()) groups[group.value].push_back(t.trainee_id());
+      row["sessions"] = activity.value[i].sessions;
+      row["last_activity_unix_ms"] = activity.value[i].last_end_unix_ms;
+      trainees.push_back(std::move(row));
+    }
+    json group_list = json::array();
+    for (auto& [name, members] : groups)
+      group_list.push_back({{"group", name}, {"trainees", members}});
+    return JsonReply(200, {{"trainees", trainees},
+                           {"groups", group_list},
+                           {"next_page_token", resp.next_page_token()}});
+  }
+  if (!get) return Error(405, "METHOD_NOT_ALLOWED", "this route answers GET only");
+
+  // trainees/{id}/sessions
+  if (path.size() == 3 && path[0] == "trainees" && path[2] == "sessions") {
+    v1::ListSessionsRequest req;
+    req.set_trainee_id(path[1]);
+    req.set_case_id(QueryText(query, "case_id"));
+    req.set_page_size(static_cast<uint32_t>(page_size));
+    req.set_page_token(page_token);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::ListSessionsResponse resp;
+    s = ListSessionsCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    return JsonReply(200, ProtoJson(resp));
+  }
+
+  // trainees/{id}/curve: per case and per lesson, with pass lines and the
+  // group's median per attempt.
+  if (path.size() == 3 && path[0] == "trainees" && path[2] == "curve") {
+    v1::LearningCurveRequest req;
+    req.set_trainee_id(path[1]);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::LearningCurveResponse resp;
+    s = GetLearningCurveCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    // Read only after the call allowed this trainee's records.
+    struct Point {
+      std::string uuid, case_id, lesson_id;
+      int64_t start = 0;
+      double score = 0, time_to_cecum_s = 0, pain_s = 0, loop_s = 0;
+      bool completed = false;
+    };
+    const auto points_of = [&](const std::string& trainee_id, std::vector<Point>* out,
+                               bool with_loop) -> Status {
+      auto rows = deps_.store->ListSessions(trainee_id, "");
+      if (!rows.ok()) return ToGrpcStatus(rows.status);
+      for (const auto& r : rows.value) {
+        Point p{r.uuid,   r.case_id, r.lesson_id, r.start_unix_ms, r.score, r.time_to_cecum_s,
+                r.pain_s, 0,         r.completed};
+        if (with_loop) {
+          // Loop time is in the record only.
+          auto full = deps_.store->GetSession(r.uuid);
+          v1::SessionRecord rec;
+          if (full.ok() && rec.ParseFromString(full.value.body)) p.loop_s = rec.metrics().loop_s();
+        }
+        out->push_back(std::move(p));
+      }
+      return Status::OK;
+    };
+    std::vector<Point> mine;
+    s = points_of(path[1], &mine, true);
+    if (!s.ok()) return ErrorOf(s);
+    // The group's median score per attempt of each case (the trainee's group).
+    std::map<std::string, std::map<int, std::vector<double>>> group_scores;
+    auto group = deps_.store->GetTraineeGroup(path[1]);
+    auto trainee_row = deps_.store->GetTrainee(path[1]);
+    std::string group_name = group.ok() ? group.value : "";
+    if (!group_name.empty() && trainee_row.ok()) {
+      auto members = deps_.store->ListGroupTrainees(trainee_row.value.institution, group_name);
+      for (const std::string& m : members.ok() ? members.value : std::vector<std::string>{}) {
+        std::vector<Point> theirs;
+        if (!points_of(m, &theirs, false).ok()) continue;
+        std::map<std::string, int> attempt;
+        for (const Point& p : theirs) {
+          group_scores[p.case_id][++attempt[p.case_id]].push_back(p.score);
+        }
+      }
+    }
+    const auto curve_json = [](const std::vector<const Point*>& pts) {
+      json a = json::array();
+      int n = 0;
+      for (const Point* p : pts) {
+        a.push_back({{"attempt", ++n},
+                     {"uuid", p->uuid},
+                     {"case_id", p->case_id},
+                     {"start_unix_ms", p->start},
+                     {"score", p->score},
+                     {"completed", p->completed},
+                     {"time_to_cecum_s", p->time_to_cecum_s},
+                     {"pain_s", p->pain_s},
+                     {"loop_s", p->loop_s}});
+      }
+      return a;
+    };
+    std::map<std::string, std::vector<const Point*>> by_case, by_lesson;
+    for (const Point& p : mine) {
+      by_case[p.case_id].push_back(&p);
+      if (!p.lesson_id.empty()) by_lesson[p.lesson_id].push_back(&p);
+    }
+    json cases = json::array();
+    for (auto& [case_id, pts] : by_case) {
+      json median = json::array();
+      for (auto& [attempt, scores] : group_scores[case_id]) {
+        median.push_back({{"attempt", attempt}, {"score", Median(scores)}});
+      }
+      cases.push_back(
+          {{"case_id", case_id}, {"points", curve_json(pts)}, {"group_median", median}});
+    }
+    json lessons = json::array();
+    for (auto& [lesson_id, pts] : by_lesson) {
+      json pass = json::object();
+      auto curriculum_id = deps_.store->FindLessonCurriculum(lesson_id);
+      auto curriculum = curriculum_id.ok() ? deps_.store->GetCurriculum(curriculum_id.value)
+                                           : patient_db::StoreResult<patient_db::CurriculumRow>{};
+      v1::Curriculum c;
+      if (curriculum_id.ok() && curriculum.ok() && c.ParseFromString(curriculum.value.body)) {
+        for (const auto& l : c.lessons()) {
+          if (l.lesson_id() != lesson_id) continue;
+          if (l.pass().has_min_score()) pass["score"] = l.pass().min_score();
+          if (l.pass().has_max_time_to_cecum_s())
+            pass["time_to_cecum_s"] = l.pass().max_time_to_cecum_s();
+          if (l.pass().has_max_pain_s()) pass["pain_s"] = l.pass().max_pain_s();
+          if (l.pass().has_max_loop_s()) pass["loop_s"] = l.pass().max_loop_s();
+          pass["title"] = l.title();
+        }
+      }
+      lessons.push_back(
+          {{"lesson_id", lesson_id}, {"points", curve_json(pts)}, {"pass_line", pass}});
+    }
+    return JsonReply(200, {{"trainee_id", resp.trainee_id()},
+                           {"group", group_name},
+                           {"cases", cases},
+                           {"lessons", lessons}});
+  }
+
+  // sessions/{uuid} and sessions/{uuid}/replay
+  if ((path.size() == 2 || (path.size() == 3 && path[2] == "replay")) && path[0] == "sessions") {
+    v1::GetSessionRequest req;
+    req.set_uuid(path[1]);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::GetSessionResponse resp;
+    if (path.size() == 2) {
+      s = GetSessionCall(deps_, who, req, &resp);
+      if (!s.ok()) return ErrorOf(s);
+      v1::SessionRecord summary = resp.record();
+      summary.clear_input_log();  // bulky and of no use to a reader
+      summary.clear_replay_setup();
+      return JsonReply(200, {{"record", ProtoJson(summary)},
+                             {"stored_unix_ms", resp.stored_unix_ms()},
+                             {"input_samples", resp.record().input_log().sample_count()}});
+    }
+    static const CallSpec spec{"session.replay",
+                               {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                               "replay sessions"};
+    std::shared_ptr<const SessionReplay> replay;
+    s = RunCall(deps_, who, spec, req.uuid(), [&]() -> Status {
+      // The read rules of GetSession (its own audit row names the read).
+      Status read = GetSessionCall(deps_, who, req, &resp);
+      if (!read.ok()) return read;
+      try {
+        replay = CachedReplay(req.uuid(), resp.record());
+      } catch (const std::exception& e) {
+        return Status(StatusCode::FAILED_PRECONDITION,
+                      "session " + req.uuid() + " cannot be replayed: " + e.what());
+      }
+      if (!replay) {
+        return Status(StatusCode::RESOURCE_EXHAUSTED,
+                      std::to_string(kMaxConcurrentReplays) +
+                          " replays are running; ask again in a few seconds");
+      }
+      return Status::OK;
+    });
+    if (!s.ok()) return ErrorOf(s);
+    json frames = json::array();
+    for (const ReplayFrame& f : replay->frames) {
+      json j = {{"t_s", f.t_s},
+                {"hand_force_N", f.hand_force_N},
+                {"stretch_m", f.stretch_m},
+                {"tip_arc_m", f.tip_arc_m},
+                {"inserted_m", f.inserted_m},
+                {"pain", f.pain},
+                {"loop", f.loop}};
+      if (!f.scope_mm.empty()) j["scope_mm"] = f.scope_mm;
+      if (!f.colon_mm.empty()) j["colon_mm"] = f.colon_mm;
+      frames.push_back(std::move(j));
+    }
+    return JsonReply(200, {{"uuid", req.uuid()},
+                           {"pain_stretch_m", replay->pain_stretch_m},
+                           {"cecum_arc_m", replay->cecum_arc_m},
+                           {"final_tip_arc_m", replay->final_tip_arc_m},
+                           {"summary", replay->summary_line},
+                           {"frames", frames}});
+  }
+
+  // groups/{group}/progress
+  if (path.size() == 3 && path[0] == "groups" && path[2] == "progress") {
+    v1::GetProgressRequest req;
+    req.set_group(path[1]);
+    req.set_institution(institution);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::GetProgressResponse resp;
+    s = GetProgressCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    return JsonReply(200, ProtoJson(resp));
+  }
+
+  // audit
+  if (path.size() == 1 && path[0] == "audit") {
+    v1::ListAuditRequest req;
+    uint64_t since = 0, limit = 0;
+    if (!QueryNumber(query, "since_unix_ms", INT64_MAX, &since, &bad)) return bad;
+    if (!QueryNumber(query, "limit", patient_db::kMaxPageSize, &limit, &bad)) return bad;
+    req.set_since_unix_ms(static_cast<int64_t>(since));
+    req.set_limit(static_cast<uint32_t>(limit));
+    req.set_page_token(page_token);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::ListAuditResponse resp;
+    s = ListAuditCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    return JsonReply(200, ProtoJson(resp));
+  }
+  return Error(404, "NOT_FOUND",
+               "no API route '" + patient_db::PrintableExcerpt(raw_path, 80) + "' (docs/web.md)");
+}
+
+std::shared_ptr<const SessionReplay> WebApi::CachedReplay(const std::string& uuid,
+                                                          const v1::SessionRecord& record) {
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = replays_.begin(); it != replays_.end(); ++it) {
+      if (it->first == uuid) {
+        replays_.splice(replays_.begin(), replays_, it);
+        return replays_.front().second;
+      }
+    }
+  }
+  {
+    std::lock_guard lock(mutex_);
+    if (replays_running_ >= kMaxConcurrentReplays) return nullptr;
+    ++replays_running_;
+  }
+  std::shared_ptr<const SessionReplay> replay;
+  try {
+    replay = std::make_shared<const SessionReplay>(ReplaySession(record));
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    --replays_running_;
+    throw;
+  }
+  std::lock_guard lock(mutex_);
+  --replays_running_;
+  replays_.emplace_front(uuid, replay);
+  if (replays_.size() > 8) replays_.pop_back();
+  return replay;
+}
+
+}  // namespace ves::server

@@ -1,0 +1,88 @@
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "server/services.h"
+#include "server/session_replay.h"
+
+// The HTTP side of ves-server without the sockets (docs/web.md): routes,
+// browser sessions (cookie + CSRF token), JSON in and out. Every /api/v1/
+// call goes through the request pipeline (server/pipeline.h), as gRPC does.
+namespace ves::server {
+
+// Bounds on what a request may carry (docs/web.md, "Limits").
+inline constexpr size_t kMaxHttpHeaderBytes = 8 << 10;
+inline constexpr size_t kMaxHttpBodyBytes = 64 << 10;
+inline constexpr size_t kMaxHttpTargetBytes = 2048;
+inline constexpr size_t kMaxWebSessions = 10000;
+// Replays re-run the model (seconds of CPU each): at most this many at once,
+// more answer 429 rather than queue up on the connection threads.
+inline constexpr int kMaxConcurrentReplays = 2;
+
+struct HttpRequest {
+  std::string method;         // "GET", "POST", ...
+  std::string target;         // path and query, as sent
+  std::string authorization;  // the Authorization header ("" when absent)
+  std::string cookie;         // the Cookie header
+  std::string csrf_token;     // the X-CSRF-Token header
+  std::string content_type;
+  std::string body;
+};
+
+struct HttpReply {
+  int status = 200;
+  std::string content_type = "application/json";
+  std::string body;
+  std::vector<std::pair<std::string, std::string>> headers;  // extra ones (Set-Cookie, ...)
+};
+
+struct WebOptions {
+  bool secure_cookies = false;                 // Secure flag: on over HTTPS
+  std::chrono::seconds session_ttl{8 * 3600};  // a browser session's life
+};
+
+class WebApi {
+ public:
+  WebApi(ServiceDeps deps, WebOptions options);
+  HttpReply Handle(const HttpRequest& request);
+
+  // JSON text with '<', '>' and '&' written as \u escapes: a value can never
+  // close a <script> or start a tag wherever the text lands.
+  static std::string HtmlSafeJson(std::string json);
+
+ private:
+  struct WebSession {
+    std::string token;  // the bearer token it stands for (memory only)
+    std::string csrf_token;
+    int64_t expires_unix_ms = 0;
+  };
+  HttpReply SignIn(const HttpRequest& request);
+  HttpReply SignOut(const HttpRequest& request);
+  // The authorization value for this request: the Bearer header, or the
+  // browser session's token. `csrf_ok` tells whether a state-changing
+  // request may go on (Bearer requests need no CSRF token).
+  std::string AuthorizationOf(const HttpRequest& request, bool* csrf_ok, std::string* session_id);
+  HttpReply Api(const HttpRequest& request, const std::string& path,
+                const std::map<std::string, std::string>& query);
+  // The replay (cached or computed); nullptr when kMaxConcurrentReplays run.
+  std::shared_ptr<const SessionReplay> CachedReplay(const std::string& uuid,
+                                                    const v1::SessionRecord& record);
+
+  ServiceDeps deps_;
+  WebOptions options_;
+  std::mutex mutex_;
+  std::map<std::string, WebSession> sessions_;  // by session id; guarded by mutex_
+  // A few recent replays by uuid (a replay re-runs the model: seconds).
+  std::list<std::pair<std::string, std::shared_ptr<const SessionReplay>>> replays_;
+  int replays_running_ = 0;  // guarded by mutex_
+};
+
+}  // namespace ves::server

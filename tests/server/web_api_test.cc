@@ -1,0 +1,474 @@
+// The HTTP API and pages of ves-server (docs/web.md) against a real server
+// on loopback: authentication on every route, the institution matrix of the
+// gRPC tests, CSRF, cookie flags, HTML-safe JSON, limits, and a session's
+// replay computed by the server from its input log.
+#include "server/web_api.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include <boost/asio/ip/tcp.hpp>
+
+#include "patient_db/case_bundle.h"
+#include "server/http_server.h"
+#include "station/training/case_run.h"
+#include "tests/integration/test_server.h"
+#include "tests/server/web_client.h"
+
+namespace ves::server::testing {
+namespace {
+
+using nlohmann::json;
+using patient_db::StoreRole;
+
+const char kXss[] = "<img src=x onerror=alert(1)>";
+const char kXssPath[] = "%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E";
+
+class WebApiTest : public ::testing::Test {
+ protected:
+  static ServerOptions WithHttp() {
+    ServerOptions o;
+    o.http_listen = "127.0.0.1:0";
+    return o;
+  }
+
+  void SetUp() override {
+    server_.AddTrainee("t1", "north");
+    server_.AddTrainee("t2", "north");
+    server_.AddTrainee(kXss, "north");
+    server_.AddTrainee("s1", "south");
+    ASSERT_TRUE(server_.store().SetTraineeGroup("t1", "g1").ok());
+    ASSERT_TRUE(server_.store().SetTraineeGroup("t2", "g1").ok());
+    PutSampleCase(server_.store(), "north", {"south"});
+    admin_ = server_.MakeToken(StoreRole::kAdmin, "north");
+    supervisor_ = server_.MakeToken(StoreRole::kSupervisor, "north");
+    south_supervisor_ = server_.MakeToken(StoreRole::kSupervisor, "south");
+    station_ = server_.MakeToken(StoreRole::kStation, "north");
+    south_station_ = server_.MakeToken(StoreRole::kStation, "south");
+    trainee_t2_ = server_.MakeToken(StoreRole::kTrainee, "north", "t2");
+    std::mt19937_64 rng(7);
+    north_uuid_ = NewUuid(rng);
+    south_uuid_ = NewUuid(rng);
+    ves::v1::UploadSessionResponse r;
+    ASSERT_TRUE(UploadSession(server_.Client(station_), MakeRecord(north_uuid_, "t1", 1), &r).ok());
+    ASSERT_TRUE(
+        UploadSession(server_.Client(south_station_), MakeRecord(south_uuid_, "s1", 2), &r).ok());
+  }
+
+  int port() { return server_.server().http_port(); }
+  HttpResult Get(const std::string& target, const std::string& token = "") {
+    Headers h;
+    if (!token.empty()) h.emplace_back("Authorization", "Bearer " + token);
+    return HttpCall(port(), "GET", target, h);
+  }
+  // Signs in with `token`; returns the cookie pair and the CSRF token.
+  std::pair<std::string, std::string> SignIn(const std::string& token,
+                                             HttpResult* reply = nullptr) {
+    HttpResult r = HttpCall(port(), "POST", "/api/v1/sign-in",
+                            {{"Content-Type", "application/json"}}, json{{"token", token}}.dump());
+    EXPECT_EQ(r.status, 200) << r.body;
+    if (reply) *reply = r;
+    const std::string set_cookie = r.Header("set-cookie");
+    return {set_cookie.substr(0, set_cookie.find(';')), json::parse(r.body)["csrf_token"]};
+  }
+
+  TestServer server_{WithHttp()};
+  std::string admin_, supervisor_, south_supervisor_, station_, south_station_, trainee_t2_;
+  std::string north_uuid_, south_uuid_;
+};
+
+const std::vector<std::string>& ApiGetRoutes() {
+  static const std::vector<std::string> routes = {
+      "/api/v1/me",
+      "/api/v1/trainees",
+      "/api/v1/trainees/t1/sessions",
+      "/api/v1/trainees/t1/curve",
+      "/api/v1/sessions/00000000-0000-4000-8000-000000000000",
+      "/api/v1/sessions/00000000-0000-4000-8000-000000000000/replay",
+      "/api/v1/groups/g1/progress",
+      "/api/v1/audit"};
+  return routes;
+}
+
+TEST_F(WebApiTest, HealthzAnswersWithoutAuthentication) {
+  const HttpResult r = Get("/healthz");
+  EXPECT_EQ(r.status, 200);
+  EXPECT_EQ(json::parse(r.body)["status"], "ok");
+}
+
+TEST_F(WebApiTest, EveryApiRouteWithoutAuthenticationIs401) {
+  for (const std::string& route : ApiGetRoutes()) {
+    const HttpResult r = Get(route);
+    EXPECT_EQ(r.status, 401) << route << ": " << r.body;
+    EXPECT_EQ(json::parse(r.body)["error"]["code"], "UNAUTHENTICATED") << route;
+    EXPECT_EQ(Get(route, "0123456789abcdef").status, 401) << route << " with an unknown token";
+    EXPECT_EQ(HttpCall(port(), "GET", route, {{"Cookie", "ves_session=forged"}}).status, 401)
+        << route << " with a forged cookie";
+  }
+  const HttpResult post = HttpCall(port(), "POST", "/api/v1/trainees",
+                                   {{"Content-Type", "application/json"}}, R"({"trainee_id":"x"})");
+  EXPECT_EQ(post.status, 401) << post.body;
+  EXPECT_EQ(
+      HttpCall(port(), "POST", "/api/v1/sign-out", {{"Content-Type", "application/json"}}, "{}")
+          .status,
+      401);
+}
+
+// The gRPC role matrix (tests/integration/role_matrix_test.cc) over HTTP:
+// another institution's trainee or session answers as a missing one (404,
+// its existence is not told); listing another institution is refused (403).
+TEST_F(WebApiTest, InstitutionMatrixMirrorsGrpc) {
+  EXPECT_EQ(Get("/api/v1/trainees/t1/curve", supervisor_).status, 200);
+  EXPECT_EQ(Get("/api/v1/trainees/t1/sessions", supervisor_).status, 200);
+  EXPECT_EQ(Get("/api/v1/sessions/" + north_uuid_, supervisor_).status, 200);
+  for (const std::string& target :
+       {std::string("/api/v1/trainees/s1/curve"), std::string("/api/v1/trainees/s1/sessions"),
+        std::string("/api/v1/sessions/") + south_uuid_,
+        std::string("/api/v1/sessions/") + south_uuid_ + "/replay"}) {
+    const HttpResult foreign = Get(target, supervisor_);
+    EXPECT_EQ(foreign.status, 404) << target << ": " << foreign.body;
+    EXPECT_EQ(foreign.body.find("south"), std::string::npos)
+        << "tells the institution: " << foreign.body;
+  }
+  // The same answer as for ids that do not exist at all.
+  EXPECT_EQ(Get("/api/v1/trainees/nobody/curve", supervisor_).status, 404);
+  EXPECT_EQ(Get("/api/v1/trainees?institution=south", supervisor_).status, 403);
+  EXPECT_EQ(Get("/api/v1/groups/g1/progress?institution=south", supervisor_).status, 403);
+  EXPECT_EQ(Get("/api/v1/trainees?institution=north", south_supervisor_).status, 403);
+  EXPECT_EQ(Get("/api/v1/trainees/t1/curve", south_supervisor_).status, 404);
+  // Roles: a trainee reads only their own records; a station no records;
+  // only admins read the audit log.
+  EXPECT_EQ(Get("/api/v1/trainees/t2/curve", trainee_t2_).status, 200);
+  EXPECT_EQ(Get("/api/v1/trainees/t1/curve", trainee_t2_).status, 404);
+  EXPECT_EQ(Get("/api/v1/trainees", trainee_t2_).status, 403);
+  EXPECT_EQ(Get("/api/v1/trainees/t1/curve", station_).status, 403);
+  EXPECT_EQ(Get("/api/v1/audit", supervisor_).status, 403);
+  EXPECT_EQ(Get("/api/v1/audit", admin_).status, 200);
+  // Admins reach every institution.
+  EXPECT_EQ(Get("/api/v1/trainees?institution=south", admin_).status, 200);
+  EXPECT_EQ(Get("/api/v1/sessions/" + south_uuid_, admin_).status, 200);
+}
+
+TEST_F(WebApiTest, HttpCallsWriteTheSameAuditRowsAsGrpc) {
+  ASSERT_EQ(Get("/api/v1/trainees/t1/curve", supervisor_).status, 200);
+  ASSERT_EQ(Get("/api/v1/trainees/s1/curve", supervisor_).status, 404);
+  // Audit rows go through the group commit: wait until they are visible.
+  json entries;
+  for (int i = 0; i < 100; ++i) {
+    entries = json::parse(Get("/api/v1/audit?limit=1000", admin_).body)["entries"];
+    int curves = 0;
+    for (const auto& e : entries) curves += e["action"] == "trainee.curve";
+    if (curves >= 2) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  bool ok_row = false, refused_row = false;
+  for (const auto& e : entries) {
+    if (e["action"] != "trainee.curve") continue;
+    ok_row |= e["target"] == "t1" && e["result"] == "OK" && e["role"] == "ROLE_SUPERVISOR";
+    refused_row |= e["target"] == "s1" && e["result"].get<std::string>().rfind("NOT_FOUND", 0) == 0;
+  }
+  EXPECT_TRUE(ok_row) << entries.dump();
+  EXPECT_TRUE(refused_row) << entries.dump();
+}
+
+TEST_F(WebApiTest, SignInSetsAStrictHttpOnlyCookieAndSignOutEndsIt) {
+  HttpResult reply;
+  const auto [cookie, csrf] = SignIn(supervisor_, &reply);
+  const std::string set_cookie = reply.Header("set-cookie");
+  EXPECT_NE(set_cookie.find("HttpOnly"), std::string::npos) << set_cookie;
+  EXPECT_NE(set_cookie.find("SameSite=Strict"), std::string::npos) << set_cookie;
+  EXPECT_NE(set_cookie.find("Max-Age="), std::string::npos) << set_cookie;
+  EXPECT_NE(set_cookie.find("Path=/"), std::string::npos) << set_cookie;
+  EXPECT_EQ(set_cookie.find("Secure"), std::string::npos) << "plain HTTP: " << set_cookie;
+  EXPECT_EQ(csrf.size(), 64u);
+  EXPECT_EQ(reply.body.find(supervisor_), std::string::npos) << "the token comes back";
+  EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/trainees", {{"Cookie", cookie}}).status, 200);
+  // Sign-out needs the CSRF token too.
+  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/sign-out",
+                     {{"Cookie", cookie}, {"Content-Type", "application/json"}}, "{}")
+                .status,
+            403);
+  const HttpResult out = HttpCall(
+      port(), "POST", "/api/v1/sign-out",
+      {{"Cookie", cookie}, {"Content-Type", "application/json"}, {"X-CSRF-Token", csrf}}, "{}");
+  EXPECT_EQ(out.status, 200) << out.body;
+  EXPECT_NE(out.Header("set-cookie").find("Max-Age=0"), std::string::npos);
+  EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/trainees", {{"Cookie", cookie}}).status, 401);
+  // A wrong token signs nobody in.
+  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/sign-in", {{"Content-Type", "application/json"}},
+                     R"({"token":"0123"})")
+                .status,
+            401);
+}
+
+TEST_F(WebApiTest, SessionCookiesAreSecureOverHttps) {
+  // Over HTTPS with the server's certificate (made here by openssl).
+  const auto dir = MakeTempDir("web-tls");
+  const std::string d = dir.string();
+  ASSERT_EQ(std::system(("cd '" + d +
+                         "' && openssl req -x509 -newkey ec -pkeyopt "
+                         "ec_paramgen_curve:prime256v1 -nodes -keyout server.key -out server.pem "
+                         "-days 2 -subj /CN=localhost >openssl.log 2>&1")
+                            .c_str()),
+            0);
+  ServerOptions tls;
+  tls.tls_cert_file = d + "/server.pem";
+  tls.tls_key_file = d + "/server.key";
+  tls.http_listen = "127.0.0.1:0";
+  TestServer secure(tls);
+  const std::string token = secure.MakeToken(StoreRole::kSupervisor, "north");
+  const HttpResult r =
+      HttpCall(secure.server().http_port(), "POST", "/api/v1/sign-in",
+               {{"Content-Type", "application/json"}}, json{{"token", token}}.dump(), /*tls=*/true);
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_NE(r.Header("set-cookie").find("; Secure"), std::string::npos) << r.Header("set-cookie");
+  EXPECT_NE(r.Header("strict-transport-security").find("max-age"), std::string::npos);
+  EXPECT_EQ(HttpCall(secure.server().http_port(), "GET", "/healthz", {}, "", true).status, 200);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(WebApiTest, StateChangingRequestsNeedTheCsrfToken) {
+  const auto [cookie, csrf] = SignIn(admin_);
+  const std::string body = R"({"trainee_id":"t9","display_name":"Nine"})";
+  const HttpResult without =
+      HttpCall(port(), "POST", "/api/v1/trainees",
+               {{"Cookie", cookie}, {"Content-Type", "application/json"}}, body);
+  EXPECT_EQ(without.status, 403) << without.body;
+  EXPECT_NE(without.body.find("CSRF"), std::string::npos) << without.body;
+  const HttpResult wrong = HttpCall(port(), "POST", "/api/v1/trainees",
+                                    {{"Cookie", cookie},
+                                     {"Content-Type", "application/json"},
+                                     {"X-CSRF-Token", std::string(64, 'a')}},
+                                    body);
+  EXPECT_EQ(wrong.status, 403);
+  EXPECT_FALSE(server_.store().GetTrainee("t9").ok()) << "added without a CSRF token";
+  // A form post (no preflight across origins) is refused whatever it carries.
+  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/trainees",
+                     {{"Cookie", cookie},
+                      {"Content-Type", "application/x-www-form-urlencoded"},
+                      {"X-CSRF-Token", csrf}},
+                     "trainee_id=t9")
+                .status,
+            415);
+  const HttpResult with = HttpCall(
+      port(), "POST", "/api/v1/trainees",
+      {{"Cookie", cookie}, {"Content-Type", "application/json"}, {"X-CSRF-Token", csrf}}, body);
+  EXPECT_EQ(with.status, 200) << with.body;
+  EXPECT_TRUE(server_.store().GetTrainee("t9").ok());
+  // Scripts with a bearer token carry no ambient credential: no CSRF token.
+  EXPECT_EQ(HttpCall(port(), "POST", "/api/v1/trainees",
+                     {{"Authorization", "Bearer " + admin_}, {"Content-Type", "application/json"}},
+                     R"({"trainee_id":"t10"})")
+                .status,
+            200);
+  // The role rule is the gRPC one: a supervisor may not add trainees.
+  EXPECT_EQ(
+      HttpCall(port(), "POST", "/api/v1/trainees",
+               {{"Authorization", "Bearer " + supervisor_}, {"Content-Type", "application/json"}},
+               R"({"trainee_id":"t11"})")
+          .status,
+      403);
+}
+
+TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
+  for (const std::string& target :
+       {std::string("/api/v1/trainees"), std::string("/api/v1/trainees/") + kXssPath + "/curve"}) {
+    const HttpResult r = Get(target, supervisor_);
+    ASSERT_EQ(r.status, 200) << target << ": " << r.body;
+    EXPECT_EQ(r.body.find('<'), std::string::npos) << target << ": " << r.body;
+    EXPECT_EQ(r.body.find('>'), std::string::npos) << target << ": " << r.body;
+    EXPECT_NE(r.body.find("\\u003cimg src=x onerror=alert(1)\\u003e"), std::string::npos)
+        << target << ": " << r.body;
+    EXPECT_EQ(r.Header("content-type"), "application/json");
+    EXPECT_EQ(r.Header("x-content-type-options"), "nosniff");
+  }
+  const HttpResult sessions =
+      Get(std::string("/api/v1/trainees/") + kXssPath + "/sessions", supervisor_);
+  EXPECT_EQ(sessions.status, 200) << sessions.body;
+  // And it decodes to the name as stored.
+  const json list = json::parse(Get("/api/v1/trainees", supervisor_).body);
+  bool found = false;
+  for (const auto& t : list["trainees"]) found |= t["trainee_id"] == kXss;
+  EXPECT_TRUE(found);
+  // An error naming it is escaped as well.
+  const HttpResult missing = Get(std::string("/api/v1/sessions/") + kXssPath, supervisor_);
+  EXPECT_EQ(missing.body.find('<'), std::string::npos) << missing.body;
+}
+
+TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
+  const auto error_of = [](const HttpResult& r) {
+    return json::parse(r.body)["error"]["message"].get<std::string>();
+  };
+  HttpResult r = Get("/api/v1/trainees?page_size=abc", supervisor_);
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(error_of(r).find("page_size"), std::string::npos) << r.body;
+  r = Get("/api/v1/trainees?page_size=99999999", supervisor_);
+  EXPECT_EQ(r.status, 400);
+  r = Get("/api/v1/trainees/%zz/curve", supervisor_);
+  EXPECT_EQ(r.status, 400) << r.body;
+  r = Get("/api/v1/trainees/" + std::string(300, 'x') + "/curve", supervisor_);
+  EXPECT_EQ(r.status, 400) << r.body;  // the request limits of gRPC name the field
+  EXPECT_NE(error_of(r).find("trainee_id"), std::string::npos) << r.body;
+  r = Get("/api/v1/" + std::string(3000, 'x'), supervisor_);
+  EXPECT_EQ(r.status, 414);
+  r = Get("/api/v1/nothing-here", supervisor_);
+  EXPECT_EQ(r.status, 404);
+  EXPECT_NE(error_of(r).find("nothing-here"), std::string::npos);
+  r = HttpCall(port(), "POST", "/api/v1/trainees",
+               {{"Authorization", "Bearer " + admin_}, {"Content-Type", "application/json"}},
+               "{not json");
+  EXPECT_EQ(r.status, 400);
+  EXPECT_NE(error_of(r).find("body"), std::string::npos) << r.body;
+  r = HttpCall(port(), "POST", "/api/v1/sign-in", {{"Content-Type", "application/json"}},
+               R"({"token": 5})");
+  EXPECT_EQ(r.status, 400);
+  // Oversized header and body: refused before any handler.
+  const std::string big_header =
+      "GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " + std::string(kMaxHttpHeaderBytes + 10, 'a') +
+      "\r\n\r\n";
+  EXPECT_EQ(HttpRaw(port(), big_header).status, 431);
+  const std::string big_body =
+      "POST /api/v1/sign-in HTTP/1.1\r\nHost: x\r\nContent-Type: "
+      "application/json\r\nContent-Length: " +
+      std::to_string(kMaxHttpBodyBytes + 1) + "\r\n\r\n" + std::string(kMaxHttpBodyBytes + 1, ' ');
+  EXPECT_EQ(HttpRaw(port(), big_body).status, 413);
+  EXPECT_EQ(HttpRaw(port(), "NONSENSE\r\n\r\n").status, 400);
+  // The server still answers.
+  EXPECT_EQ(Get("/healthz").status, 200);
+}
+
+TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
+  for (const std::string page : {"/", "/index.html", "/trainees.html", "/trainee.html",
+                                 "/session.html", "/progress.html", "/audit.html"}) {
+    const HttpResult r = Get(page);
+    EXPECT_EQ(r.status, 200) << page;
+    EXPECT_EQ(r.Header("content-type"), "text/html; charset=utf-8") << page;
+    EXPECT_NE(r.Header("content-security-policy").find("script-src 'self'"), std::string::npos);
+    EXPECT_EQ(r.body.find("http://"), std::string::npos) << page << " loads from elsewhere";
+    EXPECT_EQ(r.body.find("https://"), std::string::npos) << page << " loads from elsewhere";
+  }
+  const HttpResult chart = Get("/chart.js");
+  EXPECT_EQ(chart.status, 200);
+  EXPECT_NE(chart.body.find("Chart.js"), std::string::npos);
+  const HttpResult app = Get("/app.js");
+  EXPECT_EQ(app.status, 200);
+  EXPECT_EQ(app.body.find("innerHTML"), std::string::npos) << "data must go in as text";
+  EXPECT_EQ(Get("/../etc/passwd").status, 404);
+}
+
+TEST(WebServerOptions, PlainHttpOffLoopbackIsRefused) {
+  HttpServer server({"0.0.0.0:0", "", ""}, ServiceDeps{});
+  try {
+    server.Start();
+    FAIL() << "plain HTTP on 0.0.0.0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("loopback"), std::string::npos) << e.what();
+  }
+}
+
+// A real session (a scripted operator on the sample case) uploaded as a
+// station does: the server's replay from the input log ends where the
+// recording run ended.
+TEST_F(WebApiTest, ReplayIsComputedFromTheInputLogAndEndsAtTheFinalDepth) {
+  ves::v1::SessionRecord record;
+  double final_tip_arc_m = 0;
+  int steps = 0;
+  training::RunScriptedCase(
+      SampleCase(), ves::v1::EndoscopeSpec(), {}, "expert", 2.0, 1'700'000'000'000, &record,
+      [&](const training::InputSample&, const training::SessionRunner& runner) {
+        final_tip_arc_m = runner.observation().tip_arc_m;
+        ++steps;
+      });
+  record.set_trainee_id("t1");
+  record.set_station_id("station-1");
+  record.set_case_id(SampleCase().id());
+  record.set_case_version(SampleCase().version());
+  record.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(SampleCase()));
+  ves::v1::UploadSessionResponse up;
+  const grpc::Status s = UploadSession(server_.Client(station_), record, &up);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  const HttpResult r = Get("/api/v1/sessions/" + record.uuid() + "/replay", supervisor_);
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json replay = json::parse(r.body);
+  const json& frames = replay["frames"];
+  ASSERT_GT(frames.size(), 10u);
+  EXPECT_NEAR(frames.back()["tip_arc_m"].get<double>(), final_tip_arc_m, 1e-9);
+  EXPECT_NEAR(replay["final_tip_arc_m"].get<double>(), final_tip_arc_m, 1e-9);
+  EXPECT_NEAR(frames.back()["t_s"].get<double>(), steps * record.input_log().dt_s(), 1e-6);
+  EXPECT_GT(final_tip_arc_m, 0.0);
+  EXPECT_TRUE(frames.back().contains("scope_mm"));
+  EXPECT_TRUE(frames.back().contains("colon_mm"));
+  EXPECT_GE(frames.back()["scope_mm"].size(), 2u);
+  // Time runs forward at the series rate (10 Hz).
+  EXPECT_NEAR(frames[1]["t_s"].get<double>() - frames[0]["t_s"].get<double>(), 0.1, 1e-6);
+  // The summary leaves out the bulky input log.
+  const json summary = json::parse(Get("/api/v1/sessions/" + record.uuid(), supervisor_).body);
+  EXPECT_FALSE(summary["record"].contains("input_log"));
+  EXPECT_EQ(summary["record"]["trainee_id"], "t1");
+  // A record without a usable log answers a clear refusal, not a crash.
+  const HttpResult bad = Get("/api/v1/sessions/" + north_uuid_ + "/replay", supervisor_);
+  EXPECT_EQ(bad.status, 409) << bad.body;
+  EXPECT_NE(bad.body.find("cannot be replayed"), std::string::npos) << bad.body;
+}
+
+TEST_F(WebApiTest, LearningCurveHasOnePointPerSessionAndTheGroupMedian) {
+  std::mt19937_64 rng(11);
+  ves::v1::UploadSessionResponse up;
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(
+        UploadSession(server_.Client(station_), MakeRecord(NewUuid(rng), "t2", 10 + i), &up).ok());
+  }
+  const HttpResult r = Get("/api/v1/trainees/t2/curve", supervisor_);
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json curve = json::parse(r.body);
+  ASSERT_EQ(curve["cases"].size(), 1u);
+  const json& c = curve["cases"][0];
+  EXPECT_EQ(c["points"].size(), 3u);
+  EXPECT_EQ(c["points"][2]["attempt"], 3);
+  EXPECT_EQ(curve["group"], "g1");
+  // Group g1 is t1 (1 session) and t2 (3): attempt 1 has two scores, 2 and 3 one.
+  ASSERT_EQ(c["group_median"].size(), 3u);
+  const json t1 = json::parse(Get("/api/v1/trainees/t1/curve", supervisor_).body);
+  const double t1_first = t1["cases"][0]["points"][0]["score"];
+  const double t2_first = c["points"][0]["score"];
+  EXPECT_NEAR(c["group_median"][0]["score"].get<double>(), 0.5 * (t1_first + t2_first), 1e-9);
+  const json list = json::parse(Get("/api/v1/trainees", supervisor_).body);
+  for (const auto& t : list["trainees"]) {
+    if (t["trainee_id"] == "t2") {
+      EXPECT_EQ(t["sessions"], 3);
+      EXPECT_GT(t["last_activity_unix_ms"].get<int64_t>(), 0);
+      EXPECT_EQ(t["group"], "g1");
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ves::server::testing
+
+namespace ves::server::testing {
+namespace {
+
+// Shutdown does not wait for an idle browser connection: it is closed.
+TEST(WebServerShutdown, IdleConnectionsAreClosedOnShutdown) {
+  ServerOptions o;
+  o.http_listen = "127.0.0.1:0";
+  auto server = std::make_unique<TestServer>(o);
+  boost::asio::io_context io;
+  boost::asio::ip::tcp::socket idle(io);
+  idle.connect({boost::asio::ip::make_address("127.0.0.1"),
+                static_cast<unsigned short>(server->server().http_port())});
+  EXPECT_EQ(HttpCall(server->server().http_port(), "GET", "/healthz").status, 200);
+  server.reset();  // returns although `idle` never sent a request
+  char byte = 0;
+  boost::system::error_code ec;
+  idle.read_some(boost::asio::buffer(&byte, 1), ec);
+  EXPECT_TRUE(ec == boost::asio::error::eof || ec == boost::asio::error::connection_reset)
+      << ec.message();
+}
+
+}  // namespace
+}  // namespace ves::server::testing

@@ -1,0 +1,211 @@
+#!/usr/bin/python3
+"""The supervisors' pages in a real browser (docs/web.md): headless Chromium
+driven by Selenium against a real ves-server on loopback. Sign in, the
+trainee list (a trainee named like markup shows as text), a learning curve
+with one point per uploaded session, a session page with its plots, the
+replay scrubbed to the end showing the tip at the session's final depth,
+group progress, the audit log (admin), sign-out. Screenshots of each page go
+to --out. Exits 77 (CTest SKIP) with a reason when Chromium cannot run here.
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+SKIP = 77
+XSS = '<img src=x onerror=alert(1)>'
+
+
+def skip(why):
+    print('SKIP: ' + why, flush=True)
+    sys.exit(SKIP)
+
+
+def wait_file(path, proc, seconds=30):
+    end = time.time() + seconds
+    while time.time() < end:
+        if os.path.exists(path):
+            return open(path).read().strip()
+        if proc.poll() is not None:
+            raise RuntimeError('ves-server exited with %d' % proc.returncode)
+        time.sleep(0.05)
+    raise RuntimeError('ves-server did not write ' + path)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--server', required=True)
+    ap.add_argument('--seed', required=True)
+    ap.add_argument('--out', required=True)
+    args = ap.parse_args()
+
+    try:
+        from selenium import webdriver
+        from selenium.common.exceptions import NoAlertPresentException, WebDriverException
+        from selenium.webdriver.common.by import By
+        from selenium.webdriver.support.ui import WebDriverWait
+    except ImportError as e:
+        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
+    chromium = shutil.which('chromium')
+    driver_path = shutil.which('chromedriver')
+    if not chromium or not driver_path:
+        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
+
+    os.makedirs(args.out, exist_ok=True)
+    work = tempfile.mkdtemp(prefix='ves-web-')
+    server = None
+    driver = None
+    try:
+        db = 'sqlite:' + os.path.join(work, 'ves.db')
+        tokens = json.loads(subprocess.check_output([args.seed, 'setup', db], text=True))
+        server = subprocess.Popen(
+            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
+             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:0',
+             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1'],
+            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
+        grpc_port = wait_file(os.path.join(work, 'grpc.port'), server)
+        http_port = wait_file(os.path.join(work, 'http.port'), server)
+        base = 'http://127.0.0.1:%s' % http_port
+
+        # Three sessions of t1 on the sample case, uploaded as a station does.
+        sessions = []
+        for operator, seconds in (('novice', '2'), ('expert', '2'), ('expert', '3')):
+            sessions.append(json.loads(subprocess.check_output(
+                [args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'], 't1',
+                 operator, seconds], text=True)))
+
+        options = webdriver.ChromeOptions()
+        options.binary_location = chromium
+        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
+                     '--window-size=1280,1400', '--no-first-run', '--disable-extensions'):
+            options.add_argument(flag)
+        try:
+            from selenium.webdriver.chrome.service import Service
+            driver = webdriver.Chrome(service=Service(driver_path), options=options)
+        except WebDriverException as e:
+            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
+        driver.set_page_load_timeout(60)
+
+        def ready(page):
+            WebDriverWait(driver, 60).until(
+                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready'))
+            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
+            error = driver.find_element(By.ID, 'error').text
+            assert state == 'true', '%s page failed: %s' % (page, error)
+
+        def shot(name):
+            driver.save_screenshot(os.path.join(args.out, name + '.png'))
+
+        def no_alert():
+            try:
+                driver.switch_to.alert
+            except NoAlertPresentException:
+                return
+            raise AssertionError('a script ran: an alert is open')
+
+        # Sign in.
+        driver.get(base + '/')
+        ready('sign-in')
+        shot('01-sign-in')
+        driver.find_element(By.ID, 'token').send_keys(tokens['supervisor'])
+        driver.find_element(By.ID, 'sign-in').click()
+        WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/trainees.html'))
+        ready('trainees')
+        cookies = {c['name']: c for c in driver.get_cookies()}
+        assert cookies['ves_session']['httpOnly'], cookies
+        assert cookies['ves_session'].get('sameSite') == 'Strict', cookies
+        assert driver.execute_script('return document.cookie') == '', 'the cookie is readable'
+
+        # Trainees: the markup name is text, no element made of it.
+        rows = driver.find_elements(By.CSS_SELECTOR, '#trainees tbody tr')
+        names = [r.find_elements(By.TAG_NAME, 'td')[0].text for r in rows]
+        assert 't1' in names and XSS in names, names
+        assert not driver.find_elements(By.CSS_SELECTOR, 'main img'), 'markup became an element'
+        no_alert()
+        t1 = [r for r in rows if r.find_elements(By.TAG_NAME, 'td')[0].text == 't1'][0]
+        assert t1.find_elements(By.TAG_NAME, 'td')[3].text == '3', t1.text
+        shot('02-trainees')
+
+        # Learning curve: one point per uploaded session.
+        t1.find_element(By.TAG_NAME, 'a').click()
+        ready('trainee')
+        points = driver.execute_script(
+            "return ves.charts['case:standard-adult'].map(c => c.data.datasets[0].data.length)")
+        assert points == [3, 3, 3, 3], points
+        scores = driver.execute_script(
+            "return ves.charts['case:standard-adult'][0].data.datasets[0].data.map(p => p.y)")
+        assert [round(s, 6) for s in scores] == [round(s['score'], 6) for s in sessions], scores
+        assert len(driver.find_elements(By.CSS_SELECTOR, '#sessions tbody tr')) == 3
+        shot('03-learning-curve')
+
+        # The XSS trainee's page shows the name as text too.
+        driver.get(base + '/trainee.html?id=' + '%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E')
+        ready('trainee')
+        assert driver.find_element(By.ID, 'trainee-id').text == XSS
+        no_alert()
+
+        # A session: summary, plots, replay scrubbed to the end.
+        last = sessions[-1]
+        driver.get(base + '/session.html?uuid=' + last['uuid'])
+        ready('session')
+        lengths = driver.execute_script(
+            'return [ves.charts.force, ves.charts.stretch, ves.charts.depth]'
+            '.map(c => c.data.datasets[0].data.length)')
+        frames = driver.execute_script('return ves.replay.frames.length')
+        assert all(n == frames and n > 10 for n in lengths), (lengths, frames)
+        shot('04-session')
+        driver.execute_script(
+            "const s = document.getElementById('scrub'); s.value = s.max;"
+            "s.dispatchEvent(new Event('input'));")
+        depth = driver.find_element(By.ID, 'tip-depth').text
+        expected = '%.0f mm' % (last['final_tip_arc_m'] * 1000)
+        assert depth == expected, 'tip at the end: %s, the session ended at %s' % (depth, expected)
+        shot('05-replay-end')
+
+        # Group progress.
+        driver.get(base + '/progress.html?group=g1')
+        ready('progress')
+        rows = [r.text for r in driver.find_elements(By.CSS_SELECTOR, '#progress tbody tr')]
+        assert len(rows) == 2 and rows[0].startswith('t1') and rows[1].startswith('t2'), rows
+        shot('06-progress')
+
+        # Sign out: the pages send us back to sign-in.
+        driver.find_element(By.ID, 'sign-out').click()
+        WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
+        driver.get(base + '/trainees.html')
+        WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
+
+        # The audit log, as an admin.
+        ready('sign-in')
+        driver.find_element(By.ID, 'token').send_keys(tokens['admin'])
+        driver.find_element(By.ID, 'sign-in').click()
+        WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/trainees.html'))
+        ready('trainees')
+        driver.get(base + '/audit.html')
+        ready('audit')
+        actions = [r.find_elements(By.TAG_NAME, 'td')[5].text
+                   for r in driver.find_elements(By.CSS_SELECTOR, '#audit tbody tr')]
+        assert 'session.upload' in actions and 'trainee.curve' in actions, actions
+        shot('07-audit')
+        driver.find_element(By.ID, 'sign-out').click()
+        WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
+        print('web_browser_test: all pages checked; screenshots in ' + args.out)
+        return 0
+    finally:
+        if driver is not None:
+            driver.quit()
+        if server is not None:
+            server.terminate()
+            try:
+                server.wait(20)
+            except subprocess.TimeoutExpired:
+                server.kill()
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == '__main__':
+    sys.exit(main())
