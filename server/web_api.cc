@@ -520,7 +520,9 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                      {"start_unix_ms", p->start},
                      {"score", p->score},
                      {"completed", p->completed},
-                     {"time_to_cecum_s", p->time_to_cecum_s},
+                     // Null when the cecum was not reached: no time to plot.
+                     {"time_to_cecum_s",
+                      p->completed ? json(p->time_to_cecum_s) : json(nullptr)},
                      {"pain_s", p->pain_s},
                      {"loop_s", p->loop_s}});
       }

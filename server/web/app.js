@@ -133,6 +133,11 @@ function lineChart(canvas, title, yLabel, datasets) {
   });
 }
 
+// OUTCOME_CECUM_REACHED -> "cecum reached" (the enum name as words).
+function outcomeText(outcome) {
+  return String(outcome || '').replace(/^OUTCOME_/, '').toLowerCase().replace(/_/g, ' ');
+}
+
 function curveBlock(container, kind, name, points, median, pass) {
   const block = el('section', null, {class: 'curve', id: 'curve-' + kind + '-' + name});
   block.appendChild(el('h3', (kind === 'case' ? 'Case ' : 'Lesson ') + name));
@@ -164,7 +169,8 @@ function curveBlock(container, kind, name, points, median, pass) {
                                                   'Pain (s)', 'Loop (s)', 'Session']));
   const tbody = table.appendChild(el('tbody'));
   for (const p of points) {
-    tbody.appendChild(row([p.attempt, p.score.toFixed(1), p.time_to_cecum_s.toFixed(1),
+    tbody.appendChild(row([p.attempt, p.score.toFixed(1),
+                           p.time_to_cecum_s === null ? '—' : p.time_to_cecum_s.toFixed(1),
                            p.pain_s.toFixed(1), p.loop_s.toFixed(1),
                            link('open', '/session.html?uuid=' + encodeURIComponent(p.uuid))]));
   }
@@ -184,7 +190,7 @@ async function traineePage() {
   const body = $('sessions').querySelector('tbody');
   for (const s of sessions.sessions.slice().reverse()) {
     body.appendChild(row([link(when(s.start_unix_ms), '/session.html?uuid=' + encodeURIComponent(s.uuid)),
-                          s.case_id, s.outcome, Number(s.score).toFixed(1),
+                          s.case_id, outcomeText(s.outcome), Number(s.score).toFixed(1),
                           s.completed ? Number(s.time_to_cecum_s).toFixed(1) + ' s' : '—']));
   }
 }
@@ -276,7 +282,7 @@ async function sessionPage() {
   const summary = [['Trainee', r.trainee_id], ['Case', r.case_id + ' v' + r.case_version],
                    ['Lesson', r.lesson_id || '—'], ['Station', r.station_id],
                    ['Operator', r.operator_kind], ['Started', when(r.start_unix_ms)],
-                   ['Outcome', r.outcome], ['Score', Number(r.score).toFixed(1) + '/100'],
+                   ['Outcome', outcomeText(r.outcome)], ['Score', Number(r.score).toFixed(1) + '/100'],
                    ['Time to cecum', m.completed ? Number(m.time_to_cecum_s).toFixed(1) + ' s' : '—'],
                    ['Pain', Number(m.pain_s || 0).toFixed(1) + ' s'],
                    ['Loop', Number(m.loop_s || 0).toFixed(1) + ' s'],

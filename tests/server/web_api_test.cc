@@ -436,6 +436,7 @@ TEST_F(WebApiTest, LearningCurveHasOnePointPerSessionAndTheGroupMedian) {
   const double t1_first = t1["cases"][0]["points"][0]["score"];
   const double t2_first = c["points"][0]["score"];
   EXPECT_NEAR(c["group_median"][0]["score"].get<double>(), 0.5 * (t1_first + t2_first), 1e-9);
+  EXPECT_NEAR(c["points"][0]["time_to_cecum_s"].get<double>(), 210.0, 1e-9);
   const json list = json::parse(Get("/api/v1/trainees", supervisor_).body);
   for (const auto& t : list["trainees"]) {
     if (t["trainee_id"] == "t2") {
@@ -444,6 +445,27 @@ TEST_F(WebApiTest, LearningCurveHasOnePointPerSessionAndTheGroupMedian) {
       EXPECT_EQ(t["group"], "g1");
     }
   }
+}
+
+// A session that did not reach the cecum has no time to cecum on the curve
+// (null, drawn as a gap and shown as a dash), not a time of 0 s.
+TEST_F(WebApiTest, ACurvePointWithoutTheCecumHasNoTimeToCecum) {
+  std::mt19937_64 rng(12);
+  ves::v1::UploadSessionResponse up;
+  auto timed_out = MakeRecord(NewUuid(rng), "t2", 20);
+  timed_out.set_outcome(ves::v1::OUTCOME_TIMED_OUT);
+  timed_out.mutable_metrics()->set_completed(false);
+  timed_out.mutable_metrics()->clear_time_to_cecum_s();
+  ASSERT_TRUE(UploadSession(server_.Client(station_), timed_out, &up).ok());
+  ASSERT_TRUE(
+      UploadSession(server_.Client(station_), MakeRecord(NewUuid(rng), "t2", 21), &up).ok());
+  const json curve = json::parse(Get("/api/v1/trainees/t2/curve", supervisor_).body);
+  ASSERT_EQ(curve["cases"].size(), 1u);
+  const json& points = curve["cases"][0]["points"];
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_TRUE(points[0]["time_to_cecum_s"].is_null()) << points.dump();
+  EXPECT_FALSE(points[0]["completed"].get<bool>());
+  EXPECT_NEAR(points[1]["time_to_cecum_s"].get<double>(), 221.0, 1e-9);
 }
 
 }  // namespace

@@ -139,6 +139,13 @@ def main():
         scores = driver.execute_script(
             "return ves.charts['case:standard-adult'][0].data.datasets[0].data.map(p => p.y)")
         assert [round(s, 6) for s in scores] == [round(s['score'], 6) for s in sessions], scores
+        # Runs of 2-3 s never reach the cecum: no time to plot, a dash in the table.
+        times = driver.execute_script(
+            "return ves.charts['case:standard-adult'][1].data.datasets[0].data.map(p => p.y)")
+        assert times == [None, None, None], times
+        cells = [r.find_elements(By.TAG_NAME, 'td')[2].text for r in driver.find_elements(
+            By.CSS_SELECTOR, '#curve-case-standard-adult table.points tbody tr')]
+        assert cells == ['\u2014'] * 3, cells
         assert len(driver.find_elements(By.CSS_SELECTOR, '#sessions tbody tr')) == 3
         shot('03-learning-curve')
 
