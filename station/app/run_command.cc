@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -31,6 +32,7 @@
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
+#include "station/app/live_publish.h"
 #include "station/app/run_interactive.h"
 #include "station/app/run_lesson.h"
 #include "station/app/run_sync.h"
@@ -68,7 +70,7 @@ constexpr char kUsage[] =
     "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
     "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
-    "                       [--can-log FILE]\n\n"
+    "                       [--can-log FILE] [--no-live] [--realtime]\n\n"
     "Gets the case (the server's latest version into the offline cache, else the cached one;\n"
     "a case FILE is read and put into the cache),\n"
     "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
@@ -101,6 +103,8 @@ struct RunOptions {
   double seconds{600.0};
   double frame_period_s{5.0};
   int upload_attempts{3};
+  bool live{true};       // with a server: stream the session (docs/station-run.md)
+  bool realtime{false};  // headless: simulated time no faster than the wall clock
 };
 
 std::string HostName() {
@@ -191,6 +195,9 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   if (!std::isfinite(o.frame_period_s) || o.frame_period_s <= 0.0) {
     throw UsageError("--frame-every-s " + std::to_string(o.frame_period_s) + " must be > 0");
   }
+  o.live = vm.count("no-live") == 0;
+  o.realtime = vm.count("realtime") > 0;
+  if (o.realtime && !o.headless) throw UsageError("--realtime needs --headless");
   o.upload_attempts = vm["upload-attempts"].as<int>();
   if (o.upload_attempts < 1 || o.upload_attempts > 20) {
     throw UsageError("--upload-attempts " + std::to_string(o.upload_attempts) +
@@ -349,6 +356,10 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   }
   const haptics::DeviceState& device = rig.cycle().device_state();
   source.Start(start_ms, device.insertion_m, device.roll_rad);
+  const std::string uuid = training::NewUuidV4();
+  LivePublisher live(o.live ? o.server : std::nullopt, uuid, o.trainee_id, obtained.entry.id,
+                     obtained.entry.version);
+  const auto wall_start = std::chrono::steady_clock::now();
   training::Perception perception = training::Perceive(run.params, runner.state(), runner.output());
   training::ViewMode last_view = training::ViewMode::kTextured;
   try {
@@ -370,8 +381,15 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
       const training::InputSample& logged = runner.session().inputs().back();
       last_view = logged.view_mode;
       frames.OnStep(logged, runner);
+      live.OnStep(runner);
+      if (o.realtime) {
+        std::this_thread::sleep_until(
+            wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>(runner.state().time_s)));
+      }
       perception = training::Perceive(run.params, runner.state(), runner.output());
     }
+    live.Finish(std::cout);
     frames.Finish(runner, last_view,
                   !o.lesson_plan || o.lesson_plan->lesson.aids().fluoroscopy_allowed());
   } catch (const std::exception& error) {  // a frame that cannot be written
@@ -391,8 +409,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   if (!WriteTextFile(o.out_dir / "device.txt", device_line)) return kExitFailed;
   const training::RunResult result = training::ResultOf(runner);
   const auto duration_ms = static_cast<int64_t>(std::llround(result.metrics.duration_s * 1e3));
-  ves::v1::SessionRecord record = runner.session().ToRecord(training::NewUuidV4(),
-                                                            start_ms + duration_ms);
+  ves::v1::SessionRecord record = runner.session().ToRecord(uuid, start_ms + duration_ms);
   training::CaseModelOptions case_options;
   *record.mutable_replay_setup() =
       training::MakeReplaySetup(obtained.colon_case, case_options, o.seconds);
@@ -647,7 +664,9 @@ int RunRunCommand(const CommandArgs& args) {
       "headless: an endoscope frame per this much simulated time")(
       "upload-attempts", po::value<int>()->default_value(3),
       "upload passes (with backoff) before leaving the session pending")(
-      "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format");
+      "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format")(
+      "no-live", "with --server: do not stream the running session for live proctoring")(
+      "realtime", "headless: pace the session to the wall clock (a live demo)");
   po::variables_map vm;
   if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   RunOptions options;
