@@ -68,7 +68,8 @@ LivePublisher::LivePublisher(const std::optional<sync::ServerEndpoint>& server,
   }
 }
 
-void LivePublisher::OnStep(const training::SessionRunner& runner) {
+void LivePublisher::OnStep(const training::SessionRunner& runner,
+                           const std::function<std::string()>& jpeg) {
   if (!streamer_) return;
   const double loop_m = runner.session().accumulator().loop_index_m();
   const auto& th = runner.session().accumulator().thresholds();
@@ -76,7 +77,16 @@ void LivePublisher::OnStep(const training::SessionRunner& runner) {
   const double t_s = runner.observation().t_s;
   if (t_s + 1e-9 < next_frame_s_) return;
   next_frame_s_ = t_s + kLiveFramePeriodS;
-  streamer_->Offer(MakeLiveFrame(runner, in_loop_));
+  ves::v1::LiveFrame frame = MakeLiveFrame(runner, in_loop_);
+  const auto now = std::chrono::steady_clock::now();
+  if (jpeg && now >= next_jpeg_ && streamer_->Idle()) {
+    next_jpeg_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(kLiveJpegPeriodS));
+    std::string bytes = jpeg();
+    // Over the server's bound it would end the stream: sent without it.
+    if (bytes.size() <= sync::kMaxLiveJpegBytes) frame.set_endoscope_jpeg(std::move(bytes));
+  }
+  streamer_->Offer(std::move(frame));
 }
 
 void LivePublisher::Finish(std::ostream& log) {

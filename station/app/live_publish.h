@@ -1,6 +1,8 @@
 #pragma once
 
+#include <chrono>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -17,6 +19,7 @@ namespace ves::station {
 
 inline constexpr double kLiveFramePeriodS = 0.05;  // 20 Hz
 inline constexpr int kLivePolylinePoints = 80;
+inline constexpr double kLiveJpegPeriodS = 0.2;  // 5 Hz, wall clock
 
 // The frame of the runner's current step (no session ids).
 ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner, bool in_loop);
@@ -27,14 +30,20 @@ class LivePublisher {
   // has been reported when the options were parsed.
   LivePublisher(const std::optional<sync::ServerEndpoint>& server, const std::string& session_uuid,
                 const std::string& trainee_id, const std::string& case_id, uint32_t case_version);
-  // After each model step; builds and offers a frame every kLiveFramePeriodS.
-  void OnStep(const training::SessionRunner& runner);
+  // After each model step; builds and offers a frame every kLiveFramePeriodS
+  // of session time. `jpeg` (may be empty) renders the endoscope image: it is
+  // called at most every kLiveJpegPeriodS of wall-clock time, and only while
+  // the stream is open and its queue empty, so rendering costs a headless
+  // run at most 5 renders per second and nothing when the network is slow.
+  void OnStep(const training::SessionRunner& runner,
+              const std::function<std::string()>& jpeg = {});
   // Ends the stream; one line on `log` (frames sent, dropped, why it stopped).
   void Finish(std::ostream& log);
 
  private:
   std::unique_ptr<sync::LiveStreamer> streamer_;
   double next_frame_s_ = 0.0;
+  std::chrono::steady_clock::time_point next_jpeg_{};
   bool in_loop_ = false;
 };
 

@@ -20,6 +20,7 @@
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -256,6 +257,21 @@ class FrameWriter {
 
   int frames() const { return frames_; }
 
+  // The endoscope image now as a small JPEG for live proctoring (320 pixels
+  // wide, quality 70); "" when the views cannot render here.
+  std::string EndoscopeJpeg(const training::SessionRunner& runner, training::ViewMode mode) {
+    if (!views_) return {};
+    render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
+    const cv::Mat image = views_->Endoscope(scene_, mode);
+    if (image.empty()) return {};
+    cv::Mat small;
+    cv::resize(image, small, cv::Size(320, std::max(1, image.rows * 320 / std::max(1, image.cols))),
+               0, 0, cv::INTER_AREA);
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".jpg", small, bytes, {cv::IMWRITE_JPEG_QUALITY, 70})) return {};
+    return std::string(bytes.begin(), bytes.end());
+  }
+
  private:
   const model::ModelParams& params_;
   std::filesystem::path dir_;
@@ -381,7 +397,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
       const training::InputSample& logged = runner.session().inputs().back();
       last_view = logged.view_mode;
       frames.OnStep(logged, runner);
-      live.OnStep(runner);
+      live.OnStep(runner, [&] { return frames.EndoscopeJpeg(runner, logged.view_mode); });
       if (o.realtime) {
         std::this_thread::sleep_until(
             wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

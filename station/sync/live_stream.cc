@@ -51,6 +51,11 @@ void LiveStreamer::Offer(ves::v1::LiveFrame frame) {
   cv_.notify_one();
 }
 
+bool LiveStreamer::Idle() {
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  return lock.owns_lock() && connected_ && !closing_ && queue_.empty();
+}
+
 LiveStreamStats LiveStreamer::Close(int wait_ms) {
   {
     std::unique_lock lock(mutex_);

@@ -22,6 +22,8 @@
 namespace ves::sync {
 
 inline constexpr std::size_t kLiveQueueFrames = 4;
+// The server's bound on LiveFrame.endoscope_jpeg (server/live_hub.h).
+inline constexpr std::size_t kMaxLiveJpegBytes = 64 << 10;
 
 struct LiveStreamStats {
   uint64_t offered = 0;
@@ -41,6 +43,9 @@ class LiveStreamer {
   ~LiveStreamer();
   // Queues a frame for sending; never blocks, never throws.
   void Offer(ves::v1::LiveFrame frame);
+  // True while a stream is open and nothing waits in the queue (a good
+  // moment for an expensive frame); never blocks (false when busy).
+  bool Idle();
   // Ends the stream (WritesDone, Finish), waiting at most `wait_ms` before
   // cancelling it, and joins the thread.
   LiveStreamStats Close(int wait_ms = 2000);

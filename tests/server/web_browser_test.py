@@ -193,6 +193,12 @@ def main():
             tips = driver.execute_script('return ves.live.tips')
             assert tips[-1] > tips[0], 'the tip did not move: %s' % tips
             assert driver.find_element(By.ID, 'live-tip-depth').text.endswith(' mm')
+            with open(os.path.join(args.out, 'ves-station.log')) as f:
+                renders = 'the views cannot render here' not in f.read()
+            if renders:  # the station sends endoscope JPEGs when it can render them
+                WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+                    "const i = document.getElementById('live-jpeg');"
+                    "return !i.hidden && i.complete && i.naturalWidth === 320"))
             shot('07-live-session')
             assert station.wait(120) == 0, 'ves-station run failed (ves-station.log)'
         finally:

@@ -35,6 +35,8 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 
+static_assert(sync::kMaxLiveJpegBytes == kMaxLiveJpegBytes, "station and server JPEG bounds");
+
 // A WebSocket viewer of /api/v1/live/ws (synchronous, loopback).
 class Viewer {
  public:
