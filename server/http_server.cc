@@ -147,7 +147,8 @@ void ServeLiveViewer(Stream& stream, const http::request<http::string_body>& req
     if (ended) {
       ws.text(true);
       ws.write(asio::buffer(std::string("{\"ended\":true}")), ec);
-      if (!ec) ws.close(websocket::close_reason(websocket::close_code::normal, "session ended"), ec);
+      if (!ec)
+        ws.close(websocket::close_reason(websocket::close_code::normal, "session ended"), ec);
       break;
     }
     if (frame.empty()) continue;

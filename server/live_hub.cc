@@ -34,8 +34,8 @@ std::string CheckFloats(const Floats& v, const char* name, int max_count, int mu
            std::to_string(max_count);
   }
   if (v.size() % multiple_of != 0) {
-    return std::string(name) + ": " + std::to_string(v.size()) +
-           " numbers, not a multiple of " + std::to_string(multiple_of);
+    return std::string(name) + ": " + std::to_string(v.size()) + " numbers, not a multiple of " +
+           std::to_string(multiple_of);
   }
   for (int i = 0; i < v.size(); ++i) {
     // Shapes are metres inside a body: a kilometre is a broken frame.
@@ -57,9 +57,9 @@ std::string CheckId(const std::string& id, const char* name, bool required) {
   if (id.empty() && !required) return {};
   if (patient_db::IsPrintableId(id)) return {};
   return std::string(name) + " = '" + patient_db::PrintableExcerpt(id) + "': " +
-         (id.empty() ? "missing (the first frame names the session)"
-                     : "not 1.." + std::to_string(patient_db::kMaxIdBytes) +
-                           " bytes of printable text");
+         (id.empty()
+              ? "missing (the first frame names the session)"
+              : "not 1.." + std::to_string(patient_db::kMaxIdBytes) + " bytes of printable text");
 }
 
 nlohmann::json ApMm(const google::protobuf::RepeatedField<float>& xyz) {
@@ -211,9 +211,8 @@ std::vector<LiveSessionInfo> LiveHub::List(const std::string& institution) const
   for (const auto& [uuid, l] : live_) {
     if (institution.empty() || l.info.institution == institution) out.push_back(l.info);
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-    return a.started_unix_ms < b.started_unix_ms;
-  });
+  std::sort(out.begin(), out.end(),
+            [](const auto& a, const auto& b) { return a.started_unix_ms < b.started_unix_ms; });
   return out;
 }
 

@@ -17,10 +17,10 @@
 // viewer only ever gets the newest frame, and publishing never waits for one.
 namespace ves::server {
 
-// Bounds on a LiveFrame (docs/web.md, "Limits").
+// Bounds on a LiveFrame (docs/web.md, "Live proctoring" and "Limits").
 inline constexpr int kMaxLivePolylinePoints = 200;  // per polyline (x,y,z each)
 inline constexpr size_t kMaxLiveJpegBytes = 64 << 10;
-inline constexpr int kMaxLiveSessions = 1000;       // streams at once on one server
+inline constexpr int kMaxLiveSessions = 1000;  // streams at once on one server
 inline constexpr int kMaxLiveViewersPerSession = 32;
 
 // INVALID_ARGUMENT-style message naming the first bad field ("" when fine).

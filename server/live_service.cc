@@ -3,10 +3,11 @@
 // the session, whose trainee must be of the caller's institution; one audit
 // row per stream start. Frames go to the LiveHub; a bad frame ends the
 // stream with INVALID_ARGUMENT naming the field.
+#include "server/live_service.h"
+
 #include <utility>
 
 #include "server/live_hub.h"
-#include "server/live_service.h"
 #include "server/pipeline.h"
 #include "server/services.h"
 
@@ -71,9 +72,9 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
     }
     // Absent, or of another institution: the same answer (no existence leak).
     if (!trainee.ok() || !RequireInstitution(who_, trainee.value.institution, "stream").ok()) {
-      return Status(StatusCode::FAILED_PRECONDITION,
-                    "frame.trainee_id = '" + frame_.trainee_id() +
-                        "': no such trainee in institution '" + who_.institution + "'");
+      return Status(StatusCode::FAILED_PRECONDITION, "frame.trainee_id = '" + frame_.trainee_id() +
+                                                         "': no such trainee in institution '" +
+                                                         who_.institution + "'");
     }
     LiveSessionInfo info;
     info.session_uuid = frame_.session_uuid();
@@ -103,8 +104,8 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
 
 }  // namespace
 
-grpc::ServerReadReactor<v1::LiveFrame>* LiveService::StreamSession(
-    grpc::CallbackServerContext* ctx, v1::LiveStreamSummary* summary) {
+grpc::ServerReadReactor<v1::LiveFrame>* LiveService::StreamSession(grpc::CallbackServerContext* ctx,
+                                                                   v1::LiveStreamSummary* summary) {
   Principal who;
   const Status admitted = AdmitRequest(deps_, AuthorizationOf(ctx), v1::LiveFrame(), &who);
   if (!admitted.ok()) return new ErrorReactor(admitted);
@@ -114,7 +115,8 @@ grpc::ServerReadReactor<v1::LiveFrame>* LiveService::StreamSession(
     deps_.writer->SubmitAudit(MakeAudit(who, "live.stream", "?", ToGrpcStatus(a)));
     return new ErrorReactor(ToGrpcStatus(a));
   }
-  if (deps_.live == nullptr) return new ErrorReactor(Status(StatusCode::UNIMPLEMENTED, "no live hub"));
+  if (deps_.live == nullptr)
+    return new ErrorReactor(Status(StatusCode::UNIMPLEMENTED, "no live hub"));
   return new LiveReactor(deps_, std::move(who), summary);
 }
 

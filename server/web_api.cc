@@ -647,21 +647,22 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     req.set_institution(institution);
     Status s = admit(req);
     if (!s.ok()) return ErrorOf(s);
-    static const CallSpec spec{"live.list", {StoreRole::kAdmin, StoreRole::kSupervisor},
-                               "list live sessions", /*audit_every_call=*/false};
+    static const CallSpec spec{"live.list",
+                               {StoreRole::kAdmin, StoreRole::kSupervisor},
+                               "list live sessions",
+                               /*audit_every_call=*/false};
     std::vector<LiveSessionInfo> live;
-    s = RunCall(deps_, who, spec, institution.empty() ? who.institution : institution,
-                [&]() -> Status {
-                  const std::string scope = institution.empty() && who.role != StoreRole::kAdmin
-                                                ? who.institution
-                                                : institution;
-                  if (!scope.empty()) {
-                    AuthStatus a = RequireInstitution(who, scope, "list live sessions");
-                    if (!a.ok()) return ToGrpcStatus(a);
-                  }
-                  if (deps_.live != nullptr) live = deps_.live->List(scope);
-                  return Status::OK;
-                });
+    s = RunCall(
+        deps_, who, spec, institution.empty() ? who.institution : institution, [&]() -> Status {
+          const std::string scope =
+              institution.empty() && who.role != StoreRole::kAdmin ? who.institution : institution;
+          if (!scope.empty()) {
+            AuthStatus a = RequireInstitution(who, scope, "list live sessions");
+            if (!a.ok()) return ToGrpcStatus(a);
+          }
+          if (deps_.live != nullptr) live = deps_.live->List(scope);
+          return Status::OK;
+        });
     if (!s.ok()) return ErrorOf(s);
     json out = json::array();
     const int64_t now = NowUnixMs();
@@ -707,7 +708,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
 }
 
 HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uuid,
-                           std::shared_ptr<LiveViewer>* viewer) {
+                            std::shared_ptr<LiveViewer>* viewer) {
   if (request.target.size() > kMaxHttpTargetBytes) {
     return Error(414, "INVALID_ARGUMENT", "request target: over the limit");
   }
@@ -719,9 +720,9 @@ HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uui
   // SameSite does not hold (old browsers): the origin must be our own.
   if (!request.origin.empty() && request.origin != "http://" + request.host &&
       request.origin != "https://" + request.host) {
-    return Error(403, "PERMISSION_DENIED",
-                 "Origin '" + patient_db::PrintableExcerpt(request.origin, 80) +
-                     "': not this server's");
+    return Error(
+        403, "PERMISSION_DENIED",
+        "Origin '" + patient_db::PrintableExcerpt(request.origin, 80) + "': not this server's");
   }
   std::string uuid;
   if (qmark != std::string::npos) {
@@ -740,8 +741,8 @@ HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uui
   Principal who;
   Status s = AdmitRequest(deps_, authorization, bounds, &who);
   if (!s.ok()) return ErrorOf(s);
-  static const CallSpec spec{"live.watch", {StoreRole::kAdmin, StoreRole::kSupervisor},
-                             "watch live sessions"};
+  static const CallSpec spec{
+      "live.watch", {StoreRole::kAdmin, StoreRole::kSupervisor}, "watch live sessions"};
   s = RunCall(deps_, who, spec, uuid, [&]() -> Status {
     LiveSessionInfo info;
     if (deps_.live == nullptr || !deps_.live->Find(uuid, &info)) {

@@ -172,8 +172,9 @@ int main(int argc, char** argv) {
   };
   std::printf("live_bench: %d stations at 20 Hz, one WebSocket viewer each, %.0f s\n", stations,
               seconds);
-  std::printf("  frames sent %ld, received by viewers %ld (%.1f%%; a slow viewer gets the newest)\n",
-              sent.load(), received.load(), sent ? 100.0 * received / sent : 0.0);
+  std::printf(
+      "  frames sent %ld, received by viewers %ld (%.1f%%; a slow viewer gets the newest)\n",
+      sent.load(), received.load(), sent ? 100.0 * received / sent : 0.0);
   std::printf("  station-to-viewer latency p50 %.2f ms  p95 %.2f ms  p99 %.2f ms  max %.2f ms\n",
               at(0.5), at(0.95), at(0.99), latency_ms.empty() ? 0.0 : latency_ms.back());
   std::printf("  process CPU (server, %d station and %d viewer threads) %.1f s over %.1f s wall\n",

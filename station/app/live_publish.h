@@ -35,8 +35,7 @@ class LivePublisher {
   // called at most every kLiveJpegPeriodS of wall-clock time, and only while
   // the stream is open and its queue empty, so rendering costs a headless
   // run at most 5 renders per second and nothing when the network is slow.
-  void OnStep(const training::SessionRunner& runner,
-              const std::function<std::string()>& jpeg = {});
+  void OnStep(const training::SessionRunner& runner, const std::function<std::string()>& jpeg = {});
   // Ends the stream; one line on `log` (frames sent, dropped, why it stopped).
   void Finish(std::ostream& log);
 

@@ -16,12 +16,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -654,8 +654,8 @@ int Run(RunOptions o) {
 
 int RunRunCommand(const CommandArgs& args) {
   po::options_description desc("options");
-  desc.add_options()("help,h", "show this help")(
-      "server", po::value<std::string>(), "server address host:port")(
+  desc.add_options()("help,h", "show this help")("server", po::value<std::string>(),
+                                                 "server address host:port")(
       "token", po::value<std::string>(), "station bearer token")(
       "tls-ca", po::value<std::string>(),
       "CA of the server certificate (PEM); none: plaintext, loopback --server only")(

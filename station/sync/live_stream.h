@@ -58,11 +58,11 @@ class LiveStreamer {
   ves::v1::LiveFrame first_;
   std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<ves::v1::LiveFrame> queue_;  // guarded by mutex_
-  bool closing_ = false;                  // guarded by mutex_
-  bool connected_ = false;                // guarded by mutex_
+  std::deque<ves::v1::LiveFrame> queue_;    // guarded by mutex_
+  bool closing_ = false;                    // guarded by mutex_
+  bool connected_ = false;                  // guarded by mutex_
   grpc::ClientContext* context_ = nullptr;  // the live call's, guarded by mutex_
-  LiveStreamStats stats_;                 // guarded by mutex_
+  LiveStreamStats stats_;                   // guarded by mutex_
   std::atomic<uint64_t> dropped_{0};
   std::thread thread_;
 };

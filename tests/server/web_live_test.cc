@@ -7,6 +7,7 @@
 // streams when the server is there and never blocks when it is not.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -16,7 +17,6 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
-#include <atomic>
 #include <thread>
 
 #include "server/client.h"
@@ -74,8 +74,7 @@ class Viewer {
 
 // A raw station stream (the fake station).
 struct Station {
-  Station(const ClientOptions& client)
-      : stub(v1::Live::NewStub(MakeClientChannel(client))) {
+  Station(const ClientOptions& client) : stub(v1::Live::NewStub(MakeClientChannel(client))) {
     context.AddMetadata("authorization", "Bearer " + client.token);
     writer = stub->StreamSession(&context, &summary);
   }
@@ -149,8 +148,8 @@ class WebLiveTest : public ::testing::Test {
   }
   int port() { return server_.server().http_port(); }
   json LiveList(const std::string& token) {
-    const HttpResult r = HttpCall(port(), "GET", "/api/v1/live",
-                                  {{"Authorization", "Bearer " + token}});
+    const HttpResult r =
+        HttpCall(port(), "GET", "/api/v1/live", {{"Authorization", "Bearer " + token}});
     EXPECT_EQ(r.status, 200) << r.body;
     return r.status == 200 ? json::parse(r.body)["live"] : json::array();
   }
@@ -248,18 +247,21 @@ TEST_F(WebLiveTest, OtherInstitutionsRolesAndStrangersAreRefused) {
   EXPECT_EQ(Upgrade(NewUuid(rng), supervisor_).status, 404);
   EXPECT_EQ(Upgrade("", supervisor_).status, 400);
   {  // a page of another origin cannot ride on a supervisor's credentials
-    Headers h = {{"Connection", "Upgrade"}, {"Upgrade", "websocket"},
-                 {"Sec-WebSocket-Version", "13"}, {"Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="},
-                 {"Authorization", "Bearer " + supervisor_}, {"Origin", "https://evil.example"}};
+    Headers h = {{"Connection", "Upgrade"},
+                 {"Upgrade", "websocket"},
+                 {"Sec-WebSocket-Version", "13"},
+                 {"Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="},
+                 {"Authorization", "Bearer " + supervisor_},
+                 {"Origin", "https://evil.example"}};
     EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/live/ws?session=" + uuid_, h).status, 403);
   }
   // The same supervisor is let in (the refusals above were not by accident).
   Viewer ok;
   EXPECT_EQ(ok.Connect(port(), uuid_, supervisor_), 101);
   EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/live").status, 401);
-  EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/live", {{"Authorization", "Bearer " + trainee_}})
-                .status,
-            403);
+  EXPECT_EQ(
+      HttpCall(port(), "GET", "/api/v1/live", {{"Authorization", "Bearer " + trainee_}}).status,
+      403);
   EXPECT_EQ(HttpCall(port(), "GET", "/api/v1/live?institution=north",
                      {{"Authorization", "Bearer " + south_supervisor_}})
                 .status,
