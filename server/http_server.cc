@@ -8,11 +8,14 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/ssl.hpp>
+#include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 #include <chrono>
 #include <map>
 #include <stdexcept>
 
 #include "patient_db/net_address.h"
+#include "server/live_hub.h"
 
 namespace ves::server {
 
@@ -77,6 +80,8 @@ HttpRequest ToRequest(const http::request<http::string_body>& r) {
   out.csrf_token = std::string(r["X-CSRF-Token"]);
   out.content_type = std::string(r[http::field::content_type]);
   out.body = r.body();
+  out.origin = std::string(r[http::field::origin]);
+  out.host = std::string(r[http::field::host]);
   return out;
 }
 
@@ -110,6 +115,47 @@ HttpReply LimitReply(int status, const std::string& message) {
   r.body = WebApi::HtmlSafeJson("{\"error\":{\"code\":\"INVALID_ARGUMENT\",\"message\":\"" +
                                 message + "\"}}");
   return r;
+}
+
+bool Stopping(HttpServer::Impl* impl) {
+  std::lock_guard lock(impl->mutex);
+  return impl->stopping;
+}
+
+// A live viewer's WebSocket (docs/web.md): the newest frame of its one-slot
+// buffer whenever there is one. Only this connection's thread waits on a slow
+// browser (its write, bounded by io_timeout_s); the station and the other
+// viewers never do. Messages from the browser are not read: it only listens.
+template <class Stream>
+void ServeLiveViewer(Stream& stream, const http::request<http::string_body>& req, int fd,
+                     HttpServer::Impl* impl, WebApi* api, const HttpOptions& options,
+                     const std::string& uuid, const std::shared_ptr<LiveViewer>& viewer) {
+  namespace websocket = beast::websocket;
+  const auto timeout = std::chrono::seconds(options.io_timeout_s);
+  websocket::stream<Stream&> ws(stream);
+  ws.set_option(websocket::stream_base::decorator(
+      [](websocket::response_type& res) { res.set(http::field::server, "ves-server"); }));
+  ws.read_message_max(4096);
+  beast::error_code ec;
+  SetDeadline(impl, fd, timeout);
+  ws.accept(req, ec);
+  while (!ec && !Stopping(impl)) {
+    SetDeadline(impl, fd, std::chrono::seconds(0));  // waiting for a frame is not idling
+    bool ended = false;
+    const std::string frame = viewer->Next(250, &ended);
+    SetDeadline(impl, fd, timeout);
+    if (ended) {
+      ws.text(true);
+      ws.write(asio::buffer(std::string("{\"ended\":true}")), ec);
+      if (!ec)
+        ws.close(websocket::close_reason(websocket::close_code::normal, "session ended"), ec);
+      break;
+    }
+    if (frame.empty()) continue;
+    ws.text(true);
+    ws.write(asio::buffer(frame), ec);
+  }
+  api->LiveUnwatch(uuid, viewer);
 }
 
 template <class Stream>
@@ -147,8 +193,25 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
       }
       return;
     }
-    SetDeadline(impl, fd, std::chrono::seconds(0));  // a replay may take a while
     const auto& req = parser.get();
+    if (beast::websocket::is_upgrade(req)) {
+      std::string uuid;
+      std::shared_ptr<LiveViewer> viewer;
+      const HttpReply refusal = api->LiveWatch(ToRequest(req), &uuid, &viewer);
+      if (options.log_calls)
+        spdlog::info("http websocket {} {} peer={}",
+                     patient_db::PrintableExcerpt(
+                         std::string(req.target().substr(0, req.target().find('?'))), 120),
+                     refusal.status, peer);
+      if (refusal.status == 101) {
+        ServeLiveViewer(stream, req, fd, impl, api, options, uuid, viewer);
+      } else {
+        auto res = ToResponse(refusal, req.version(), false, false, tls);
+        http::write(stream, res, ec);
+      }
+      return;
+    }
+    SetDeadline(impl, fd, std::chrono::seconds(0));  // a replay may take a while
     const auto start = Clock::now();
     const HttpReply reply = api->Handle(ToRequest(req));
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

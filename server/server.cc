@@ -198,12 +198,14 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
   judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
-  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get()};
+  live_ = std::make_unique<LiveHub>();
+  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get(), live_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);
   trainees_ = std::make_unique<TraineesService>(deps);
   admin_ = std::make_unique<AdminService>(deps);
   lessons_ = std::make_unique<LessonsService>(deps);
+  live_service_ = std::make_unique<LiveService>(deps);
 }
 
 VesServer::~VesServer() { Shutdown(std::chrono::milliseconds(0)); }
@@ -217,6 +219,7 @@ void VesServer::Start() {
   builder.RegisterService(trainees_.get());
   builder.RegisterService(admin_.get());
   builder.RegisterService(lessons_.get());
+  builder.RegisterService(live_service_.get());
   builder.SetMaxReceiveMessageSize(options_.max_receive_message_bytes);
   builder.SetMaxSendMessageSize(options_.max_send_message_bytes);
   // Keepalive: ping idle clients every 30 s, drop them after 10 s of silence;
@@ -244,7 +247,7 @@ void VesServer::Start() {
     http.tls_key_file = options_.tls_key_file;
     http.log_calls = options_.log_calls;
     http_ = std::make_unique<HttpServer>(
-        http, ServiceDeps{store_.get(), writer_.get(), auth_.get(), judge_.get()});
+        http, ServiceDeps{store_.get(), writer_.get(), auth_.get(), judge_.get(), live_.get()});
     try {
       http_->Start();
     } catch (...) {

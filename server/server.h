@@ -9,6 +9,8 @@
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/http_server.h"
+#include "server/live_hub.h"
+#include "server/live_service.h"
 #include "server/services.h"
 #include "server/session_writer.h"
 
@@ -59,12 +61,14 @@ class VesServer {
   std::unique_ptr<patient_db::Store> store_;
   std::unique_ptr<SessionWriter> writer_;
   std::unique_ptr<Authenticator> auth_;
+  std::unique_ptr<LiveHub> live_;  // before the services that point to it
   std::unique_ptr<CasesService> cases_;
   std::unique_ptr<SessionsService> sessions_;
   std::unique_ptr<TraineesService> trainees_;
   std::unique_ptr<AdminService> admin_;
   std::unique_ptr<LessonJudge> judge_;
   std::unique_ptr<LessonsService> lessons_;
+  std::unique_ptr<LiveService> live_service_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<HttpServer> http_;
   int port_ = 0;

@@ -24,6 +24,8 @@
 // AdmitRequest. docs/server.md lists who may call what.
 namespace ves::server {
 
+class LiveHub;
+
 inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
 inline constexpr uint64_t kMaxCaseUploadBytes = 256ull << 20;  // a bundle's limit
 inline constexpr size_t kMaxAuditTextBytes = 160;              // audit target, label, institution
@@ -37,6 +39,7 @@ struct ServiceDeps {
   SessionWriter* writer = nullptr;
   Authenticator* auth = nullptr;
   LessonJudge* judge = nullptr;  // lesson sessions are queued here once stored (may be null)
+  LiveHub* live = nullptr;       // live proctoring (may be null: no Live service)
 };
 
 // Recently served case bundles by hash (content-addressed, so never stale).

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "patient_db/limits.h"
+#include "server/live_hub.h"
 #include "server/pipeline.h"
 #include "server/web_assets.h"
 #include "ves/v1/lesson.pb.h"
@@ -642,6 +643,52 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     return JsonReply(200, ProtoJson(resp));
   }
 
+  // live sessions (GET list); live/ws is the WebSocket (LiveWatch)
+  if (get && path.size() == 1 && path[0] == "live") {
+    v1::ListTraineesRequest req;  // bounds of the institution filter
+    req.set_institution(institution);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    static const CallSpec spec{"live.list",
+                               {StoreRole::kAdmin, StoreRole::kSupervisor},
+                               "list live sessions",
+                               /*audit_every_call=*/false};
+    std::vector<LiveSessionInfo> live;
+    s = RunCall(
+        deps_, who, spec, institution.empty() ? who.institution : institution, [&]() -> Status {
+          const std::string scope =
+              institution.empty() && who.role != StoreRole::kAdmin ? who.institution : institution;
+          if (!scope.empty()) {
+            AuthStatus a = RequireInstitution(who, scope, "list live sessions");
+            if (!a.ok()) return ToGrpcStatus(a);
+          }
+          if (deps_.live != nullptr) live = deps_.live->List(scope);
+          return Status::OK;
+        });
+    if (!s.ok()) return ErrorOf(s);
+    json out = json::array();
+    const int64_t now = NowUnixMs();
+    for (const LiveSessionInfo& l : live) {
+      out.push_back({{"session_uuid", l.session_uuid},
+                     {"institution", l.institution},
+                     {"trainee_id", l.trainee_id},
+                     {"case_id", l.case_id},
+                     {"case_version", l.case_version},
+                     {"station", l.station},
+                     {"started_unix_ms", l.started_unix_ms},
+                     {"last_frame_unix_ms", l.last_frame_unix_ms},
+                     {"frames", l.frames},
+                     {"station_dropped", l.station_dropped},
+                     {"t_s", l.t_s},
+                     {"now_unix_ms", now}});
+    }
+    return JsonReply(200, {{"live", out}});
+  }
+  if (path.size() == 2 && path[0] == "live" && path[1] == "ws") {
+    return Error(426, "FAILED_PRECONDITION",
+                 "live/ws: a WebSocket endpoint (Upgrade: websocket), docs/web.md");
+  }
+
   // audit
   if (path.size() == 1 && path[0] == "audit") {
     v1::ListAuditRequest req;
@@ -660,6 +707,66 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
   }
   return Error(404, "NOT_FOUND",
                "no API route '" + patient_db::PrintableExcerpt(raw_path, 80) + "' (docs/web.md)");
+}
+
+HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uuid,
+                            std::shared_ptr<LiveViewer>* viewer) {
+  if (request.target.size() > kMaxHttpTargetBytes) {
+    return Error(414, "INVALID_ARGUMENT", "request target: over the limit");
+  }
+  const size_t qmark = request.target.find('?');
+  if (request.target.substr(0, qmark) != "/api/v1/live/ws") {
+    return Error(404, "NOT_FOUND", "WebSocket only at /api/v1/live/ws?session=UUID");
+  }
+  // A page of another origin may open a WebSocket with our cookie where
+  // SameSite does not hold (old browsers): the origin must be our own.
+  if (!request.origin.empty() && request.origin != "http://" + request.host &&
+      request.origin != "https://" + request.host) {
+    return Error(
+        403, "PERMISSION_DENIED",
+        "Origin '" + patient_db::PrintableExcerpt(request.origin, 80) + "': not this server's");
+  }
+  std::string uuid;
+  if (qmark != std::string::npos) {
+    for (const std::string& pair : Split(std::string_view(request.target).substr(qmark + 1), '&')) {
+      if (pair.rfind("session=", 0) == 0 && !Decode(pair.substr(8), &uuid, true)) {
+        return Error(400, "INVALID_ARGUMENT", "query: a broken %-escape");
+      }
+    }
+  }
+  if (uuid.empty()) return Error(400, "INVALID_ARGUMENT", "query: session=UUID missing");
+  bool csrf_ok = true;
+  std::string sid;
+  const std::string authorization = AuthorizationOf(request, &csrf_ok, &sid);
+  v1::GetSessionRequest bounds;  // the uuid's bounds, as for a stored session
+  bounds.set_uuid(uuid);
+  Principal who;
+  Status s = AdmitRequest(deps_, authorization, bounds, &who);
+  if (!s.ok()) return ErrorOf(s);
+  static const CallSpec spec{
+      "live.watch", {StoreRole::kAdmin, StoreRole::kSupervisor}, "watch live sessions"};
+  s = RunCall(deps_, who, spec, uuid, [&]() -> Status {
+    LiveSessionInfo info;
+    if (deps_.live == nullptr || !deps_.live->Find(uuid, &info)) {
+      return Status(StatusCode::NOT_FOUND, "session " + uuid + " is not live");
+    }
+    AuthStatus a = RequireInstitution(who, info.institution, "watch");
+    if (!a.ok()) return ToGrpcStatus(a);
+    std::string why;
+    *viewer = deps_.live->Watch(uuid, &why);
+    if (!*viewer) return Status(StatusCode::RESOURCE_EXHAUSTED, why);
+    return Status::OK;
+  });
+  if (!s.ok()) return ErrorOf(s);
+  *session_uuid = uuid;
+  HttpReply ok;
+  ok.status = 101;
+  return ok;
+}
+
+void WebApi::LiveUnwatch(const std::string& session_uuid,
+                         const std::shared_ptr<LiveViewer>& viewer) {
+  if (deps_.live != nullptr) deps_.live->Unwatch(session_uuid, viewer);
 }
 
 std::shared_ptr<const SessionReplay> WebApi::CachedReplay(const std::string& uuid,

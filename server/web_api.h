@@ -18,6 +18,8 @@
 // call goes through the request pipeline (server/pipeline.h), as gRPC does.
 namespace ves::server {
 
+class LiveViewer;
+
 // Bounds on what a request may carry (docs/web.md, "Limits").
 inline constexpr size_t kMaxHttpHeaderBytes = 8 << 10;
 inline constexpr size_t kMaxHttpBodyBytes = 64 << 10;
@@ -35,6 +37,8 @@ struct HttpRequest {
   std::string csrf_token;     // the X-CSRF-Token header
   std::string content_type;
   std::string body;
+  std::string origin;  // the Origin header (WebSocket upgrades)
+  std::string host;    // the Host header
 };
 
 struct HttpReply {
@@ -53,6 +57,13 @@ class WebApi {
  public:
   WebApi(ServiceDeps deps, WebOptions options);
   HttpReply Handle(const HttpRequest& request);
+
+  // A WebSocket upgrade to /api/v1/live/ws?session=UUID (docs/web.md):
+  // admitted (cookie or Bearer), role supervisor or admin, the session's
+  // institution, audited; status 101 with `viewer` set, else the refusal.
+  HttpReply LiveWatch(const HttpRequest& request, std::string* session_uuid,
+                      std::shared_ptr<LiveViewer>* viewer);
+  void LiveUnwatch(const std::string& session_uuid, const std::shared_ptr<LiveViewer>& viewer);
 
   // JSON text with '<', '>' and '&' written as \u escapes: a value can never
   // close a <script> or start a tag wherever the text lands.

@@ -236,18 +236,12 @@ function timeChart(canvas, title, frames, series) {
   });
 }
 
-function drawFrame(replay, index) {
-  const frames = replay.frames;
-  const f = frames[index];
-  let shape = null;
-  for (let i = index; i >= 0 && !shape; i--) if (frames[i].scope_mm) shape = frames[i];
-  const canvas = $('fluoro');
+// As the fluoroscopy view: AP projection, image right = -x, up = +z; the
+// box `b` (of every shape shown) fills the canvas.
+function drawShape(canvas, shape, b) {
   const ctx = canvas.getContext('2d');
   ctx.fillStyle = '#8a8a8a';
   ctx.fillRect(0, 0, canvas.width, canvas.height);
-  // As the fluoroscopy view: AP projection, image right = -x, up = +z; the
-  // box of every shape in the session fills the canvas.
-  const b = replay.bounds;
   const scale = Math.min(canvas.width / (b.x1 - b.x0), canvas.height / (b.y1 - b.y0)) * 0.9;
   const px = (p) => [canvas.width / 2 + (p[0] - (b.x0 + b.x1) / 2) * scale,
                      canvas.height / 2 - (p[1] - (b.y0 + b.y1) / 2) * scale];
@@ -257,13 +251,21 @@ function drawFrame(replay, index) {
     ctx.lineWidth = width; ctx.strokeStyle = color; ctx.lineJoin = 'round'; ctx.lineCap = 'round';
     ctx.stroke();
   };
-  if (shape) {
-    path(shape.colon_mm, Math.max(4, 45 * scale), 'rgba(60,60,60,0.45)');
+  if (shape && shape.scope_mm && shape.scope_mm.length) {
+    path(shape.colon_mm || [], Math.max(4, 45 * scale), 'rgba(60,60,60,0.45)');
     path(shape.scope_mm, Math.max(2, 12 * scale), '#1a1a1a');
     const tip = px(shape.scope_mm[shape.scope_mm.length - 1]);
     ctx.fillStyle = '#ffd24a';
     ctx.beginPath(); ctx.arc(tip[0], tip[1], 4, 0, 2 * Math.PI); ctx.fill();
   }
+}
+
+function drawFrame(replay, index) {
+  const frames = replay.frames;
+  const f = frames[index];
+  let shape = null;
+  for (let i = index; i >= 0 && !shape; i--) if (frames[i].scope_mm) shape = frames[i];
+  drawShape($('fluoro'), shape, replay.bounds);
   $('fig-t').textContent = f.t_s.toFixed(1) + ' s';
   $('tip-depth').textContent = (f.tip_arc_m * 1000).toFixed(0) + ' mm';
   $('fig-inserted').textContent = (f.inserted_m * 1000).toFixed(0) + ' mm';
@@ -356,8 +358,65 @@ async function auditPage() {
   await more();
 }
 
+// Live: the institution's running sessions; with ?session=UUID, that one's
+// frames over a WebSocket (the server sends only the newest to a slow page).
+async function livePage() {
+  await signedIn();
+  const uuid = param('session');
+  const list = async () => {
+    const live = (await api('live')).live;
+    const body = $('live-list').querySelector('tbody');
+    body.replaceChildren();
+    for (const l of live) {
+      body.appendChild(row([l.trainee_id, l.case_id + ' v' + l.case_version, l.station,
+                            when(l.started_unix_ms), Number(l.t_s).toFixed(1) + ' s', l.frames,
+                            link('watch', '/live.html?session=' + encodeURIComponent(l.session_uuid))]));
+      if (l.session_uuid === uuid) $('live-who').textContent = l.trainee_id + ' on ' + l.case_id;
+    }
+    $('live-none').hidden = live.length > 0;
+  };
+  await list();
+  setInterval(() => list().catch((e) => showError(e.message)), 2000);
+  if (!uuid) return;
+  $('live-view').hidden = false;
+  const b = {x0: Infinity, x1: -Infinity, y0: Infinity, y1: -Infinity};
+  ves.live = {frames: 0, tips: []};
+  const scheme = location.protocol === 'https:' ? 'wss://' : 'ws://';
+  const ws = new WebSocket(scheme + location.host + '/api/v1/live/ws?session=' + encodeURIComponent(uuid));
+  await new Promise((resolve, reject) => {
+    ws.onopen = () => { $('live-status').textContent = 'Live'; resolve(); };
+    ws.onerror = () => reject(new Error('the live session ' + uuid + ' cannot be watched (ended, or not yours)'));
+  });
+  ws.onclose = () => { $('live-status').textContent = 'The session ended (or the connection closed).'; };
+  ws.onmessage = (event) => {
+    const f = JSON.parse(event.data);
+    if (f.ended) { $('live-status').textContent = 'The session ended.'; return; }
+    for (const p of (f.colon_mm || []).concat(f.scope_mm || [])) {
+      b.x0 = Math.min(b.x0, p[0]); b.x1 = Math.max(b.x1, p[0]);
+      b.y0 = Math.min(b.y0, p[1]); b.y1 = Math.max(b.y1, p[1]);
+    }
+    if (b.x1 > b.x0 && b.y1 > b.y0) drawShape($('live-fluoro'), f, b);
+    ves.live.frames += 1;
+    ves.live.tips.push(f.tip_arc_m);
+    $('live-t').textContent = Number(f.t_s).toFixed(1) + ' s';
+    $('live-tip-depth').textContent = (f.tip_arc_m * 1000).toFixed(0) + ' mm';
+    $('live-inserted').textContent = (f.inserted_m * 1000).toFixed(0) + ' mm';
+    $('live-force').textContent = Number(f.hand_force_N).toFixed(2) + ' N';
+    $('live-stretch').textContent = (f.stretch_m * 1000).toFixed(1) + ' mm';
+    $('live-pain').textContent = f.pain ? 'yes' : 'no';
+    $('live-loop').textContent = f.loop ? 'yes' : 'no';
+    $('live-frames').textContent = String(ves.live.frames);
+    if (f.sent_unix_ms > 0) $('live-latency').textContent = (Date.now() - f.sent_unix_ms) + ' ms (station clock)';
+    if (f.jpeg_base64) {
+      $('live-jpeg').src = 'data:image/jpeg;base64,' + f.jpeg_base64;
+      $('live-jpeg').hidden = false;
+    }
+  };
+}
+
 const pages = {'sign-in': signInPage, trainees: traineesPage, trainee: traineePage,
-               session: sessionPage, progress: progressPage, audit: auditPage};
+               session: sessionPage, progress: progressPage, audit: auditPage,
+               live: livePage};
 
 document.addEventListener('DOMContentLoaded', () => {
   const page = pages[document.body.dataset.page];

@@ -16,14 +16,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -31,6 +33,7 @@
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
+#include "station/app/live_publish.h"
 #include "station/app/run_interactive.h"
 #include "station/app/run_lesson.h"
 #include "station/app/run_sync.h"
@@ -68,7 +71,7 @@ constexpr char kUsage[] =
     "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
     "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
-    "                       [--can-log FILE]\n\n"
+    "                       [--can-log FILE] [--no-live] [--realtime]\n\n"
     "Gets the case (the server's latest version into the offline cache, else the cached one;\n"
     "a case FILE is read and put into the cache),\n"
     "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
@@ -101,6 +104,8 @@ struct RunOptions {
   double seconds{600.0};
   double frame_period_s{5.0};
   int upload_attempts{3};
+  bool live{true};       // with a server: stream the session (docs/station-run.md)
+  bool realtime{false};  // headless: simulated time no faster than the wall clock
 };
 
 std::string HostName() {
@@ -191,6 +196,9 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
   if (!std::isfinite(o.frame_period_s) || o.frame_period_s <= 0.0) {
     throw UsageError("--frame-every-s " + std::to_string(o.frame_period_s) + " must be > 0");
   }
+  o.live = vm.count("no-live") == 0;
+  o.realtime = vm.count("realtime") > 0;
+  if (o.realtime && !o.headless) throw UsageError("--realtime needs --headless");
   o.upload_attempts = vm["upload-attempts"].as<int>();
   if (o.upload_attempts < 1 || o.upload_attempts > 20) {
     throw UsageError("--upload-attempts " + std::to_string(o.upload_attempts) +
@@ -248,6 +256,21 @@ class FrameWriter {
   }
 
   int frames() const { return frames_; }
+
+  // The endoscope image now as a small JPEG for live proctoring (320 pixels
+  // wide, quality 70); "" when the views cannot render here.
+  std::string EndoscopeJpeg(const training::SessionRunner& runner, training::ViewMode mode) {
+    if (!views_) return {};
+    render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
+    const cv::Mat image = views_->Endoscope(scene_, mode);
+    if (image.empty()) return {};
+    cv::Mat small;
+    cv::resize(image, small, cv::Size(320, std::max(1, image.rows * 320 / std::max(1, image.cols))),
+               0, 0, cv::INTER_AREA);
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".jpg", small, bytes, {cv::IMWRITE_JPEG_QUALITY, 70})) return {};
+    return std::string(bytes.begin(), bytes.end());
+  }
 
  private:
   const model::ModelParams& params_;
@@ -349,6 +372,10 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   }
   const haptics::DeviceState& device = rig.cycle().device_state();
   source.Start(start_ms, device.insertion_m, device.roll_rad);
+  const std::string uuid = training::NewUuidV4();
+  LivePublisher live(o.live ? o.server : std::nullopt, uuid, o.trainee_id, obtained.entry.id,
+                     obtained.entry.version);
+  const auto wall_start = std::chrono::steady_clock::now();
   training::Perception perception = training::Perceive(run.params, runner.state(), runner.output());
   training::ViewMode last_view = training::ViewMode::kTextured;
   try {
@@ -370,8 +397,15 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
       const training::InputSample& logged = runner.session().inputs().back();
       last_view = logged.view_mode;
       frames.OnStep(logged, runner);
+      live.OnStep(runner, [&] { return frames.EndoscopeJpeg(runner, logged.view_mode); });
+      if (o.realtime) {
+        std::this_thread::sleep_until(
+            wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>(runner.state().time_s)));
+      }
       perception = training::Perceive(run.params, runner.state(), runner.output());
     }
+    live.Finish(std::cout);
     frames.Finish(runner, last_view,
                   !o.lesson_plan || o.lesson_plan->lesson.aids().fluoroscopy_allowed());
   } catch (const std::exception& error) {  // a frame that cannot be written
@@ -391,8 +425,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   if (!WriteTextFile(o.out_dir / "device.txt", device_line)) return kExitFailed;
   const training::RunResult result = training::ResultOf(runner);
   const auto duration_ms = static_cast<int64_t>(std::llround(result.metrics.duration_s * 1e3));
-  ves::v1::SessionRecord record = runner.session().ToRecord(training::NewUuidV4(),
-                                                            start_ms + duration_ms);
+  ves::v1::SessionRecord record = runner.session().ToRecord(uuid, start_ms + duration_ms);
   training::CaseModelOptions case_options;
   *record.mutable_replay_setup() =
       training::MakeReplaySetup(obtained.colon_case, case_options, o.seconds);
@@ -621,8 +654,8 @@ int Run(RunOptions o) {
 
 int RunRunCommand(const CommandArgs& args) {
   po::options_description desc("options");
-  desc.add_options()("help,h", "show this help")(
-      "server", po::value<std::string>(), "server address host:port")(
+  desc.add_options()("help,h", "show this help")("server", po::value<std::string>(),
+                                                 "server address host:port")(
       "token", po::value<std::string>(), "station bearer token")(
       "tls-ca", po::value<std::string>(),
       "CA of the server certificate (PEM); none: plaintext, loopback --server only")(
@@ -647,7 +680,9 @@ int RunRunCommand(const CommandArgs& args) {
       "headless: an endoscope frame per this much simulated time")(
       "upload-attempts", po::value<int>()->default_value(3),
       "upload passes (with backoff) before leaving the session pending")(
-      "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format");
+      "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format")(
+      "no-live", "with --server: do not stream the running session for live proctoring")(
+      "realtime", "headless: pace the session to the wall clock (a live demo)");
   po::variables_map vm;
   if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;
   RunOptions options;

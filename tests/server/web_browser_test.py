@@ -40,6 +40,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--server', required=True)
     ap.add_argument('--seed', required=True)
+    ap.add_argument('--station', required=True)
     ap.add_argument('--out', required=True)
     args = ap.parse_args()
 
@@ -173,12 +174,55 @@ def main():
         assert depth == expected, 'tip at the end: %s, the session ended at %s' % (depth, expected)
         shot('05-replay-end')
 
+        # Live: a headless `ves-station run` paced to the wall clock streams
+        # its session; the live page lists it and draws the tip moving.
+        station_log = open(os.path.join(args.out, 'ves-station.log'), 'w')
+        station = subprocess.Popen(
+            [args.station, 'run', '--trainee', 't1', '--case', 'standard-adult',
+             '--server', '127.0.0.1:' + grpc_port, '--token', tokens['station'],
+             '--headless', '--operator', 'expert', '--out', os.path.join(work, 'station-out'),
+             '--data-dir', os.path.join(work, 'station-data'), '--seconds', '12', '--realtime',
+             '--frame-every-s', '100'],
+            stdout=station_log, stderr=subprocess.STDOUT)
+        try:
+            driver.get(base + '/live.html')
+            ready('live')
+            WebDriverWait(driver, 60).until(lambda d: any(
+                r.find_elements(By.TAG_NAME, 'td')[0].text == 't1'
+                for r in d.find_elements(By.CSS_SELECTOR, '#live-list tbody tr')))
+            row = driver.find_elements(By.CSS_SELECTOR, '#live-list tbody tr')[0]
+            assert 'standard-adult' in row.text, row.text
+            shot('06-live-list')
+            row.find_element(By.TAG_NAME, 'a').click()
+            ready('live')
+            WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+                'const t = ves.live.tips; return t.length >= 10 && t[t.length - 1] > t[0] + 0.005'))
+            tips = driver.execute_script('return ves.live.tips')
+            assert tips[-1] > tips[0], 'the tip did not move: %s' % tips
+            assert driver.find_element(By.ID, 'live-tip-depth').text.endswith(' mm')
+            with open(os.path.join(args.out, 'ves-station.log')) as f:
+                renders = 'the views cannot render here' not in f.read()
+            if renders:  # the station sends endoscope JPEGs when it can render them
+                WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+                    "const i = document.getElementById('live-jpeg');"
+                    "return !i.hidden && i.complete && i.naturalWidth === 320"))
+            shot('07-live-session')
+            assert station.wait(120) == 0, 'ves-station run failed (ves-station.log)'
+        finally:
+            if station.poll() is None:
+                station.kill()
+                station.wait()
+        station_log.close()
+        with open(os.path.join(args.out, 'ves-station.log')) as f:
+            log = f.read()
+        assert ' frames streamed' in log and 'live: 0 frames' not in log, log[-2000:]
+
         # Group progress.
         driver.get(base + '/progress.html?group=g1')
         ready('progress')
         rows = [r.text for r in driver.find_elements(By.CSS_SELECTOR, '#progress tbody tr')]
         assert len(rows) == 2 and rows[0].startswith('t1') and rows[1].startswith('t2'), rows
-        shot('06-progress')
+        shot('08-progress')
 
         # Sign out: the pages send us back to sign-in.
         driver.find_element(By.ID, 'sign-out').click()
@@ -197,7 +241,7 @@ def main():
         actions = [r.find_elements(By.TAG_NAME, 'td')[5].text
                    for r in driver.find_elements(By.CSS_SELECTOR, '#audit tbody tr')]
         assert 'session.upload' in actions and 'trainee.curve' in actions, actions
-        shot('07-audit')
+        shot('09-audit')
         driver.find_element(By.ID, 'sign-out').click()
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
         print('web_browser_test: all pages checked; screenshots in ' + args.out)
