@@ -34,15 +34,12 @@ SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, d
   const int64_t series_every = std::max<int64_t>(1, std::llround(1.0 / (series_hz * dt_s)));
   const int64_t shape_every =
       series_every * std::max<int64_t>(1, std::llround(series_hz / shape_hz));
-  bool in_loop = false;
   int64_t step = 0;
   const training::StepCallback on_step = [&](const training::InputSample&,
                                              const training::SessionRunner& runner) {
     ++step;
     const auto& th = runner.session().accumulator().thresholds();
     const auto& obs = runner.observation();
-    const double loop_m = runner.session().accumulator().loop_index_m();
-    in_loop = in_loop ? loop_m > th.loop_exit_m : loop_m > th.loop_enter_m;
     out.pain_stretch_m = th.pain_stretch_m;
     out.cecum_arc_m = th.cecum_arc_m;
     out.final_tip_arc_m = obs.tip_arc_m;
@@ -54,7 +51,7 @@ SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, d
     f.tip_arc_m = obs.tip_arc_m;
     f.inserted_m = obs.inserted_m;
     f.pain = obs.peak_stretch_m > th.pain_stretch_m;
-    f.loop = in_loop;
+    f.loop = runner.session().accumulator().in_loop();
     if (step % shape_every == 0 || step == n_steps) {
       const auto& state = runner.state();
       // The scope from just outside the anus to the tip.

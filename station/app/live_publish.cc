@@ -22,7 +22,7 @@ void AddPolyline(const std::vector<Eigen::Vector3d>& points, size_t first,
 
 }  // namespace
 
-ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner, bool in_loop) {
+ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner) {
   ves::v1::LiveFrame f;
   const auto& obs = runner.observation();
   const auto& th = runner.session().accumulator().thresholds();
@@ -33,7 +33,7 @@ ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner, bool in_
   f.set_tip_arc_m(obs.tip_arc_m);
   f.set_stretch_m(obs.peak_stretch_m);
   f.set_pain(obs.peak_stretch_m > th.pain_stretch_m);
-  f.set_loop(in_loop);
+  f.set_loop(runner.session().accumulator().in_loop());
   // The scope from just outside the anus to the tip, as the replay draws it.
   const size_t first = static_cast<size_t>(std::max(0, state.first_inside_sample - 1));
   AddPolyline(state.p_WSample, first, f.mutable_scope_xyz_m());
@@ -71,13 +71,10 @@ LivePublisher::LivePublisher(const std::optional<sync::ServerEndpoint>& server,
 void LivePublisher::OnStep(const training::SessionRunner& runner,
                            const std::function<std::string()>& jpeg) {
   if (!streamer_) return;
-  const double loop_m = runner.session().accumulator().loop_index_m();
-  const auto& th = runner.session().accumulator().thresholds();
-  in_loop_ = in_loop_ ? loop_m > th.loop_exit_m : loop_m > th.loop_enter_m;
   const double t_s = runner.observation().t_s;
   if (t_s + 1e-9 < next_frame_s_) return;
   next_frame_s_ = t_s + kLiveFramePeriodS;
-  ves::v1::LiveFrame frame = MakeLiveFrame(runner, in_loop_);
+  ves::v1::LiveFrame frame = MakeLiveFrame(runner);
   const auto now = std::chrono::steady_clock::now();
   if (jpeg && now >= next_jpeg_ && streamer_->Idle()) {
     next_jpeg_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

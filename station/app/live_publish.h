@@ -22,7 +22,7 @@ inline constexpr int kLivePolylinePoints = 80;
 inline constexpr double kLiveJpegPeriodS = 0.2;  // 5 Hz, wall clock
 
 // The frame of the runner's current step (no session ids).
-ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner, bool in_loop);
+ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner);
 
 class LivePublisher {
  public:
@@ -43,7 +43,6 @@ class LivePublisher {
   std::unique_ptr<sync::LiveStreamer> streamer_;
   double next_frame_s_ = 0.0;
   std::chrono::steady_clock::time_point next_jpeg_{};
-  bool in_loop_ = false;
 };
 
 }  // namespace ves::station

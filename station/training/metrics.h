@@ -95,6 +95,8 @@ class MetricsAccumulator {
 
   bool cecum_reached() const { return cecum_time_s_.has_value(); }
   double loop_index_m() const { return loop_index_.value(); }
+  // Whether the scope is in a loop now (the hysteresis the loop time uses).
+  bool in_loop() const { return in_loop_; }
   // The metrics and events so far, open episodes closed at the last step.
   Metrics Result() const;
   std::vector<Event> Events() const;
