@@ -221,11 +221,13 @@ def main():
         # Stations: the headless station above reported its health with its
         # upload; the seeded uploads (web_seed) carried none.
         version = subprocess.check_output([args.station, '--version'], text=True).split()[-1]
+        subprocess.check_output([args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'],
+                                 't2', 'novice', '1', 'ward-3', 'faulty'], text=True)
         driver.get(base + '/stations.html')
         ready('stations')
         rows = {r.get_attribute('data-station'): [td.text for td in r.find_elements(By.TAG_NAME, 'td')]
                 for r in driver.find_elements(By.CSS_SELECTOR, '#stations tbody tr')}
-        assert set(rows) == {'browser-station', 'web-test-station'}, rows
+        assert set(rows) == {'browser-station', 'web-test-station', 'ward-3'}, rows
         cells = rows['browser-station']
         assert cells[0] == 'browser-station' and cells[1].endswith(' UTC'), cells
         assert cells[2] == version, (cells, version)
@@ -241,6 +243,16 @@ def main():
         assert flagged == [False] * 6 + [safe_state > 0, can_errors > 0], (flagged, cells)
         seeded = rows['web-test-station']
         assert seeded[2] == version and seeded[3] == 'not reported', seeded
+        # A station whose health is out of range everywhere: every health cell flagged.
+        faulty = rows['ward-3']
+        assert faulty[3:] == ['can:can0', '1500 / 1000 \u00b5s', '12 of 2000',
+                              '1 (1 re-armed, 0 paused)',
+                              '2 (bus 2, lost 0, unsent 0, malformed 0)'], faulty
+        ward = driver.find_element(By.CSS_SELECTOR, '#stations tbody tr[data-station="ward-3"]')
+        assert 'unhealthy' in ward.get_attribute('class').split(), ward.get_attribute('class')
+        flagged = [td.get_attribute('class') == 'flagged'
+                   for td in ward.find_elements(By.TAG_NAME, 'td')]
+        assert flagged == [False] * 4 + [True] * 4, flagged
         shot('08-stations')
 
         # Group progress.
