@@ -132,10 +132,10 @@ void WriteStation(pqxx::transaction_base& tx, const StationRow& report) {
           ") ON CONFLICT (institution, station_id) DO NOTHING RETURNING station_id",
       pqxx::prepare::make_dynamic_params(StationParams(report)));
   if (!inserted.empty()) return;
-  const pqxx::result found = tx.exec_params(
-      std::string("SELECT ") + kStationColumns +
-          " FROM stations WHERE institution = $1 AND station_id = $2 FOR UPDATE",
-      report.institution, report.station_id);
+  const pqxx::result found =
+      tx.exec_params(std::string("SELECT ") + kStationColumns +
+                         " FROM stations WHERE institution = $1 AND station_id = $2 FOR UPDATE",
+                     report.institution, report.station_id);
   if (found.empty()) throw std::runtime_error("station " + report.station_id + " vanished");
   const StationRow stored = ReadStationRow(found[0]);
   const StationRow merged = MergeStationReport(&stored, report);
@@ -144,8 +144,8 @@ void WriteStation(pqxx::transaction_base& tx, const StationRow& report) {
   size_t start = 0;
   for (int c = 1; c <= 19; ++c) {
     const size_t comma = columns.find(", ", start);
-    const std::string name = columns.substr(start, comma == std::string::npos ? std::string::npos
-                                                                                : comma - start);
+    const std::string name =
+        columns.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     start = comma + 2;
     if (c <= 2) continue;  // the key
     sql += (c == 3 ? "" : ", ") + name + " = $" + std::to_string(c);

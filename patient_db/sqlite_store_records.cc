@@ -367,8 +367,8 @@ StoreStatus SqliteStore::WriteStation(const StationRow& report) {
   if (rc != SQLITE_OK) return Internal(db, "find station");
   // The writer holds the database (BEGIN IMMEDIATE): read, merge, write back.
   const StationRow merged = MergeStationReport(stored ? &*stored : nullptr, report);
-  std::string sql = std::string("INSERT OR REPLACE INTO stations (") + kStationColumns +
-                    ") VALUES (?";
+  std::string sql =
+      std::string("INSERT OR REPLACE INTO stations (") + kStationColumns + ") VALUES (?";
   for (int c = 2; c <= kStationColumnCount; ++c) sql += ", ?";
   s = db.Prepare(sql + ")", nullptr);
   if (!s) return Internal(db, "write station");
@@ -380,11 +380,11 @@ StoreStatus SqliteStore::WriteStation(const StationRow& report) {
 StoreResult<std::vector<StationRow>> SqliteStore::ListStations(const std::string& institution,
                                                                const ListPage& page) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
-      std::string("SELECT ") + kStationColumns +
-          " FROM stations WHERE institution = ? AND (? = 0 OR station_id > ?) "
-          "ORDER BY station_id LIMIT ?",
-      nullptr);
+  SqliteStatement* s =
+      r.db().Prepare(std::string("SELECT ") + kStationColumns +
+                         " FROM stations WHERE institution = ? AND (? = 0 OR station_id > ?) "
+                         "ORDER BY station_id LIMIT ?",
+                     nullptr);
   if (!s) return Internal(r.db(), "list stations");
   s->Bind(1, institution).Bind(2, int64_t{page.has_after}).Bind(3, page.after_text);
   s->Bind(4, int64_t{page.limit > 0 ? page.limit : -1});

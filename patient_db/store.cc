@@ -46,7 +46,7 @@ StationRow MergeStationReport(const StationRow* stored, const StationRow& report
     out.version_session_end_unix_ms = report.version_session_end_unix_ms;
   }
   if (report.has_health && (!stored->has_health || report.health_session_end_unix_ms >=
-                                                        stored->health_session_end_unix_ms)) {
+                                                       stored->health_session_end_unix_ms)) {
     out.has_health = true;
     out.health = report.health;
     out.health_session_uuid = report.health_session_uuid;

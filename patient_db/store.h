@@ -126,11 +126,11 @@ struct StationHealthRow {
 struct StationRow {
   std::string institution;
   std::string station_id;
-  int64_t last_seen_unix_ms = 0;             // the server's clock at the latest upload
-  std::string software_version;              // of the newest session (by end_unix_ms)
+  int64_t last_seen_unix_ms = 0;  // the server's clock at the latest upload
+  std::string software_version;   // of the newest session (by end_unix_ms)
   int64_t version_session_end_unix_ms = 0;
   bool has_health = false;
-  StationHealthRow health;                   // of the newest session that carried health
+  StationHealthRow health;  // of the newest session that carried health
   std::string health_session_uuid;
   int64_t health_session_end_unix_ms = 0;
   bool operator==(const StationRow&) const = default;

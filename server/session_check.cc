@@ -209,9 +209,9 @@ std::string CheckStationHealth(const ves::v1::SessionRecord& r) {
   const std::string at = "record.station_health";
   bool device_ok = !h.device().empty() && h.device().size() <= kMaxDeviceNameBytes;
   for (const char c : h.device()) {
-    device_ok = device_ok && ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') ||
-                              (c >= 'A' && c <= 'Z') || c == ':' || c == '.' || c == '_' ||
-                              c == '-');
+    device_ok =
+        device_ok && ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                      c == ':' || c == '.' || c == '_' || c == '-');
   }
   if (!device_ok) {
     return at + ".device = '" + patient_db::PrintableExcerpt(h.device(), 40) + "': must be 1.." +
@@ -232,15 +232,15 @@ std::string CheckStationHealth(const ves::v1::SessionRecord& r) {
              std::to_string(kMaxHealthCount);
     }
   }
-  std::string p =
-      InRange(at + ".loop_budget_us", h.loop_budget_us(), 0.0, kMaxLoopBudget_us, "us");
+  std::string p = InRange(at + ".loop_budget_us", h.loop_budget_us(), 0.0, kMaxLoopBudget_us, "us");
   if (p.empty()) {
     p = InRange(at + ".loop_cycle_p99_us", h.loop_cycle_p99_us(), 0.0, kMaxLoopTime_us, "us");
   }
   if (!p.empty()) return p;
   if (h.loop_cycles() == 0 && (h.loop_cycle_p99_us() != 0.0 || h.loop_overruns() != 0)) {
-    return at + ".loop_cycle_p99_us = " + Num(h.loop_cycle_p99_us()) + ", loop_overruns = " +
-           std::to_string(h.loop_overruns()) + ": must be 0 when loop_cycles is 0";
+    return at + ".loop_cycle_p99_us = " + Num(h.loop_cycle_p99_us()) +
+           ", loop_overruns = " + std::to_string(h.loop_overruns()) +
+           ": must be 0 when loop_cycles is 0";
   }
   if (h.loop_overruns() > h.loop_cycles()) {
     return at + ".loop_overruns = " + std::to_string(h.loop_overruns()) +

@@ -29,8 +29,8 @@ inline constexpr uint32_t kMaxSegmentCount = 20000;
 inline constexpr std::size_t kMaxSoftwareVersionBytes = 64;
 inline constexpr std::size_t kMaxDeviceNameBytes = 32;
 inline constexpr uint64_t kMaxHealthCount = 1'000'000'000;  // ~11.6 days of 1 kHz periods
-inline constexpr double kMaxLoopTime_us = 1e7;               // a 10 s stall
-inline constexpr double kMaxLoopBudget_us = 1e5;             // a 10 Hz loop
+inline constexpr double kMaxLoopTime_us = 1e7;              // a 10 s stall
+inline constexpr double kMaxLoopBudget_us = 1e5;            // a 10 Hz loop
 
 // The version charset: letters, digits and . + - _ ~ (e.g. "0.1.0",
 // "0.2.0-rc1+g1a2b3c"), 1..kMaxSoftwareVersionBytes.

@@ -760,8 +760,7 @@ std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {
   }
   if (h.loop_overruns() > 0) flags.push_back("overruns");
   if (h.safe_state_entries() + h.force_pauses() > 0) flags.push_back("safe_state");
-  if (h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() +
-          h.can_malformed_frames() >
+  if (h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() + h.can_malformed_frames() >
       0) {
     flags.push_back("can_errors");
   }

@@ -439,8 +439,8 @@ int RunStationsCommand(const CommandArgs& args) {
   options.add_options()("institution", po::value(&institution),
                         "institution (default: the token's)");
   po::variables_map vm;
-  const int rc = ParseRemote("stations", "stations [--institution I]", args, options, nullptr,
-                             &vm, &client, deadline_s);
+  const int rc = ParseRemote("stations", "stations [--institution I]", args, options, nullptr, &vm,
+                             &client, deadline_s);
   if (rc >= 0) return rc;
   ves::v1::ListStationsRequest q;
   q.set_institution(institution);
@@ -470,8 +470,8 @@ int RunStationsCommand(const CommandArgs& args) {
               loop = "not timed";
             }
             safe = std::to_string(h.safe_state_entries() + h.force_pauses());
-            can = std::to_string(h.can_bus_errors() + h.can_lost_frames() +
-                                 h.can_send_failures() + h.can_malformed_frames());
+            can = std::to_string(h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() +
+                                 h.can_malformed_frames());
             for (const std::string& f : ves::server::StationHealthFlags(h)) {
               flags += (flags.empty() ? "" : ",") + f;
             }

@@ -337,8 +337,7 @@ class CoupledLoop {
               double time_limit_s, InteractiveRig* rig)
       : rig_(rig),
         period_s_(run.params.dt_s),
-        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_,
-                 &published_),
+        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_, &published_),
         cycle_(rig->device(), session_.source(), CycleOptionsFor(run.params.dt_s)),
         loop_(&cycle_, LoopOptionsFor(run.params.dt_s)) {
     session_.Start(rig->initial_state().insertion_m, rig->initial_state().roll_rad);
@@ -386,9 +385,8 @@ class CoupledLoop {
   InteractiveResult Finish() {
     InteractiveResult result = session_.Finish();
     result.device_report = InteractiveReport(*rig_, cycle_, loop_, *session_.source());
-    const ves::v1::StationHealth health =
-        MakeStationHealth(rig_->label(), rig_->device()->counters(), cycle_.safety(),
-                          &loop_.stats(), period_s_);
+    const ves::v1::StationHealth health = MakeStationHealth(
+        rig_->label(), rig_->device()->counters(), cycle_.safety(), &loop_.stats(), period_s_);
     for (auto& record : result.records) *record.mutable_station_health() = health;
     return result;
   }

@@ -142,14 +142,15 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   faulty.mutable_station_health()->set_loop_budget_us(1000);
   faulty.mutable_station_health()->set_can_lost_frames(3);
   ASSERT_TRUE(
-      UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")), faulty, &r).ok());
+      UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")), faulty, &r)
+          .ok());
   stations = Admin(dir, "stations" + remote);
   ASSERT_EQ(stations.exit_status, 0) << stations.err;
   const std::string ward = stations.out.substr(stations.out.find("ward-3"));
   for (const std::string& cell : {std::string("0.1.0"), std::string("can:can0"),
                                   std::string("1500/1000"), std::string("loop_p99,can_errors")}) {
     EXPECT_NE(ward.substr(0, ward.find('\n')).find(cell), std::string::npos) << cell << "\n"
-                                                                              << stations.out;
+                                                                             << stations.out;
   }
   AdminRun token = Admin(dir, "token create --role station" + remote);
   EXPECT_EQ(token.out.size(), 65u);

@@ -165,7 +165,8 @@ TEST_F(SessionUpload, AnUploadWithHealthCreatesThenUpdatesItsStationRow) {
   // Supervisors see their own institution only; trainees and stations none.
   EXPECT_EQ(ListStations(supervisor_, "south", &list).error_code(),
             grpc::StatusCode::PERMISSION_DENIED);
-  const ClientOptions trainee = server_.Client(server_.MakeToken(StoreRole::kTrainee, "north", "t1"));
+  const ClientOptions trainee =
+      server_.Client(server_.MakeToken(StoreRole::kTrainee, "north", "t1"));
   EXPECT_EQ(ListStations(trainee, "", &list).error_code(), grpc::StatusCode::PERMISSION_DENIED);
   EXPECT_EQ(ListStations(station_, "", &list).error_code(), grpc::StatusCode::PERMISSION_DENIED);
 }

@@ -489,20 +489,21 @@ TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
   {
     SqliteDb db(path.string());
     std::string error;
-    ASSERT_TRUE(db.Exec("CREATE TABLE schema_migrations (version INTEGER PRIMARY KEY, "
-                        "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
-                        &error))
+    ASSERT_TRUE(
+        db.Exec("CREATE TABLE schema_migrations (version INTEGER PRIMARY KEY, "
+                "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
+                &error))
         << error;
     for (const Migration& m : SqlMigrations()) {
       if (m.version > 4) break;
       ASSERT_TRUE(db.Exec(m.sql, &error)) << error;
-      ASSERT_TRUE(db.Exec("INSERT INTO schema_migrations VALUES (" + std::to_string(m.version) +
-                              ", 'old', 1)",
-                          &error))
+      ASSERT_TRUE(db.Exec(
+          "INSERT INTO schema_migrations VALUES (" + std::to_string(m.version) + ", 'old', 1)",
+          &error))
           << error;
     }
-    ASSERT_TRUE(db.Exec("INSERT INTO institutions (name, created_unix_ms) VALUES ('north', 1)",
-                        &error))
+    ASSERT_TRUE(
+        db.Exec("INSERT INTO institutions (name, created_unix_ms) VALUES ('north', 1)", &error))
         << error;
     ASSERT_TRUE(db.Exec("SELECT * FROM stations", &error) == false);  // not there yet
   }

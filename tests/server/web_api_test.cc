@@ -306,7 +306,7 @@ TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
 TEST_F(WebApiTest, StationsShowTheirReportedHealthToTheirOwnInstitution) {
   std::mt19937_64 rng(11);
   auto record = MakeRecord(NewUuid(rng), "t1", 3);  // newer than SetUp's (seed 1)
-  record.set_station_id(kXss);  // a station named like markup
+  record.set_station_id(kXss);                      // a station named like markup
   record.set_software_version("0.1.0");
   auto* h = record.mutable_station_health();
   h->set_device("can:can0");
@@ -429,9 +429,9 @@ TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
 }
 
 TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
-  for (const std::string page : {"/", "/index.html", "/trainees.html", "/trainee.html",
-                                 "/session.html", "/progress.html", "/audit.html",
-                                 "/live.html", "/stations.html"}) {
+  for (const std::string page :
+       {"/", "/index.html", "/trainees.html", "/trainee.html", "/session.html", "/progress.html",
+        "/audit.html", "/live.html", "/stations.html"}) {
     const HttpResult r = Get(page);
     EXPECT_EQ(r.status, 200) << page;
     EXPECT_EQ(r.Header("content-type"), "text/html; charset=utf-8") << page;
