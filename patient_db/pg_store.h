@@ -62,6 +62,8 @@ class PgStore final : public Store {
   StoreResult<int64_t> CountSessions() override;
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) override;
+  StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,
+                                                    const ListPage& page = {}) override;
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
                                                int64_t after_id = 0) override;
   StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;

@@ -7,6 +7,8 @@
 #include <numeric>
 #include <optional>
 #include <set>
+#include <stdexcept>
+#include <tuple>
 
 #include <pqxx/pqxx>
 
@@ -62,6 +64,94 @@ SessionRow ReadSessionRow(const pqxx::row& r) {
   s.operator_kind = r[15].as<std::string>();
   s.max_tip_arc_m = r[16].as<double>();
   return s;
+}
+
+constexpr const char* kStationColumns =
+    "institution, station_id, last_seen_unix_ms, software_version, version_session_end_unix_ms, "
+    "has_health, health_session_uuid, health_session_end_unix_ms, device, loop_cycles, "
+    "loop_cycle_p99_us, loop_budget_us, loop_overruns, safe_state_entries, force_pauses, "
+    "can_bus_errors, can_lost_frames, can_send_failures, can_malformed_frames";
+
+StationRow ReadStationRow(const pqxx::row& r) {
+  StationRow s;
+  s.institution = r[0].as<std::string>();
+  s.station_id = r[1].as<std::string>();
+  s.last_seen_unix_ms = r[2].as<int64_t>();
+  s.software_version = r[3].as<std::string>();
+  s.version_session_end_unix_ms = r[4].as<int64_t>();
+  s.has_health = r[5].as<int>() != 0;
+  s.health_session_uuid = r[6].as<std::string>();
+  s.health_session_end_unix_ms = r[7].as<int64_t>();
+  StationHealthRow& h = s.health;
+  h.device = r[8].as<std::string>();
+  h.loop_cycles = static_cast<uint64_t>(r[9].as<int64_t>());
+  h.loop_cycle_p99_us = r[10].as<double>();
+  h.loop_budget_us = r[11].as<double>();
+  h.loop_overruns = static_cast<uint64_t>(r[12].as<int64_t>());
+  h.safe_state_entries = static_cast<uint64_t>(r[13].as<int64_t>());
+  h.force_pauses = static_cast<uint64_t>(r[14].as<int64_t>());
+  h.can_bus_errors = static_cast<uint64_t>(r[15].as<int64_t>());
+  h.can_lost_frames = static_cast<uint64_t>(r[16].as<int64_t>());
+  h.can_send_failures = static_cast<uint64_t>(r[17].as<int64_t>());
+  h.can_malformed_frames = static_cast<uint64_t>(r[18].as<int64_t>());
+  return s;
+}
+
+// The 19 column values of kStationColumns, in order, as text parameters.
+std::vector<std::string> StationParams(const StationRow& r) {
+  const StationHealthRow& h = r.health;
+  return {r.institution,
+          r.station_id,
+          std::to_string(r.last_seen_unix_ms),
+          r.software_version,
+          std::to_string(r.version_session_end_unix_ms),
+          r.has_health ? "1" : "0",
+          r.health_session_uuid,
+          std::to_string(r.health_session_end_unix_ms),
+          h.device,
+          std::to_string(h.loop_cycles),
+          pqxx::to_string(h.loop_cycle_p99_us),
+          pqxx::to_string(h.loop_budget_us),
+          std::to_string(h.loop_overruns),
+          std::to_string(h.safe_state_entries),
+          std::to_string(h.force_pauses),
+          std::to_string(h.can_bus_errors),
+          std::to_string(h.can_lost_frames),
+          std::to_string(h.can_send_failures),
+          std::to_string(h.can_malformed_frames)};
+}
+
+// Merges one upload's report into its station's row. A new station is
+// inserted; a present one is locked (FOR UPDATE: another replica's upload
+// from the same station waits), merged and written back.
+void WriteStation(pqxx::transaction_base& tx, const StationRow& report) {
+  std::string values;
+  for (int c = 1; c <= 19; ++c) values += (c == 1 ? "$" : ", $") + std::to_string(c);
+  const pqxx::result inserted = tx.exec_params(
+      std::string("INSERT INTO stations (") + kStationColumns + ") VALUES (" + values +
+          ") ON CONFLICT (institution, station_id) DO NOTHING RETURNING station_id",
+      pqxx::prepare::make_dynamic_params(StationParams(report)));
+  if (!inserted.empty()) return;
+  const pqxx::result found =
+      tx.exec_params(std::string("SELECT ") + kStationColumns +
+                         " FROM stations WHERE institution = $1 AND station_id = $2 FOR UPDATE",
+                     report.institution, report.station_id);
+  if (found.empty()) throw std::runtime_error("station " + report.station_id + " vanished");
+  const StationRow stored = ReadStationRow(found[0]);
+  const StationRow merged = MergeStationReport(&stored, report);
+  std::string sql = "UPDATE stations SET ";
+  const std::string columns = kStationColumns;
+  size_t start = 0;
+  for (int c = 1; c <= 19; ++c) {
+    const size_t comma = columns.find(", ", start);
+    const std::string name =
+        columns.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    start = comma + 2;
+    if (c <= 2) continue;  // the key
+    sql += (c == 3 ? "" : ", ") + name + " = $" + std::to_string(c);
+  }
+  sql += " WHERE institution = $1 AND station_id = $2";
+  tx.exec_params(sql, pqxx::prepare::make_dynamic_params(StationParams(merged)));
 }
 
 // Appends `rows` in order in one statement; ids come from audit_log_id_seq
@@ -296,6 +386,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
         first[row.uuid] = row;
         first[row.uuid].body.clear();
         first[row.uuid].lesson_id.clear();
+        first[row.uuid].station.reset();
         results[i].outcome = SessionPut::kStored;
         if (!row.lesson_id.empty()) {  // queued for the lesson judge with the session itself
           tx.exec_params(
@@ -330,6 +421,17 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
       results[i].outcome = stored.body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
                                                                           : SessionPut::kConflict;
     }
+    // Station reports of the sessions not refused, in key order (as the
+    // sessions above, so replicas lock stations in the same order).
+    std::vector<const StationRow*> reports;
+    for (size_t i = 0; i < batch.sessions.size(); ++i) {
+      const auto& station = batch.sessions[i].station;
+      if (station && results[i].outcome != SessionPut::kConflict) reports.push_back(&*station);
+    }
+    std::stable_sort(reports.begin(), reports.end(), [](const StationRow* a, const StationRow* b) {
+      return std::tie(a->institution, a->station_id) < std::tie(b->institution, b->station_id);
+    });
+    for (const StationRow* report : reports) WriteStation(tx, *report);
     std::vector<AuditRow> audit;
     for (size_t i = 0; i < batch.sessions.size() && i < batch.session_audit.size(); ++i) {
       audit.push_back(batch.session_audit[i]);
@@ -391,6 +493,26 @@ StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
       const auto r = tx.exec_params(
           "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = $1", id);
       out.push_back({r[0][0].as<int64_t>(), r[0][1].as<int64_t>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<StationRow>> PgStore::ListStations(const std::string& institution,
+                                                           const ListPage& page) {
+  std::vector<StationRow> out;
+  StoreStatus st = Transact("list stations", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    // COLLATE "C": byte order, as SQLite sorts.
+    for (const auto& row : tx.exec_params(
+             std::string("SELECT ") + kStationColumns +
+                 " FROM stations WHERE institution = $1 AND ($2 = 0 OR station_id COLLATE \"C\" "
+                 "> $3) ORDER BY station_id COLLATE \"C\" LIMIT $4",
+             institution, page.has_after ? 1 : 0, page.after_text,
+             page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
+      out.push_back(ReadStationRow(row));
     }
     return StoreStatus::Ok();
   });

@@ -40,6 +40,8 @@ class SqliteStore final : public Store {
   StoreResult<int64_t> CountSessions() override;
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) override;
+  StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,
+                                                    const ListPage& page = {}) override;
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
                                                int64_t after_id = 0) override;
   StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
@@ -71,6 +73,7 @@ class SqliteStore final : public Store {
   void Migrate();
   StoreStatus WriteSession(const SessionRow& row, SessionPutResult* result);
   StoreStatus WriteAudit(const AuditRow& row);
+  StoreStatus WriteStation(const StationRow& report);
   StoreResult<CurriculumRow> ReadCurriculum(SqliteDb& db, const std::string& curriculum_id);
   StoreResult<std::vector<std::string>> ReadShares(SqliteDb& db, const std::string& case_id,
                                                    uint32_t version);

@@ -61,6 +61,51 @@ SessionRow ReadSessionRow(const SqliteStatement& s) {
   return r;
 }
 
+constexpr const char* kStationColumns =
+    "institution, station_id, last_seen_unix_ms, software_version, version_session_end_unix_ms, "
+    "has_health, health_session_uuid, health_session_end_unix_ms, device, loop_cycles, "
+    "loop_cycle_p99_us, loop_budget_us, loop_overruns, safe_state_entries, force_pauses, "
+    "can_bus_errors, can_lost_frames, can_send_failures, can_malformed_frames";
+constexpr int kStationColumnCount = 19;
+
+StationRow ReadStationRow(const SqliteStatement& s) {
+  StationRow r;
+  r.institution = s.Text(0);
+  r.station_id = s.Text(1);
+  r.last_seen_unix_ms = s.Int(2);
+  r.software_version = s.Text(3);
+  r.version_session_end_unix_ms = s.Int(4);
+  r.has_health = s.Int(5) != 0;
+  r.health_session_uuid = s.Text(6);
+  r.health_session_end_unix_ms = s.Int(7);
+  StationHealthRow& h = r.health;
+  h.device = s.Text(8);
+  h.loop_cycles = static_cast<uint64_t>(s.Int(9));
+  h.loop_cycle_p99_us = s.Real(10);
+  h.loop_budget_us = s.Real(11);
+  h.loop_overruns = static_cast<uint64_t>(s.Int(12));
+  h.safe_state_entries = static_cast<uint64_t>(s.Int(13));
+  h.force_pauses = static_cast<uint64_t>(s.Int(14));
+  h.can_bus_errors = static_cast<uint64_t>(s.Int(15));
+  h.can_lost_frames = static_cast<uint64_t>(s.Int(16));
+  h.can_send_failures = static_cast<uint64_t>(s.Int(17));
+  h.can_malformed_frames = static_cast<uint64_t>(s.Int(18));
+  return r;
+}
+
+void BindStationRow(SqliteStatement* s, const StationRow& r) {
+  const StationHealthRow& h = r.health;
+  const auto u = [](uint64_t v) { return static_cast<int64_t>(v); };  // bounded by the server
+  s->Bind(1, r.institution).Bind(2, r.station_id).Bind(3, r.last_seen_unix_ms);
+  s->Bind(4, r.software_version).Bind(5, r.version_session_end_unix_ms);
+  s->Bind(6, int64_t{r.has_health}).Bind(7, r.health_session_uuid);
+  s->Bind(8, r.health_session_end_unix_ms).Bind(9, h.device).Bind(10, u(h.loop_cycles));
+  s->Bind(11, h.loop_cycle_p99_us).Bind(12, h.loop_budget_us).Bind(13, u(h.loop_overruns));
+  s->Bind(14, u(h.safe_state_entries)).Bind(15, u(h.force_pauses));
+  s->Bind(16, u(h.can_bus_errors)).Bind(17, u(h.can_lost_frames));
+  s->Bind(18, u(h.can_send_failures)).Bind(19, u(h.can_malformed_frames));
+}
+
 // Runs `s` (already bound) to completion; false on error.
 bool Run(SqliteStatement* s, int* rc) {
   *rc = SQLITE_OK;
@@ -304,7 +349,51 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
   result->first = row;
   result->first.body.clear();
   result->first.lesson_id.clear();
+  result->first.station.reset();
   return StoreStatus::Ok();
+}
+
+StoreStatus SqliteStore::WriteStation(const StationRow& report) {
+  SqliteDb& db = *writer_;
+  SqliteStatement* s = db.Prepare(std::string("SELECT ") + kStationColumns +
+                                      " FROM stations WHERE institution = ? AND station_id = ?",
+                                  nullptr);
+  if (!s) return Internal(db, "find station");
+  s->Bind(1, report.institution).Bind(2, report.station_id);
+  int rc = SQLITE_OK;
+  std::optional<StationRow> stored;
+  if (s->Step(&rc)) stored = ReadStationRow(*s);
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "find station");
+  // The writer holds the database (BEGIN IMMEDIATE): read, merge, write back.
+  const StationRow merged = MergeStationReport(stored ? &*stored : nullptr, report);
+  std::string sql =
+      std::string("INSERT OR REPLACE INTO stations (") + kStationColumns + ") VALUES (?";
+  for (int c = 2; c <= kStationColumnCount; ++c) sql += ", ?";
+  s = db.Prepare(sql + ")", nullptr);
+  if (!s) return Internal(db, "write station");
+  BindStationRow(s, merged);
+  if (!Run(s, &rc)) return Internal(db, "write station " + report.station_id);
+  return StoreStatus::Ok();
+}
+
+StoreResult<std::vector<StationRow>> SqliteStore::ListStations(const std::string& institution,
+                                                               const ListPage& page) {
+  Reader r = Read();
+  SqliteStatement* s =
+      r.db().Prepare(std::string("SELECT ") + kStationColumns +
+                         " FROM stations WHERE institution = ? AND (? = 0 OR station_id > ?) "
+                         "ORDER BY station_id LIMIT ?",
+                     nullptr);
+  if (!s) return Internal(r.db(), "list stations");
+  s->Bind(1, institution).Bind(2, int64_t{page.has_after}).Bind(3, page.after_text);
+  s->Bind(4, int64_t{page.limit > 0 ? page.limit : -1});
+  int rc = SQLITE_OK;
+  std::vector<StationRow> out;
+  while (s->Step(&rc)) out.push_back(ReadStationRow(*s));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list stations");
+  return out;
 }
 
 StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteBatch& batch) {
@@ -324,6 +413,12 @@ StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteB
   for (size_t i = 0; i < batch.sessions.size(); ++i) {
     StoreStatus st = WriteSession(batch.sessions[i], &results[i]);
     if (!st.ok()) return fail(st);
+    // A refused (conflicting) upload reports nothing; a repeated one still
+    // says the station was seen.
+    if (batch.sessions[i].station && results[i].outcome != SessionPut::kConflict) {
+      st = WriteStation(*batch.sessions[i].station);
+      if (!st.ok()) return fail(st);
+    }
     if (i < batch.session_audit.size()) {
       AuditRow a = batch.session_audit[i];
       a.result = SessionPutAuditResult(results[i].outcome);

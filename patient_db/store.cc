@@ -1,5 +1,6 @@
 #include "patient_db/store.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "patient_db/sqlite_store.h"
@@ -34,6 +35,24 @@ const char* SessionPutAuditResult(SessionPut outcome) {
     case SessionPut::kConflict: return "ALREADY_EXISTS";
   }
   return "UNKNOWN";
+}
+
+StationRow MergeStationReport(const StationRow* stored, const StationRow& report) {
+  if (stored == nullptr) return report;
+  StationRow out = *stored;
+  out.last_seen_unix_ms = std::max(stored->last_seen_unix_ms, report.last_seen_unix_ms);
+  if (report.version_session_end_unix_ms >= stored->version_session_end_unix_ms) {
+    out.software_version = report.software_version;
+    out.version_session_end_unix_ms = report.version_session_end_unix_ms;
+  }
+  if (report.has_health && (!stored->has_health || report.health_session_end_unix_ms >=
+                                                       stored->health_session_end_unix_ms)) {
+    out.has_health = true;
+    out.health = report.health;
+    out.health_session_uuid = report.health_session_uuid;
+    out.health_session_end_unix_ms = report.health_session_end_unix_ms;
+  }
+  return out;
 }
 
 std::unique_ptr<Store> OpenStore(const std::string& url) {

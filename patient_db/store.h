@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -103,6 +104,44 @@ struct PutCaseResult {
   bool already_stored = false;
 };
 
+// What a station reported of its haptic side with a session
+// (ves.v1.StationHealth; docs/server.md, "Stations").
+struct StationHealthRow {
+  std::string device;  // "sim", "can:IFACE"
+  uint64_t loop_cycles = 0;
+  double loop_cycle_p99_us = 0;
+  double loop_budget_us = 0;
+  uint64_t loop_overruns = 0;
+  uint64_t safe_state_entries = 0;
+  uint64_t force_pauses = 0;
+  uint64_t can_bus_errors = 0;
+  uint64_t can_lost_frames = 0;
+  uint64_t can_send_failures = 0;
+  uint64_t can_malformed_frames = 0;
+  bool operator==(const StationHealthRow&) const = default;
+};
+
+// A station of an institution as its uploads reported it (table stations,
+// keyed by institution and station id).
+struct StationRow {
+  std::string institution;
+  std::string station_id;
+  int64_t last_seen_unix_ms = 0;  // the server's clock at the latest upload
+  std::string software_version;   // of the newest session (by end_unix_ms)
+  int64_t version_session_end_unix_ms = 0;
+  bool has_health = false;
+  StationHealthRow health;  // of the newest session that carried health
+  std::string health_session_uuid;
+  int64_t health_session_end_unix_ms = 0;
+  bool operator==(const StationRow&) const = default;
+};
+
+// The row after a report: last seen only moves forward; the version and the
+// health follow the newest session (by end_unix_ms), so an outbox delivering
+// old sessions late does not overwrite what a newer one said. `report` is one
+// upload's row (has_health when it carried health). Pure.
+StationRow MergeStationReport(const StationRow* stored, const StationRow& report);
+
 // A session record as stored: the searchable columns plus the serialized body.
 struct SessionRow {
   std::string uuid;
@@ -126,6 +165,10 @@ struct SessionRow {
   // Non-empty: the record names a lesson; CommitBatch queues it for judging
   // (table lesson_sessions) in the same transaction. Not read back.
   std::string lesson_id;
+  // Set: the station's report that came with this upload; CommitBatch merges
+  // it into table stations in the same transaction unless the session is a
+  // conflict. Not read back.
+  std::optional<StationRow> station;
   bool operator==(const SessionRow&) const = default;
 };
 
@@ -246,6 +289,10 @@ class Store {
   // each of `trainee_ids` in order: one read, without listing the rows.
   virtual StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) = 0;
+
+  // The institution's stations by station id. Page key: station_id.
+  virtual StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,
+                                                            const ListPage& page = {}) = 0;
 
   // Oldest first, at most `limit`, ids above `after_id`.
   virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,

@@ -59,6 +59,8 @@ grpc::Status CreateTokenCall(const ServiceDeps&, const Principal&, const v1::Cre
                              v1::CreateTokenResponse*);
 grpc::Status ListAuditCall(const ServiceDeps&, const Principal&, const v1::ListAuditRequest&,
                            v1::ListAuditResponse*);
+grpc::Status ListStationsCall(const ServiceDeps&, const Principal&, const v1::ListStationsRequest&,
+                              v1::ListStationsResponse*);
 grpc::Status GetProgressCall(const ServiceDeps&, const Principal&, const v1::GetProgressRequest&,
                              v1::GetProgressResponse*);
 

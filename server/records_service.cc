@@ -195,7 +195,42 @@ Status ReadableTrainee(const ServiceDeps& deps, const Principal& who, const std:
   return Status::OK;
 }
 
+void ToStationHealth(const patient_db::StationHealthRow& h, ves::v1::StationHealth* out) {
+  out->set_device(h.device);
+  out->set_loop_cycles(h.loop_cycles);
+  out->set_loop_cycle_p99_us(h.loop_cycle_p99_us);
+  out->set_loop_budget_us(h.loop_budget_us);
+  out->set_loop_overruns(h.loop_overruns);
+  out->set_safe_state_entries(h.safe_state_entries);
+  out->set_force_pauses(h.force_pauses);
+  out->set_can_bus_errors(h.can_bus_errors);
+  out->set_can_lost_frames(h.can_lost_frames);
+  out->set_can_send_failures(h.can_send_failures);
+  out->set_can_malformed_frames(h.can_malformed_frames);
+}
+
 }  // namespace
+
+patient_db::StationRow StationReportOf(const ves::v1::SessionRecord& rec,
+                                       const std::string& institution, int64_t now_unix_ms) {
+  patient_db::StationRow r;
+  r.institution = institution;
+  r.station_id = rec.station_id();
+  r.last_seen_unix_ms = now_unix_ms;
+  r.software_version = rec.software_version();
+  r.version_session_end_unix_ms = rec.end_unix_ms();
+  if (rec.has_station_health()) {
+    const ves::v1::StationHealth& h = rec.station_health();
+    r.has_health = true;
+    r.health_session_uuid = rec.uuid();
+    r.health_session_end_unix_ms = rec.end_unix_ms();
+    r.health = {
+        h.device(),          h.loop_cycles(),        h.loop_cycle_p99_us(),   h.loop_budget_us(),
+        h.loop_overruns(),   h.safe_state_entries(), h.force_pauses(),        h.can_bus_errors(),
+        h.can_lost_frames(), h.can_send_failures(),  h.can_malformed_frames()};
+  }
+  return r;
+}
 
 // ---- Sessions --------------------------------------------------------------
 
@@ -285,6 +320,8 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.body_sha256_hex = Sha256HexOf(row.body);
   row.stored_unix_ms = NowUnixMs();
   row.lesson_id = rec.lesson_id();  // queued for the lesson judge in the same transaction
+  // The station's report, merged into table stations in the same transaction.
+  row.station = StationReportOf(rec, institution.value, row.stored_unix_ms);
   const std::string body_sha = row.body_sha256_hex;
   LessonJudge* judge = rec.lesson_id().empty() ? nullptr : deps_.judge;
   // Acknowledged from the writer thread once the batch holding it is durable.
@@ -614,6 +651,49 @@ Status ListAuditCall(const ServiceDeps& deps, const Principal& who,
     }
     return Status::OK;
   });
+}
+
+Status ListStationsCall(const ServiceDeps& deps, const Principal& who,
+                        const ves::v1::ListStationsRequest& request,
+                        ves::v1::ListStationsResponse* response) {
+  const std::string institution =
+      request.institution().empty() ? who.institution : request.institution();
+  static const CallSpec spec{
+      "station.list", {StoreRole::kAdmin, StoreRole::kSupervisor}, "list stations"};
+  return RunCall(deps, who, spec, institution, [&]() -> Status {
+    AuthStatus a = RequireInstitution(who, institution, "list the stations");
+    if (!a.ok()) return ToGrpcStatus(a);
+    patient_db::ListPage page;
+    const Status token = ReadPageToken(request.page_token(), "stations", &page);
+    if (!token.ok()) return token;
+    const int size = PageSizeOf(request.page_size());
+    page.limit = size + 1;  // one more tells whether a next page exists
+    auto rows = deps.store->ListStations(institution, page);
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    for (int i = 0; i < static_cast<int>(rows.value.size()) && i < size; ++i) {
+      const patient_db::StationRow& r = rows.value[i];
+      auto* out = response->add_stations();
+      out->set_station_id(r.station_id);
+      out->set_institution(r.institution);
+      out->set_last_seen_unix_ms(r.last_seen_unix_ms);
+      out->set_software_version(r.software_version);
+      if (r.has_health) {
+        ToStationHealth(r.health, out->mutable_health());
+        out->set_health_session_uuid(r.health_session_uuid);
+        out->set_health_session_end_unix_ms(r.health_session_end_unix_ms);
+      }
+      if (i + 1 == size && i + 1 < static_cast<int>(rows.value.size())) {
+        response->set_next_page_token(MakePageToken("stations", 0, r.station_id));
+      }
+    }
+    return Status::OK;
+  });
+}
+
+grpc::ServerUnaryReactor* AdminService::ListStations(grpc::CallbackServerContext* ctx,
+                                                     const ves::v1::ListStationsRequest* request,
+                                                     ves::v1::ListStationsResponse* response) {
+  return ServeUnary(ctx, deps_, request, response, &ListStationsCall);
 }
 
 grpc::ServerUnaryReactor* AdminService::ListAudit(grpc::CallbackServerContext* ctx,

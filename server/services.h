@@ -124,6 +124,9 @@ class AdminService final : public ves::v1::Admin::CallbackService {
   grpc::ServerUnaryReactor* ListAudit(grpc::CallbackServerContext* ctx,
                                       const ves::v1::ListAuditRequest* request,
                                       ves::v1::ListAuditResponse* response) override;
+  grpc::ServerUnaryReactor* ListStations(grpc::CallbackServerContext* ctx,
+                                         const ves::v1::ListStationsRequest* request,
+                                         ves::v1::ListStationsResponse* response) override;
 
  private:
   ServiceDeps deps_;
@@ -191,5 +194,10 @@ grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
 std::string DeterministicBytes(const google::protobuf::Message& m);
 // An id: 1-128 bytes of printable UTF-8 (patient_db::IsPrintableId).
 bool IsName(const std::string& s);
+// What an accepted upload tells of its station (table stations): seen now,
+// the record's version, and its StationHealth when it has one. The record
+// has passed CheckSessionRecord.
+patient_db::StationRow StationReportOf(const ves::v1::SessionRecord& record,
+                                       const std::string& institution, int64_t now_unix_ms);
 
 }  // namespace ves::server

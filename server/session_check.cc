@@ -201,7 +201,68 @@ std::string CheckInputLog(const ves::v1::SessionRecord& r) {
   return {};
 }
 
+// What the station says of itself: bounded, consistent counts; the loop's
+// timing only with loop cycles to time.
+std::string CheckStationHealth(const ves::v1::SessionRecord& r) {
+  if (!r.has_station_health()) return {};
+  const auto& h = r.station_health();
+  const std::string at = "record.station_health";
+  bool device_ok = !h.device().empty() && h.device().size() <= kMaxDeviceNameBytes;
+  for (const char c : h.device()) {
+    device_ok =
+        device_ok && ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                      c == ':' || c == '.' || c == '_' || c == '-');
+  }
+  if (!device_ok) {
+    return at + ".device = '" + patient_db::PrintableExcerpt(h.device(), 40) + "': must be 1.." +
+           std::to_string(kMaxDeviceNameBytes) + " of letters, digits and : . _ - (sim, can:IFACE)";
+  }
+  const std::pair<const char*, uint64_t> counts[] = {
+      {"loop_cycles", h.loop_cycles()},
+      {"loop_overruns", h.loop_overruns()},
+      {"safe_state_entries", h.safe_state_entries()},
+      {"force_pauses", h.force_pauses()},
+      {"can_bus_errors", h.can_bus_errors()},
+      {"can_lost_frames", h.can_lost_frames()},
+      {"can_send_failures", h.can_send_failures()},
+      {"can_malformed_frames", h.can_malformed_frames()}};
+  for (const auto& [name, n] : counts) {
+    if (n > kMaxHealthCount) {
+      return at + "." + name + " = " + std::to_string(n) + ": more than " +
+             std::to_string(kMaxHealthCount);
+    }
+  }
+  std::string p = InRange(at + ".loop_budget_us", h.loop_budget_us(), 0.0, kMaxLoopBudget_us, "us");
+  if (p.empty()) {
+    p = InRange(at + ".loop_cycle_p99_us", h.loop_cycle_p99_us(), 0.0, kMaxLoopTime_us, "us");
+  }
+  if (!p.empty()) return p;
+  if (h.loop_cycles() == 0 && (h.loop_cycle_p99_us() != 0.0 || h.loop_overruns() != 0)) {
+    return at + ".loop_cycle_p99_us = " + Num(h.loop_cycle_p99_us()) +
+           ", loop_overruns = " + std::to_string(h.loop_overruns()) +
+           ": must be 0 when loop_cycles is 0";
+  }
+  if (h.loop_overruns() > h.loop_cycles()) {
+    return at + ".loop_overruns = " + std::to_string(h.loop_overruns()) +
+           ": more than loop_cycles " + std::to_string(h.loop_cycles());
+  }
+  if (h.loop_cycles() > 0 && !(h.loop_budget_us() > 0.0)) {
+    return at + ".loop_budget_us = " + Num(h.loop_budget_us()) + ": must be > 0 with loop cycles";
+  }
+  return {};
+}
+
 }  // namespace
+
+bool IsSoftwareVersion(const std::string& text) {
+  if (text.empty() || text.size() > kMaxSoftwareVersionBytes) return false;
+  for (const char c : text) {
+    const bool ok = (c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                    c == '.' || c == '+' || c == '-' || c == '_' || c == '~';
+    if (!ok) return false;
+  }
+  return true;
+}
 
 bool IsLowerCaseUuid(const std::string& text) {
   if (text.size() != 36) return false;
@@ -228,6 +289,13 @@ std::string CheckSessionRecord(const ves::v1::SessionRecord& record, int64_t now
   if (p.empty()) p = CheckId("record.station_id", record.station_id());
   if (!p.empty()) return p;
   if (record.case_version() == 0) return "record.case_version = 0: must be >= 1";
+  // Empty in records of builds that did not set it; otherwise shown on the
+  // stations page, so a plain version string.
+  if (!record.software_version().empty() && !IsSoftwareVersion(record.software_version())) {
+    return "record.software_version = '" +
+           patient_db::PrintableExcerpt(record.software_version(), 40) + "': must be 1.." +
+           std::to_string(kMaxSoftwareVersionBytes) + " of letters, digits and . + - _ ~";
+  }
   if (!record.case_sha256_hex().empty() && record.case_sha256_hex().size() != 64) {
     return "record.case_sha256_hex = '" + record.case_sha256_hex() +
            "': must be 64 hex digits (or empty)";
@@ -252,6 +320,7 @@ std::string CheckSessionRecord(const ves::v1::SessionRecord& record, int64_t now
            ": before start_unix_ms " + std::to_string(record.start_unix_ms());
   }
   p = CheckMetrics(record);
+  if (p.empty()) p = CheckStationHealth(record);
   if (p.empty()) p = CheckEvents(record);
   if (p.empty()) p = CheckInputLog(record);
   if (!p.empty()) return p;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -24,6 +25,16 @@ inline constexpr double kMaxEventValue = 1e9;
 inline constexpr int kEventsPerSecond = 20;        // events: 100 + this many per second of session
 inline constexpr uint32_t kMaxScopeLinks = 1000;
 inline constexpr uint32_t kMaxSegmentCount = 20000;
+// Station health (record.station_health) and the build that made the record.
+inline constexpr std::size_t kMaxSoftwareVersionBytes = 64;
+inline constexpr std::size_t kMaxDeviceNameBytes = 32;
+inline constexpr uint64_t kMaxHealthCount = 1'000'000'000;  // ~11.6 days of 1 kHz periods
+inline constexpr double kMaxLoopTime_us = 1e7;              // a 10 s stall
+inline constexpr double kMaxLoopBudget_us = 1e5;            // a 10 Hz loop
+
+// The version charset: letters, digits and . + - _ ~ (e.g. "0.1.0",
+// "0.2.0-rc1+g1a2b3c"), 1..kMaxSoftwareVersionBytes.
+bool IsSoftwareVersion(const std::string& text);
 
 // Empty when acceptable; otherwise one line naming the field and the value,
 // e.g. "record.metrics.pain_s = nan: must be finite" or

@@ -689,6 +689,50 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                  "live/ws: a WebSocket endpoint (Upgrade: websocket), docs/web.md");
   }
 
+  // stations: last seen, version and health as their uploads reported them
+  if (path.size() == 1 && path[0] == "stations") {
+    v1::ListStationsRequest req;
+    req.set_institution(institution);
+    req.set_page_size(static_cast<uint32_t>(page_size));
+    req.set_page_token(page_token);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    v1::ListStationsResponse resp;
+    s = ListStationsCall(deps_, who, req, &resp);
+    if (!s.ok()) return ErrorOf(s);
+    json stations = json::array();
+    for (const auto& st : resp.stations()) {
+      json row = {{"station_id", st.station_id()},
+                  {"institution", st.institution()},
+                  {"last_seen_unix_ms", st.last_seen_unix_ms()},
+                  {"software_version", st.software_version()},
+                  {"health", nullptr},
+                  {"flags", json::array()}};
+      if (st.has_health()) {
+        const v1::StationHealth& h = st.health();
+        const bool timed = h.loop_cycles() > 0;  // headless runs have no loop timing
+        row["health"] = {{"device", h.device()},
+                         {"session_uuid", st.health_session_uuid()},
+                         {"session_end_unix_ms", st.health_session_end_unix_ms()},
+                         {"loop_cycles", h.loop_cycles()},
+                         {"loop_cycle_p99_us", timed ? json(h.loop_cycle_p99_us()) : json(nullptr)},
+                         {"loop_budget_us", h.loop_budget_us()},
+                         {"loop_overruns", h.loop_overruns()},
+                         {"safe_state_entries", h.safe_state_entries()},
+                         {"force_pauses", h.force_pauses()},
+                         {"can_bus_errors", h.can_bus_errors()},
+                         {"can_lost_frames", h.can_lost_frames()},
+                         {"can_send_failures", h.can_send_failures()},
+                         {"can_malformed_frames", h.can_malformed_frames()}};
+        row["flags"] = StationHealthFlags(h);
+      }
+      stations.push_back(std::move(row));
+    }
+    return JsonReply(200, {{"stations", stations},
+                           {"next_page_token", resp.next_page_token()},
+                           {"now_unix_ms", NowUnixMs()}});
+  }
+
   // audit
   if (path.size() == 1 && path[0] == "audit") {
     v1::ListAuditRequest req;
@@ -707,6 +751,20 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
   }
   return Error(404, "NOT_FOUND",
                "no API route '" + patient_db::PrintableExcerpt(raw_path, 80) + "' (docs/web.md)");
+}
+
+std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {
+  std::vector<std::string> flags;
+  if (h.loop_cycles() > 0 && h.loop_cycle_p99_us() > h.loop_budget_us()) {
+    flags.push_back("loop_p99");
+  }
+  if (h.loop_overruns() > 0) flags.push_back("overruns");
+  if (h.safe_state_entries() + h.force_pauses() > 0) flags.push_back("safe_state");
+  if (h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() + h.can_malformed_frames() >
+      0) {
+    flags.push_back("can_errors");
+  }
+  return flags;
 }
 
 HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uuid,

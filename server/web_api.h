@@ -53,6 +53,12 @@ struct WebOptions {
   std::chrono::seconds session_ttl{8 * 3600};  // a browser session's life
 };
 
+// What the stations page flags in a station's latest health (docs/web.md,
+// "Stations"): "loop_p99" (a measured loop's p99 over its budget),
+// "overruns", "safe_state" (any safe-state entry or force pause) and
+// "can_errors" (any CAN error, lost, unsent or malformed frame). Pure.
+std::vector<std::string> StationHealthFlags(const v1::StationHealth& health);
+
 class WebApi {
  public:
   WebApi(ServiceDeps deps, WebOptions options);

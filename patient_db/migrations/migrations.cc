@@ -136,6 +136,30 @@ ALTER TABLE lesson_sessions ADD COLUMN judge_starts INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE sessions ADD COLUMN operator_kind TEXT NOT NULL DEFAULT '';
 ALTER TABLE sessions ADD COLUMN max_tip_arc_m DOUBLE PRECISION NOT NULL DEFAULT 0;
 )sql"},
+      {5, "stations: last seen, software version and health, reported with uploads", R"sql(
+CREATE TABLE stations (
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  station_id TEXT NOT NULL,
+  last_seen_unix_ms BIGINT NOT NULL,
+  software_version TEXT NOT NULL,
+  version_session_end_unix_ms BIGINT NOT NULL,
+  has_health INTEGER NOT NULL,
+  health_session_uuid TEXT NOT NULL,
+  health_session_end_unix_ms BIGINT NOT NULL,
+  device TEXT NOT NULL,
+  loop_cycles BIGINT NOT NULL,
+  loop_cycle_p99_us DOUBLE PRECISION NOT NULL,
+  loop_budget_us DOUBLE PRECISION NOT NULL,
+  loop_overruns BIGINT NOT NULL,
+  safe_state_entries BIGINT NOT NULL,
+  force_pauses BIGINT NOT NULL,
+  can_bus_errors BIGINT NOT NULL,
+  can_lost_frames BIGINT NOT NULL,
+  can_send_failures BIGINT NOT NULL,
+  can_malformed_frames BIGINT NOT NULL,
+  PRIMARY KEY (institution, station_id)
+);
+)sql"},
   };
   return kMigrations;
 }

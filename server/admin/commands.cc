@@ -12,6 +12,7 @@ const std::vector<Command>& AllCommands() {
       {"scores", "a trainee's sessions and scores", RunScoresCommand},
       {"session", "show one session whole", RunSessionCommand},
       {"audit", "read the audit log (admin)", RunAuditCommand},
+      {"stations", "stations: last seen, version, health (admin, supervisor)", RunStationsCommand},
       {"curriculum", "create or list curricula of lessons", RunCurriculumCommand},
       {"assign", "assign a curriculum to a trainee or a group", RunAssignCommand},
       {"progress", "a trainee's or a group's lesson progress", RunProgressCommand},

@@ -28,6 +28,7 @@ int RunTraineeCommand(const CommandArgs& args);
 int RunScoresCommand(const CommandArgs& args);
 int RunSessionCommand(const CommandArgs& args);
 int RunAuditCommand(const CommandArgs& args);
+int RunStationsCommand(const CommandArgs& args);
 int RunCaseUpload(const CommandArgs& args);
 int RunCaseList(const CommandArgs& args);
 int RunCaseDownload(const CommandArgs& args);

@@ -11,6 +11,7 @@
 #include "patient_db/limits.h"
 #include "server/admin/remote.h"
 #include "server/auth.h"
+#include "server/web_api.h"
 #include "ves/v1/services.grpc.pb.h"
 
 namespace ves::admin {
@@ -426,6 +427,65 @@ int RunAuditCommand(const CommandArgs& args) {
         return shown < limit;
       });
   if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
+  return kExitOk;
+}
+
+int RunStationsCommand(const CommandArgs& args) {
+  ClientOptions client;
+  int deadline_s = 30;
+  std::string institution;
+  po::options_description options("options");
+  AddRemoteOptions(&options, &client, &deadline_s);
+  options.add_options()("institution", po::value(&institution),
+                        "institution (default: the token's)");
+  po::variables_map vm;
+  const int rc = ParseRemote("stations", "stations [--institution I]", args, options, nullptr, &vm,
+                             &client, deadline_s);
+  if (rc >= 0) return rc;
+  ves::v1::ListStationsRequest q;
+  q.set_institution(institution);
+  q.set_page_size(1000);
+  auto stub = Stub<ves::v1::Admin>(client);
+  std::printf("%-24s %-17s %-12s %-10s %-14s %-10s %-12s %-10s %s\n", "station", "last seen UTC",
+              "version", "device", "p99/budget us", "overruns", "safe-state", "CAN errors",
+              "flags");
+  auto status = ForEachPage<ves::v1::ListStationsResponse>(
+      client, q,
+      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
+        return stub->ListStations(c, request, reply);
+      },
+      [&](const ves::v1::ListStationsResponse& r) {
+        for (const auto& st : r.stations()) {
+          std::string device = "-", loop = "-", overruns = "-", safe = "-", can = "-", flags;
+          if (st.has_health()) {
+            const ves::v1::StationHealth& h = st.health();
+            char text[64];
+            device = h.device();
+            if (h.loop_cycles() > 0) {
+              std::snprintf(text, sizeof text, "%.0f/%.0f", h.loop_cycle_p99_us(),
+                            h.loop_budget_us());
+              loop = text;
+              overruns = std::to_string(h.loop_overruns());
+            } else {
+              loop = "not timed";
+            }
+            safe = std::to_string(h.safe_state_entries() + h.force_pauses());
+            can = std::to_string(h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() +
+                                 h.can_malformed_frames());
+            for (const std::string& f : ves::server::StationHealthFlags(h)) {
+              flags += (flags.empty() ? "" : ",") + f;
+            }
+          }
+          std::printf("%-24s %-17s %-12s %-10s %-14s %-10s %-12s %-10s %s\n",
+                      Shown(st.station_id()).c_str(),
+                      FormatUtcMinute(st.last_seen_unix_ms()).c_str(),
+                      Shown(st.software_version().empty() ? "-" : st.software_version()).c_str(),
+                      Shown(device).c_str(), loop.c_str(), overruns.c_str(), safe.c_str(),
+                      can.c_str(), flags.empty() ? "-" : flags.c_str());
+        }
+        return true;
+      });
+  if (!status.ok()) return ReportRpcError("stations", status.error_code(), status.error_message());
   return kExitOk;
 }
 

@@ -358,6 +358,56 @@ async function auditPage() {
   await more();
 }
 
+// Stations: one row each, health figures as text; a flagged cell gets the
+// class "flagged" and a title saying why (the server decides the flags).
+async function stationsPage() {
+  const me = await signedIn();
+  $('institution').textContent = me.institution;
+  const body = $('stations').querySelector('tbody');
+  let token = '';
+  do {
+    const page = await api('stations?page_size=500' +
+                           (token ? '&page_token=' + encodeURIComponent(token) : ''));
+    for (const s of page.stations) {
+      const h = s.health;
+      const flags = new Set(s.flags);
+      let cells;
+      if (!h) {
+        cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—',
+                 'not reported', '—', '—', '—', '—'];
+      } else {
+        const loop = h.loop_cycle_p99_us === null
+            ? 'not timed (simulated time) / ' + h.loop_budget_us.toFixed(0) + ' µs'
+            : h.loop_cycle_p99_us.toFixed(0) + ' / ' + h.loop_budget_us.toFixed(0) + ' µs';
+        const canTotal = h.can_bus_errors + h.can_lost_frames + h.can_send_failures +
+                         h.can_malformed_frames;
+        cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—', h.device,
+                 loop,
+                 h.loop_cycles > 0 ? h.loop_overruns + ' of ' + h.loop_cycles : '—',
+                 (h.safe_state_entries + h.force_pauses) + ' (' + h.safe_state_entries +
+                     ' re-armed, ' + h.force_pauses + ' paused)',
+                 canTotal + ' (bus ' + h.can_bus_errors + ', lost ' + h.can_lost_frames +
+                     ', unsent ' + h.can_send_failures + ', malformed ' +
+                     h.can_malformed_frames + ')'];
+      }
+      const tr = row(cells);
+      tr.dataset.station = s.station_id;
+      const why = {loop_p99: [4, 'loop p99 over its budget'], overruns: [5, 'the loop overran'],
+                   safe_state: [6, 'the device went to its safe state'],
+                   can_errors: [7, 'CAN errors']};
+      for (const [flag, [column, title]] of Object.entries(why)) {
+        if (!flags.has(flag)) continue;
+        tr.children[column].classList.add('flagged');
+        tr.children[column].setAttribute('title', title);
+      }
+      if (flags.size > 0) tr.classList.add('unhealthy');
+      body.appendChild(tr);
+    }
+    token = page.next_page_token;
+  } while (token);
+  $('no-stations').hidden = body.children.length > 0;
+}
+
 // Live: the institution's running sessions; with ?session=UUID, that one's
 // frames over a WebSocket (the server sends only the newest to a slow page).
 async function livePage() {
@@ -416,7 +466,7 @@ async function livePage() {
 
 const pages = {'sign-in': signInPage, trainees: traineesPage, trainee: traineePage,
                session: sessionPage, progress: progressPage, audit: auditPage,
-               live: livePage};
+               live: livePage, stations: stationsPage};
 
 document.addEventListener('DOMContentLoaded', () => {
   const page = pages[document.body.dataset.page];

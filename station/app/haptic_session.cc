@@ -102,6 +102,27 @@ std::string DeviceReportLine(const std::string& device, const std::string& bus,
   return line;
 }
 
+ves::v1::StationHealth MakeStationHealth(const std::string& device,
+                                         const haptics::DeviceCounters& counters,
+                                         const haptics::SafetyMonitor& safety,
+                                         const haptics::LoopStats* loop, double period_s) {
+  ves::v1::StationHealth h;
+  h.set_device(device);
+  h.set_loop_budget_us(period_s * 1e6);
+  if (loop != nullptr && loop->cycles > 0) {
+    h.set_loop_cycles(loop->cycles);
+    h.set_loop_cycle_p99_us(static_cast<double>(loop->cycle_end.PercentileNs(0.99)) / 1000.0);
+    h.set_loop_overruns(loop->overruns);
+  }
+  h.set_safe_state_entries(safety.hard_faults());
+  h.set_force_pauses(safety.transient_faults());
+  h.set_can_bus_errors(counters.bus_errors);
+  h.set_can_lost_frames(counters.lost_frames);
+  h.set_can_send_failures(counters.send_failures);
+  h.set_can_malformed_frames(counters.malformed_frames);
+  return h;
+}
+
 haptics::HandProfile HandForSample(const training::InputSample& sample, double model_offset_m) {
   haptics::HandProfile hand;
   if (sample.thrust_mode == training::ThrustMode::kForce) {

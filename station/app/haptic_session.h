@@ -23,11 +23,13 @@
 #include "station/haptics/base_response.h"
 #include "station/haptics/device.h"
 #include "station/haptics/hand_profile.h"
+#include "station/haptics/haptic_loop.h"
 #include "station/haptics/model_base_response.h"
 #include "station/haptics/safety_monitor.h"
 #include "station/haptics/seqlock.h"
 #include "station/training/input_log.h"
 #include "station/training/session_runner.h"
+#include "ves/v1/session.pb.h"
 
 namespace ves::station {
 
@@ -103,6 +105,16 @@ std::string DeviceReportLine(const std::string& device, const std::string& bus,
                              const haptics::DeviceCounters& counters,
                              const SessionModelSource& source,
                              const haptics::SafetyMonitor& safety);
+
+// The station's health over one haptic run, for the records it produced
+// (SessionRecord.station_health): the driver's CAN counters and the safety
+// monitor's fault counts; the loop's timing when a real-time loop ran (`loop`
+// null: headless, simulated time, loop_cycles 0). `device` is "sim" or
+// "can:IFACE".
+ves::v1::StationHealth MakeStationHealth(const std::string& device,
+                                         const haptics::DeviceCounters& counters,
+                                         const haptics::SafetyMonitor& safety,
+                                         const haptics::LoopStats* loop, double period_s);
 
 // The simulated hand for a scripted operator's sample (headless): in the
 // force mode the hand pushes the scope with push_force_N; in the position

@@ -430,6 +430,9 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
   *record.mutable_replay_setup() =
       training::MakeReplaySetup(obtained.colon_case, case_options, o.seconds);
   if (o.lesson_plan) record.set_lesson_id(o.lesson_plan->lesson.lesson_id());
+  // Simulated time: the counters are real, the loop's timing is not measured.
+  *record.mutable_station_health() = MakeStationHealth(
+      "sim", rig.driver().counters(), rig.cycle().safety(), nullptr, run.params.dt_s);
   const std::string summary = training::SummaryLine(result);
   if (!WriteTextFile(o.out_dir / "summary.txt", summary)) return kExitFailed;
   {

@@ -316,13 +316,15 @@ std::string InteractiveReport(InteractiveRig& rig, const haptics::HapticCycle& c
   std::string report = DeviceReportLine(rig.label(), rig.bus_name(), rig.device()->counters(),
                                         source, cycle.safety());
   const haptics::LoopStats& stats = loop.stats();
-  char timing[200];
+  char timing[240];
   std::snprintf(timing, sizeof(timing),
-                " loop_cycles=%llu overruns=%llu station_stalls=%llu p99_period_error_us=%.0f",
+                " loop_cycles=%llu overruns=%llu station_stalls=%llu p99_period_error_us=%.0f "
+                "p99_cycle_end_us=%.0f",
                 static_cast<unsigned long long>(stats.cycles),
                 static_cast<unsigned long long>(stats.overruns),
                 static_cast<unsigned long long>(cycle.safety().stalls()),
-                static_cast<double>(stats.period_error.PercentileNs(0.99)) / 1000.0);
+                static_cast<double>(stats.period_error.PercentileNs(0.99)) / 1000.0,
+                static_cast<double>(stats.cycle_end.PercentileNs(0.99)) / 1000.0);
   return report + timing;
 }
 
@@ -334,8 +336,8 @@ class CoupledLoop {
   CoupledLoop(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
               double time_limit_s, InteractiveRig* rig)
       : rig_(rig),
-        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_,
-                 &published_),
+        period_s_(run.params.dt_s),
+        session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_, &published_),
         cycle_(rig->device(), session_.source(), CycleOptionsFor(run.params.dt_s)),
         loop_(&cycle_, LoopOptionsFor(run.params.dt_s)) {
     session_.Start(rig->initial_state().insertion_m, rig->initial_state().roll_rad);
@@ -383,6 +385,9 @@ class CoupledLoop {
   InteractiveResult Finish() {
     InteractiveResult result = session_.Finish();
     result.device_report = InteractiveReport(*rig_, cycle_, loop_, *session_.source());
+    const ves::v1::StationHealth health = MakeStationHealth(
+        rig_->label(), rig_->device()->counters(), cycle_.safety(), &loop_.stats(), period_s_);
+    for (auto& record : result.records) *record.mutable_station_health() = health;
     return result;
   }
 
@@ -400,6 +405,7 @@ class CoupledLoop {
   }
 
   InteractiveRig* rig_;
+  double period_s_;
   haptics::SeqLock<ModelControls> model_controls_;
   std::mutex published_mutex_;
   Published published_;

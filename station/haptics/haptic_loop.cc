@@ -132,6 +132,7 @@ void HapticLoop::Main() {
     cycles_.store(stats_.cycles, std::memory_order_relaxed);
     deadline_ns += period_ns;
     const long long end_ns = MonotonicNanoseconds();
+    stats_.cycle_end.Add(end_ns - (deadline_ns - period_ns));
     if (end_ns > deadline_ns) {
       ++stats_.overruns;
       // Skip the deadlines already missed rather than running them back to back.

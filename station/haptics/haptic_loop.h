@@ -64,6 +64,9 @@ struct LoopStats {
   PeriodHistogram period_error{};
   PeriodHistogram sleep_overshoot{};  // wake-up minus the sleep's own target
   PeriodHistogram spin_margin{};      // the margin used, per period
+  // Deadline to the end of that period's cycle (late start plus the cycle's
+  // work): over the period, the cycle overran (station health, docs/station-run.md).
+  PeriodHistogram cycle_end{};
   std::uint64_t cycles{0};
   std::uint64_t overruns{0};
 };

@@ -127,6 +127,31 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   ASSERT_EQ(raw.exit_status, 0) << raw.err;
   EXPECT_NE(raw.out.find("centerline"), std::string::npos);
   EXPECT_NE(raw.out.find("uuid: \"" + uuid + "\""), std::string::npos);
+  // stations: the upload's station, seen, with no health reported; then one
+  // whose health is out of range, flagged.
+  AdminRun stations = Admin(dir, "stations" + remote);
+  ASSERT_EQ(stations.exit_status, 0) << stations.err;
+  EXPECT_EQ(Lines(stations.out), 2) << stations.out;
+  EXPECT_NE(stations.out.find("station-1"), std::string::npos) << stations.out;
+  ves::v1::SessionRecord faulty = MakeRecord(NewUuid(rng), "alice", 8);
+  faulty.set_station_id("ward-3");
+  faulty.set_software_version("0.1.0");
+  faulty.mutable_station_health()->set_device("can:can0");
+  faulty.mutable_station_health()->set_loop_cycles(2000);
+  faulty.mutable_station_health()->set_loop_cycle_p99_us(1500);
+  faulty.mutable_station_health()->set_loop_budget_us(1000);
+  faulty.mutable_station_health()->set_can_lost_frames(3);
+  ASSERT_TRUE(
+      UploadSession(server.Client(server.MakeToken(StoreRole::kStation, "north")), faulty, &r)
+          .ok());
+  stations = Admin(dir, "stations" + remote);
+  ASSERT_EQ(stations.exit_status, 0) << stations.err;
+  const std::string ward = stations.out.substr(stations.out.find("ward-3"));
+  for (const std::string& cell : {std::string("0.1.0"), std::string("can:can0"),
+                                  std::string("1500/1000"), std::string("loop_p99,can_errors")}) {
+    EXPECT_NE(ward.substr(0, ward.find('\n')).find(cell), std::string::npos) << cell << "\n"
+                                                                             << stations.out;
+  }
   AdminRun token = Admin(dir, "token create --role station" + remote);
   EXPECT_EQ(token.out.size(), 65u);
   // Reads are audited through the group commit, a moment after the answer:

@@ -167,6 +167,53 @@ TEST_F(Replicas, ThirtyTwoClientsWithRepeatedUuidsStoreExactlyTheDistinctRecords
   for (const auto& uuid : sent) EXPECT_TRUE(store_->GetSession(uuid).ok()) << uuid;
 }
 
+// Four stations upload through both replicas at once: the station rows are
+// merged under row locks without a deadlock, and each ends with the health of
+// its newest session whatever order the uploads committed in.
+TEST_F(Replicas, StationRowsFromBothReplicasEndWithTheNewestSessionsHealth) {
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.port > 0 && b.port > 0);
+  std::mt19937_64 uuid_rng(11);
+  std::vector<ves::v1::SessionRecord> records;
+  for (int i = 0; i < 80; ++i) {
+    auto rec = MakeRecord(NewUuid(uuid_rng), Trainee(i % 4), i);  // seed i starts i minutes in
+    rec.set_station_id("st-" + std::to_string(i % 4));
+    rec.set_software_version("0.1." + std::to_string(i));
+    auto* h = rec.mutable_station_health();
+    h->set_device("sim");
+    h->set_safe_state_entries(static_cast<uint64_t>(i));
+    records.push_back(rec);
+  }
+  std::atomic<int> errors{0};
+  std::vector<std::thread> clients;
+  const ClientOptions to[2] = {Client(a, station_), Client(b, station_)};
+  for (int c = 0; c < 16; ++c) {
+    clients.emplace_back([&, c] {
+      for (size_t i = static_cast<size_t>(c); i < records.size(); i += 16) {
+        ves::v1::UploadSessionResponse resp;
+        const grpc::Status st = UploadSession(to[(i / 16) % 2], records[i], &resp);
+        if (!st.ok()) {
+          ++errors;
+          ADD_FAILURE() << st.error_message();
+        }
+      }
+    });
+  }
+  for (auto& t : clients) t.join();
+  EXPECT_EQ(errors, 0);
+  auto rows = store_->ListStations("north");
+  ASSERT_TRUE(rows.ok()) << rows.status.message;
+  ASSERT_EQ(rows.value.size(), 4u);
+  for (int k = 0; k < 4; ++k) {
+    const auto& newest = records[76 + k];  // the last session of station k
+    EXPECT_EQ(rows.value[k].station_id, "st-" + std::to_string(k));
+    EXPECT_EQ(rows.value[k].software_version, newest.software_version());
+    EXPECT_EQ(rows.value[k].health_session_uuid, newest.uuid());
+    EXPECT_EQ(rows.value[k].health.safe_state_entries, static_cast<uint64_t>(76 + k));
+  }
+}
+
 TEST_F(Replicas, SameUuidToBothReplicasAtOnceIsStoredOnce) {
   Replica& a = Start();
   Replica& b = Start();

@@ -117,6 +117,113 @@ TEST_F(SessionUpload, NonFiniteMetricIsRefusedNamingTheField) {
   EXPECT_TRUE(UploadSession(station_, MakeRecord(NewUuid(rng_), "t1", 2), &r).ok());
 }
 
+// Admin.ListStations as `who`.
+grpc::Status ListStations(const ClientOptions& who, const std::string& institution,
+                          ves::v1::ListStationsResponse* r) {
+  grpc::ClientContext ctx;
+  PrepareContext(&ctx, who);
+  ves::v1::ListStationsRequest q;
+  q.set_institution(institution);
+  return ves::v1::Admin::NewStub(MakeClientChannel(who))->ListStations(&ctx, q, r);
+}
+
+ves::v1::SessionRecord WithHealth(ves::v1::SessionRecord r, uint64_t safe_state_entries) {
+  r.set_software_version("0.1.0");
+  auto* h = r.mutable_station_health();
+  h->set_device("can:can0");
+  h->set_loop_cycles(300'000);
+  h->set_loop_cycle_p99_us(380);
+  h->set_loop_budget_us(1000);
+  h->set_loop_overruns(2);
+  h->set_safe_state_entries(safe_state_entries);
+  h->set_can_bus_errors(4);
+  return r;
+}
+
+TEST_F(SessionUpload, AnUploadWithHealthCreatesThenUpdatesItsStationRow) {
+  ves::v1::UploadSessionResponse r;
+  const auto first = WithHealth(MakeRecord(NewUuid(rng_), "t1", 1), 0);
+  ASSERT_TRUE(UploadSession(station_, first, &r).ok());
+  ves::v1::ListStationsResponse list;
+  ASSERT_TRUE(ListStations(supervisor_, "", &list).ok());
+  ASSERT_EQ(list.stations_size(), 1);
+  const ves::v1::StationSummary& s = list.stations(0);
+  EXPECT_EQ(s.station_id(), "station-1");
+  EXPECT_EQ(s.institution(), "north");
+  EXPECT_EQ(s.software_version(), "0.1.0");
+  EXPECT_EQ(s.last_seen_unix_ms(), r.stored_unix_ms());
+  EXPECT_EQ(s.health_session_uuid(), first.uuid());
+  EXPECT_EQ(s.health().SerializeAsString(), first.station_health().SerializeAsString());
+
+  // A newer session (seed 2 starts a minute later) replaces the health.
+  const auto second = WithHealth(MakeRecord(NewUuid(rng_), "t1", 2), 3);
+  ASSERT_TRUE(UploadSession(station_, second, &r).ok());
+  ASSERT_TRUE(ListStations(supervisor_, "", &list).ok());
+  ASSERT_EQ(list.stations_size(), 1);
+  EXPECT_EQ(list.stations(0).health().safe_state_entries(), 3u);
+  EXPECT_EQ(list.stations(0).health_session_uuid(), second.uuid());
+  // Supervisors see their own institution only; trainees and stations none.
+  EXPECT_EQ(ListStations(supervisor_, "south", &list).error_code(),
+            grpc::StatusCode::PERMISSION_DENIED);
+  const ClientOptions trainee =
+      server_.Client(server_.MakeToken(StoreRole::kTrainee, "north", "t1"));
+  EXPECT_EQ(ListStations(trainee, "", &list).error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(ListStations(station_, "", &list).error_code(), grpc::StatusCode::PERMISSION_DENIED);
+}
+
+TEST_F(SessionUpload, MalformedHealthIsRefusedNamingTheFieldAndNothingIsStored) {
+  ves::v1::UploadSessionResponse r;
+  const auto good = WithHealth(MakeRecord(NewUuid(rng_), "t1", 1), 1);
+  ASSERT_TRUE(UploadSession(station_, good, &r).ok());
+  ves::v1::ListStationsResponse before;
+  ASSERT_TRUE(ListStations(supervisor_, "", &before).ok());
+
+  struct Case {
+    const char* field;
+    void (*spoil)(ves::v1::SessionRecord*);
+  };
+  const Case cases[] = {
+      {"record.station_health.loop_cycle_p99_us = nan",
+       [](ves::v1::SessionRecord* x) {
+         x->mutable_station_health()->set_loop_cycle_p99_us(
+             std::numeric_limits<double>::quiet_NaN());
+       }},
+      {"record.station_health.loop_cycle_p99_us = -5",
+       [](ves::v1::SessionRecord* x) { x->mutable_station_health()->set_loop_cycle_p99_us(-5); }},
+      {"record.station_health.can_bus_errors = 18446744073709551615",
+       [](ves::v1::SessionRecord* x) {
+         x->mutable_station_health()->set_can_bus_errors(UINT64_MAX);
+       }},
+      {"record.software_version = '0.1.0.0.0",
+       [](ves::v1::SessionRecord* x) {
+         std::string v = "0.1.0";
+         while (v.size() < 80) v += ".0";
+         x->set_software_version(v);
+       }},
+      // Control characters are refused by the request bounds, before the record's checks.
+      {"request.record.software_version = '0.1\\x07'",
+       [](ves::v1::SessionRecord* x) { x->set_software_version("0.1\a"); }},
+  };
+  for (const Case& c : cases) {
+    auto bad = WithHealth(MakeRecord(NewUuid(rng_), "t1", 5), 9);
+    c.spoil(&bad);
+    const grpc::Status status = UploadSession(station_, bad, &r);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << c.field;
+    EXPECT_EQ(status.error_message().rfind(c.field, 0), 0u) << status.error_message();
+    ves::v1::GetSessionResponse got;
+    EXPECT_EQ(Get(bad.uuid(), &got).error_code(), grpc::StatusCode::NOT_FOUND) << c.field;
+  }
+  // Nothing of the refused uploads reached the station row; the good one is whole.
+  ves::v1::ListStationsResponse after;
+  ASSERT_TRUE(ListStations(supervisor_, "", &after).ok());
+  EXPECT_EQ(after.SerializeAsString(), before.SerializeAsString());
+  EXPECT_EQ(server_.store().CountSessions().value, 1);
+  ves::v1::GetSessionResponse stored;
+  ASSERT_TRUE(Get(good.uuid(), &stored).ok());
+  EXPECT_EQ(stored.record().station_health().SerializeAsString(),
+            good.station_health().SerializeAsString());
+}
+
 TEST_F(SessionUpload, BadUuidAndUnknownTraineeAreRefused) {
   ves::v1::UploadSessionResponse r;
   auto status = UploadSession(station_, MakeRecord("NOT-A-UUID", "t1", 1), &r);

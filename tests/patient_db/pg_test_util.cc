@@ -86,6 +86,9 @@ class SkippedStore final : public Store {
       const std::vector<std::string>&) override {
     return Skipped();
   }
+  StoreResult<std::vector<StationRow>> ListStations(const std::string&, const ListPage&) override {
+    return {};
+  }
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int, int64_t) override { return {}; }
   StoreResult<bool> PutCurriculum(const CurriculumRow&) override { return Skipped(); }
   StoreResult<CurriculumRow> GetCurriculum(const std::string&) override { return Skipped(); }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -248,6 +249,100 @@ TEST_P(StoreContract, SessionForUnknownTraineeFailsWholeBatch) {
   EXPECT_EQ(store_->CountSessions().value, 0);  // nothing half-written
 }
 
+// What a station reports with an upload (records_service.cc builds it).
+StationRow Report(const std::string& station, int64_t seen, const std::string& version,
+                  int64_t session_end, std::optional<uint64_t> safe_states) {
+  StationRow r;
+  r.institution = "north";
+  r.station_id = station;
+  r.last_seen_unix_ms = seen;
+  r.software_version = version;
+  r.version_session_end_unix_ms = session_end;
+  if (safe_states) {
+    r.has_health = true;
+    r.health_session_uuid = "s-" + std::to_string(session_end);
+    r.health_session_end_unix_ms = session_end;
+    r.health = {"can:can0", 600000, 412.5, 1000.0, 3, *safe_states, 2, 5, 7, 1, 4};
+  }
+  return r;
+}
+
+TEST_P(StoreContract, StationRowsFollowTheirUploadsInTheSameTransaction) {
+  auto with = [](SessionRow row, StationRow report) {
+    row.station = std::move(report);
+    return row;
+  };
+  WriteBatch first;
+  first.sessions = {with(Session("u1", "a", 1000), Report("st-1", 9000, "0.1.0", 2000, 1))};
+  ASSERT_TRUE(store_->CommitBatch(first).ok());
+  auto rows = store_->ListStations("north");
+  ASSERT_TRUE(rows.ok()) << rows.status.message;
+  ASSERT_EQ(rows.value.size(), 1u);
+  EXPECT_EQ(rows.value[0], Report("st-1", 9000, "0.1.0", 2000, 1));
+  EXPECT_TRUE(store_->ListStations("south").value.empty());  // per institution
+
+  // A newer session: version and health follow it; an older one delivered
+  // late (an outbox) moves only last seen.
+  WriteBatch second;
+  second.sessions = {with(Session("u2", "b", 3000), Report("st-1", 9500, "0.2.0", 4000, 0)),
+                     with(Session("u0", "c", 100), Report("st-1", 9600, "0.0.9", 1100, 9))};
+  ASSERT_TRUE(store_->CommitBatch(second).ok());
+  StationRow expected = Report("st-1", 9600, "0.2.0", 4000, 0);
+  ASSERT_EQ(store_->ListStations("north").value.size(), 1u);
+  EXPECT_EQ(store_->ListStations("north").value[0], expected);
+
+  // Without health: the version moves, the health stays. A conflicting
+  // upload (refused) says nothing; a repeated one says the station was seen.
+  WriteBatch third;
+  third.sessions = {with(Session("u3", "d", 5000), Report("st-1", 9700, "0.3.0", 6000, {})),
+                    with(Session("u1", "changed", 1000), Report("st-1", 99999, "9.9.9", 99999, 5)),
+                    with(Session("u2", "b", 3000), Report("st-1", 9800, "0.2.0", 4000, 0))};
+  auto r3 = store_->CommitBatch(third);
+  ASSERT_TRUE(r3.ok());
+  EXPECT_EQ(r3.value[1].outcome, SessionPut::kConflict);
+  EXPECT_EQ(r3.value[2].outcome, SessionPut::kDuplicate);
+  expected.last_seen_unix_ms = 9800;
+  expected.software_version = "0.3.0";
+  expected.version_session_end_unix_ms = 6000;
+  Reopen();
+  ASSERT_EQ(store_->ListStations("north").value.size(), 1u);
+  EXPECT_EQ(store_->ListStations("north").value[0], expected);
+}
+
+TEST_P(StoreContract, AFailedBatchWritesNoStationRow) {
+  WriteBatch b;
+  SessionRow orphan = Session("u9", "x", 1);
+  orphan.trainee_id = "ghost";
+  SessionRow reported = Session("u8", "y", 1);
+  reported.station = Report("st-1", 10, "0.1.0", 1001, 0);
+  b.sessions = {reported, orphan};
+  EXPECT_FALSE(store_->CommitBatch(b).ok());
+  EXPECT_TRUE(store_->ListStations("north").value.empty());
+}
+
+TEST_P(StoreContract, StationsAreListedByIdAndPaged) {
+  WriteBatch b;
+  int n = 0;
+  for (const char* id : {"st-c", "st-a", "st-b"}) {
+    SessionRow row = Session(std::string("u-") + id, id, 100 * ++n);
+    row.station = Report(id, 10, "0.1.0", 1000, 0);
+    b.sessions.push_back(row);
+  }
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  ListPage page;
+  page.limit = 2;
+  auto first = store_->ListStations("north", page);
+  ASSERT_TRUE(first.ok());
+  ASSERT_EQ(first.value.size(), 2u);
+  EXPECT_EQ(first.value[0].station_id, "st-a");
+  EXPECT_EQ(first.value[1].station_id, "st-b");
+  page.has_after = true;
+  page.after_text = "st-b";
+  auto rest = store_->ListStations("north", page);
+  ASSERT_EQ(rest.value.size(), 1u);
+  EXPECT_EQ(rest.value[0].station_id, "st-c");
+}
+
 TEST_P(StoreContract, AuditRowsGetIdsAndSessionResults) {
   WriteBatch b;
   b.sessions = {Session("u1", "a", 1), Session("u1", "b", 1)};
@@ -382,6 +477,60 @@ TEST(SqliteStore, MigratesOnceAndRecordsVersion) {
   s = db.Prepare("PRAGMA foreign_keys", &error);
   ASSERT_TRUE(s->Step(&rc));
   EXPECT_EQ(s->Int(0), 1);
+  std::filesystem::remove(path);
+}
+
+// A database an older server (schema 4) left: opening it applies migration 5
+// (stations) and keeps what was stored; uploads then report their station.
+TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("ves_migrate5_" + std::to_string(::getpid()) + ".db");
+  std::filesystem::remove(path);
+  {
+    SqliteDb db(path.string());
+    std::string error;
+    ASSERT_TRUE(
+        db.Exec("CREATE TABLE schema_migrations (version INTEGER PRIMARY KEY, "
+                "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
+                &error))
+        << error;
+    for (const Migration& m : SqlMigrations()) {
+      if (m.version > 4) break;
+      ASSERT_TRUE(db.Exec(m.sql, &error)) << error;
+      ASSERT_TRUE(db.Exec(
+          "INSERT INTO schema_migrations VALUES (" + std::to_string(m.version) + ", 'old', 1)",
+          &error))
+          << error;
+    }
+    ASSERT_TRUE(
+        db.Exec("INSERT INTO institutions (name, created_unix_ms) VALUES ('north', 1)", &error))
+        << error;
+    ASSERT_TRUE(db.Exec("SELECT * FROM stations", &error) == false);  // not there yet
+  }
+  SqliteStore store(path.string());
+  EXPECT_EQ(store.schema_version(), 5);
+  ASSERT_TRUE(store.HasInstitution("north").value);
+  ASSERT_TRUE(store.AddTrainee({"t1", "north", "T", 1}).ok());
+  SessionRow row;
+  row.uuid = "u1";
+  row.trainee_id = "t1";
+  row.institution = "north";
+  row.case_id = "c";
+  row.case_version = 1;
+  row.station_id = "st-1";
+  row.body_sha256_hex = "h";
+  row.body = "b";
+  StationRow report;
+  report.institution = "north";
+  report.station_id = "st-1";
+  report.last_seen_unix_ms = 7;
+  report.software_version = "0.1.0";
+  row.station = report;
+  WriteBatch b;
+  b.sessions = {row};
+  ASSERT_TRUE(store.CommitBatch(b).ok());
+  ASSERT_EQ(store.ListStations("north").value.size(), 1u);
+  EXPECT_EQ(store.ListStations("north").value[0], report);
   std::filesystem::remove(path);
 }
 

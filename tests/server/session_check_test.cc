@@ -169,6 +169,80 @@ TEST(CheckSessionRecord, StringsAreBoundedAndPrintable) {
   EXPECT_NE(Check(r).find("control character U+001B"), std::string::npos) << Check(r);
 }
 
+// A real-time run's health: 10 minutes of 1 kHz periods on a CAN bus.
+ves::v1::SessionRecord WithHealth() {
+  auto r = Valid();
+  r.set_software_version("0.1.0");
+  auto* h = r.mutable_station_health();
+  h->set_device("can:can0");
+  h->set_loop_cycles(600'000);
+  h->set_loop_cycle_p99_us(412.5);
+  h->set_loop_budget_us(1000);
+  h->set_loop_overruns(3);
+  h->set_safe_state_entries(1);
+  h->set_can_bus_errors(2);
+  return r;
+}
+
+TEST(CheckSessionRecord, StationHealthIsBoundedNamingTheField) {
+  EXPECT_EQ(Check(WithHealth()), "");
+  auto headless = WithHealth();  // simulated time: no loop timing
+  headless.mutable_station_health()->set_loop_cycles(0);
+  headless.mutable_station_health()->set_loop_cycle_p99_us(0);
+  headless.mutable_station_health()->set_loop_overruns(0);
+  EXPECT_EQ(Check(headless), "");
+
+  struct Case {
+    const char* expect;
+    void (*spoil)(ves::v1::StationHealth*);
+  };
+  const Case cases[] = {
+      {"record.station_health.loop_cycle_p99_us = nan: must be finite",
+       [](ves::v1::StationHealth* h) {
+         h->set_loop_cycle_p99_us(std::numeric_limits<double>::quiet_NaN());
+       }},
+      {"record.station_health.loop_cycle_p99_us = -1: must be in [0, 10000000] us",
+       [](ves::v1::StationHealth* h) { h->set_loop_cycle_p99_us(-1); }},
+      {"record.station_health.loop_budget_us = inf: must be finite",
+       [](ves::v1::StationHealth* h) {
+         h->set_loop_budget_us(std::numeric_limits<double>::infinity());
+       }},
+      {"record.station_health.safe_state_entries = 18446744073709551615: more than 1000000000",
+       [](ves::v1::StationHealth* h) { h->set_safe_state_entries(UINT64_MAX); }},
+      {"record.station_health.can_lost_frames = 1000000001: more than 1000000000",
+       [](ves::v1::StationHealth* h) { h->set_can_lost_frames(1'000'000'001); }},
+      {"record.station_health.loop_overruns = 600001: more than loop_cycles 600000",
+       [](ves::v1::StationHealth* h) { h->set_loop_overruns(600'001); }},
+      {"record.station_health.loop_cycle_p99_us = 412.5, loop_overruns = 3: must be 0 when "
+       "loop_cycles is 0",
+       [](ves::v1::StationHealth* h) { h->set_loop_cycles(0); }},
+      {"record.station_health.device = '': must be 1..32 of letters",
+       [](ves::v1::StationHealth* h) { h->set_device(""); }},
+      {"record.station_health.device = 'can:<b>': must be 1..32 of letters",
+       [](ves::v1::StationHealth* h) { h->set_device("can:<b>"); }},
+  };
+  for (const Case& c : cases) {
+    auto r = WithHealth();
+    c.spoil(r.mutable_station_health());
+    EXPECT_EQ(Check(r).rfind(c.expect, 0), 0u) << Check(r);
+  }
+}
+
+TEST(CheckSessionRecord, SoftwareVersionIsAPlainVersionString) {
+  auto r = WithHealth();
+  r.set_software_version("0.2.0-rc1+g1a2b3c");
+  EXPECT_EQ(Check(r), "");
+  r.set_software_version("");  // records of builds that did not set it
+  EXPECT_EQ(Check(r), "");
+  r.set_software_version(std::string(65, '1'));
+  EXPECT_EQ(Check(r).rfind("record.software_version = '1111", 0), 0u) << Check(r);
+  EXPECT_NE(Check(r).find("must be 1..64 of letters, digits and . + - _ ~"), std::string::npos);
+  r.set_software_version("0.1.0\x1b[2J");
+  EXPECT_EQ(Check(r).rfind("record.software_version = '0.1.0\\x1b[2J'", 0), 0u) << Check(r);
+  r.set_software_version("0.1 <script>");
+  EXPECT_EQ(Check(r).rfind("record.software_version = '0.1 <script>'", 0), 0u) << Check(r);
+}
+
 TEST(IsLowerCaseUuid, Shape) {
   EXPECT_TRUE(IsLowerCaseUuid("0f8fad5b-d9cb-469f-a165-70867728950e"));
   EXPECT_FALSE(IsLowerCaseUuid("0f8fad5b-d9cb-469f-a165-70867728950"));

@@ -91,7 +91,8 @@ const std::vector<std::string>& ApiGetRoutes() {
       "/api/v1/sessions/00000000-0000-4000-8000-000000000000/replay",
       "/api/v1/groups/g1/progress",
       "/api/v1/audit",
-      "/api/v1/live"};
+      "/api/v1/live",
+      "/api/v1/stations"};
   return routes;
 }
 
@@ -300,6 +301,91 @@ TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
   EXPECT_EQ(missing.body.find('<'), std::string::npos) << missing.body;
 }
 
+// Stations report with their uploads; the page's API shows an institution's
+// own, with flags on health out of range, and is audited as a read.
+TEST_F(WebApiTest, StationsShowTheirReportedHealthToTheirOwnInstitution) {
+  std::mt19937_64 rng(11);
+  auto record = MakeRecord(NewUuid(rng), "t1", 3);  // newer than SetUp's (seed 1)
+  record.set_station_id(kXss);                      // a station named like markup
+  record.set_software_version("0.1.0");
+  auto* h = record.mutable_station_health();
+  h->set_device("can:can0");
+  h->set_loop_cycles(600'000);
+  h->set_loop_cycle_p99_us(1500);  // over the 1000 us budget
+  h->set_loop_budget_us(1000);
+  h->set_safe_state_entries(1);
+  ves::v1::UploadSessionResponse r;
+  ASSERT_TRUE(UploadSession(server_.Client(station_), record, &r).ok());
+  auto south = MakeRecord(NewUuid(rng), "s1", 4);
+  south.set_station_id("south-station");
+  ASSERT_TRUE(UploadSession(server_.Client(south_station_), south, &r).ok());
+
+  const HttpResult got = Get("/api/v1/stations", supervisor_);
+  ASSERT_EQ(got.status, 200) << got.body;
+  EXPECT_EQ(got.body.find('<'), std::string::npos) << got.body;  // JSON-escaped markup
+  EXPECT_EQ(got.body.find("south-station"), std::string::npos) << got.body;
+  const json stations = json::parse(got.body)["stations"];
+  ASSERT_EQ(stations.size(), 2u) << stations.dump();
+  // By station id: the markup name sorts first ('<' < 's').
+  EXPECT_EQ(stations[0]["station_id"], kXss);
+  EXPECT_EQ(stations[0]["software_version"], "0.1.0");
+  EXPECT_EQ(stations[0]["health"]["loop_cycle_p99_us"], 1500.0);
+  EXPECT_EQ(stations[0]["health"]["safe_state_entries"], 1);
+  EXPECT_EQ(stations[0]["flags"], json::array({"loop_p99", "safe_state"}));
+  // SetUp's upload carried no health: seen, not reported.
+  EXPECT_EQ(stations[1]["station_id"], "station-1");
+  EXPECT_TRUE(stations[1]["health"].is_null());
+  EXPECT_EQ(stations[1]["flags"], json::array());
+  EXPECT_GT(stations[1]["last_seen_unix_ms"].get<int64_t>(), 0);
+
+  // Other institutions and other roles.
+  EXPECT_EQ(Get("/api/v1/stations?institution=south", supervisor_).status, 403);
+  EXPECT_EQ(Get("/api/v1/stations", trainee_t2_).status, 403);
+  EXPECT_EQ(Get("/api/v1/stations", station_).status, 403);
+  // South has its own "station-1" (SetUp's upload) beside "south-station":
+  // stations are keyed by institution and id.
+  const json south_view = json::parse(Get("/api/v1/stations", south_supervisor_).body);
+  ASSERT_EQ(south_view["stations"].size(), 2u) << south_view.dump();
+  EXPECT_EQ(south_view["stations"][0]["station_id"], "south-station");
+  EXPECT_EQ(south_view["stations"][1]["station_id"], "station-1");
+  EXPECT_EQ(south_view["stations"][1]["institution"], "south");
+  EXPECT_EQ(south_view.dump().find("onerror"), std::string::npos) << south_view.dump();
+  EXPECT_EQ(json::parse(Get("/api/v1/stations?institution=south", admin_).body)["stations"],
+            south_view["stations"]);
+
+  // Audited like the other reads: the supervisor's read and the refusals.
+  bool read = false, refused = false;
+  for (int i = 0; i < 100 && !(read && refused); ++i) {
+    const json audit = json::parse(Get("/api/v1/audit?limit=1000", admin_).body);
+    for (const auto& e : audit["entries"]) {
+      if (e["action"] != "station.list") continue;
+      read |= e["target"] == "north" && e["result"] == "OK" && e["role"] == "ROLE_SUPERVISOR";
+      refused |= e["target"] == "south" &&
+                 e["result"].get<std::string>().rfind("PERMISSION_DENIED", 0) == 0;
+    }
+    if (!(read && refused)) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(read);
+  EXPECT_TRUE(refused);
+}
+
+TEST(StationHealthFlags, FlagWhatIsOutOfRange) {
+  v1::StationHealth h;
+  h.set_loop_budget_us(1000);
+  EXPECT_TRUE(StationHealthFlags(h).empty());
+  h.set_loop_cycle_p99_us(1000);  // at the budget: fine
+  h.set_loop_cycles(10);
+  EXPECT_TRUE(StationHealthFlags(h).empty());
+  h.set_loop_cycle_p99_us(1001);
+  EXPECT_EQ(StationHealthFlags(h), std::vector<std::string>{"loop_p99"});
+  h.set_loop_cycle_p99_us(10);
+  h.set_loop_overruns(1);
+  h.set_force_pauses(1);
+  h.set_can_malformed_frames(1);
+  EXPECT_EQ(StationHealthFlags(h),
+            (std::vector<std::string>{"overruns", "safe_state", "can_errors"}));
+}
+
 TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
   const auto error_of = [](const HttpResult& r) {
     return json::parse(r.body)["error"]["message"].get<std::string>();
@@ -343,8 +429,9 @@ TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
 }
 
 TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
-  for (const std::string page : {"/", "/index.html", "/trainees.html", "/trainee.html",
-                                 "/session.html", "/progress.html", "/audit.html"}) {
+  for (const std::string page :
+       {"/", "/index.html", "/trainees.html", "/trainee.html", "/session.html", "/progress.html",
+        "/audit.html", "/live.html", "/stations.html"}) {
     const HttpResult r = Get(page);
     EXPECT_EQ(r.status, 200) << page;
     EXPECT_EQ(r.Header("content-type"), "text/html; charset=utf-8") << page;

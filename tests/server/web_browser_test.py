@@ -4,6 +4,7 @@ driven by Selenium against a real ves-server on loopback. Sign in, the
 trainee list (a trainee named like markup shows as text), a learning curve
 with one point per uploaded session, a session page with its plots, the
 replay scrubbed to the end showing the tip at the session's final depth,
+the live page, the stations page with the health a headless station reported,
 group progress, the audit log (admin), sign-out. Screenshots of each page go
 to --out. Exits 77 (CTest SKIP) with a reason when Chromium cannot run here.
 """
@@ -182,7 +183,7 @@ def main():
              '--server', '127.0.0.1:' + grpc_port, '--token', tokens['station'],
              '--headless', '--operator', 'expert', '--out', os.path.join(work, 'station-out'),
              '--data-dir', os.path.join(work, 'station-data'), '--seconds', '12', '--realtime',
-             '--frame-every-s', '100'],
+             '--frame-every-s', '100', '--station-id', 'browser-station'],
             stdout=station_log, stderr=subprocess.STDOUT)
         try:
             driver.get(base + '/live.html')
@@ -217,12 +218,49 @@ def main():
             log = f.read()
         assert ' frames streamed' in log and 'live: 0 frames' not in log, log[-2000:]
 
+        # Stations: the headless station above reported its health with its
+        # upload; the seeded uploads (web_seed) carried none.
+        version = subprocess.check_output([args.station, '--version'], text=True).split()[-1]
+        subprocess.check_output([args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'],
+                                 't2', 'novice', '1', 'ward-3', 'faulty'], text=True)
+        driver.get(base + '/stations.html')
+        ready('stations')
+        rows = {r.get_attribute('data-station'): [td.text for td in r.find_elements(By.TAG_NAME, 'td')]
+                for r in driver.find_elements(By.CSS_SELECTOR, '#stations tbody tr')}
+        assert set(rows) == {'browser-station', 'web-test-station', 'ward-3'}, rows
+        cells = rows['browser-station']
+        assert cells[0] == 'browser-station' and cells[1].endswith(' UTC'), cells
+        assert cells[2] == version, (cells, version)
+        assert cells[3] == 'sim', cells
+        # Headless runs on simulated time: no loop timing, no overrun count.
+        assert cells[4] == 'not timed (simulated time) / 1000 \u00b5s', cells
+        assert cells[5] == '\u2014', cells
+        safe_state = int(cells[6].split()[0])
+        can_errors = int(cells[7].split()[0])
+        flagged = [td.get_attribute('class') == 'flagged' for td in driver.find_elements(
+            By.CSS_SELECTOR, '#stations tbody tr[data-station="browser-station"] td')]
+        # A cell is flagged exactly when its count is not zero.
+        assert flagged == [False] * 6 + [safe_state > 0, can_errors > 0], (flagged, cells)
+        seeded = rows['web-test-station']
+        assert seeded[2] == version and seeded[3] == 'not reported', seeded
+        # A station whose health is out of range everywhere: every health cell flagged.
+        faulty = rows['ward-3']
+        assert faulty[3:] == ['can:can0', '1500 / 1000 \u00b5s', '12 of 2000',
+                              '1 (1 re-armed, 0 paused)',
+                              '2 (bus 2, lost 0, unsent 0, malformed 0)'], faulty
+        ward = driver.find_element(By.CSS_SELECTOR, '#stations tbody tr[data-station="ward-3"]')
+        assert 'unhealthy' in ward.get_attribute('class').split(), ward.get_attribute('class')
+        flagged = [td.get_attribute('class') == 'flagged'
+                   for td in ward.find_elements(By.TAG_NAME, 'td')]
+        assert flagged == [False] * 4 + [True] * 4, flagged
+        shot('08-stations')
+
         # Group progress.
         driver.get(base + '/progress.html?group=g1')
         ready('progress')
         rows = [r.text for r in driver.find_elements(By.CSS_SELECTOR, '#progress tbody tr')]
         assert len(rows) == 2 and rows[0].startswith('t1') and rows[1].startswith('t2'), rows
-        shot('08-progress')
+        shot('09-progress')
 
         # Sign out: the pages send us back to sign-in.
         driver.find_element(By.ID, 'sign-out').click()
@@ -241,7 +279,7 @@ def main():
         actions = [r.find_elements(By.TAG_NAME, 'td')[5].text
                    for r in driver.find_elements(By.CSS_SELECTOR, '#audit tbody tr')]
         assert 'session.upload' in actions and 'trainee.curve' in actions, actions
-        shot('09-audit')
+        shot('10-audit')
         driver.find_element(By.ID, 'sign-out').click()
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
         print('web_browser_test: all pages checked; screenshots in ' + args.out)

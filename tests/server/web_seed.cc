@@ -6,6 +6,9 @@
 //     a scripted operator's session on the sample case, uploaded as a station
 //     does; prints {"uuid": ..., "final_tip_arc_m": ...} (the recording run's
 //     own last tip depth, independent of the server's replay).
+//   web_seed upload ... SECONDS STATION_ID faulty
+//     the same from STATION_ID with a fixture StationHealth whose every
+//     figure is out of range (the stations page's flags).
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -52,7 +55,7 @@ int main(int argc, char** argv) {
       std::cout << out.dump() << "\n";
       return 0;
     }
-    if (mode == "upload" && argc == 7) {
+    if (mode == "upload" && (argc == 7 || argc == 9)) {
       const auto colon_case = ts::SampleCase();
       ves::v1::SessionRecord record;
       double final_tip_arc_m = 0;
@@ -63,7 +66,22 @@ int main(int argc, char** argv) {
             final_tip_arc_m = runner.observation().tip_arc_m;
           });
       record.set_trainee_id(argv[4]);
-      record.set_station_id("web-test-station");
+      record.set_station_id(argc == 9 ? argv[7] : "web-test-station");
+      if (argc == 9 && std::string(argv[8]) == "faulty") {
+        // A fixture, not a measurement: the health a station with a slow
+        // loop, a bus-off and CAN errors would report, for the flags.
+        auto* h = record.mutable_station_health();
+        h->set_device("can:can0");
+        h->set_loop_cycles(2000);
+        h->set_loop_cycle_p99_us(1500);
+        h->set_loop_budget_us(1000);
+        h->set_loop_overruns(12);
+        h->set_safe_state_entries(1);
+        h->set_can_bus_errors(2);
+      } else if (argc == 9) {
+        std::cerr << "web_seed: HEALTH '" << argv[8] << "' must be faulty\n";
+        return 2;
+      }
       record.set_case_id(colon_case.id());
       record.set_case_version(colon_case.version());
       record.set_case_sha256_hex(ves::patient_db::CasePayloadSha256Hex(colon_case));
@@ -89,7 +107,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     std::cerr << "usage: web_seed setup DB_URL | web_seed upload ADDRESS TOKEN TRAINEE "
-                 "OPERATOR SECONDS\n";
+                 "OPERATOR SECONDS [STATION_ID faulty]\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "web_seed: " << e.what() << "\n";

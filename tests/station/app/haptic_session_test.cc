@@ -107,6 +107,49 @@ TEST_F(SessionModelSourceTest, TheLogAloneReplaysTheModelExactly) {
   EXPECT_EQ(replay.session().metrics(), runner_.session().metrics());
 }
 
+TEST(MakeStationHealth, CarriesTheCountersTheFaultsAndTheLoopsTail) {
+  haptics::DeviceCounters counters;
+  counters.bus_errors = 3;
+  counters.lost_frames = 5;
+  counters.send_failures = 7;
+  counters.malformed_frames = 11;
+  haptics::SafetyMonitor safety;
+  safety.Rearm();
+  safety.Trip(haptics::SafetyFault::kBusOff);  // one safe-state entry
+  haptics::LoopStats loop;
+  for (int i = 0; i < 980; ++i) loop.cycle_end.Add(200'400);  // ns
+  for (int i = 0; i < 20; ++i) loop.cycle_end.Add(1'500'000);
+  loop.cycles = 1000;
+  loop.overruns = 20;
+
+  const ves::v1::StationHealth h = MakeStationHealth("can:can0", counters, safety, &loop, 0.001);
+  EXPECT_EQ(h.device(), "can:can0");
+  EXPECT_EQ(h.loop_cycles(), 1000u);
+  EXPECT_EQ(h.loop_cycle_p99_us(), 1500.0);  // 2 % of the cycles ended 1.5 ms after the deadline
+  EXPECT_EQ(h.loop_budget_us(), 1000.0);
+  EXPECT_EQ(h.loop_overruns(), 20u);
+  EXPECT_EQ(h.safe_state_entries(), 1u);
+  EXPECT_EQ(h.force_pauses(), 0u);
+  EXPECT_EQ(h.can_bus_errors(), 3u);
+  EXPECT_EQ(h.can_lost_frames(), 5u);
+  EXPECT_EQ(h.can_send_failures(), 7u);
+  EXPECT_EQ(h.can_malformed_frames(), 11u);
+
+  // 1 % in the tail: the p99 is still the bulk.
+  haptics::LoopStats light;
+  for (int i = 0; i < 990; ++i) light.cycle_end.Add(200'400);
+  for (int i = 0; i < 10; ++i) light.cycle_end.Add(1'500'000);
+  light.cycles = 1000;
+  EXPECT_EQ(MakeStationHealth("sim", counters, safety, &light, 0.001).loop_cycle_p99_us(), 201.0);
+
+  // Headless (simulated time): no loop timing, the counts still.
+  const ves::v1::StationHealth headless = MakeStationHealth("sim", {}, safety, nullptr, 0.001);
+  EXPECT_EQ(headless.loop_cycles(), 0u);
+  EXPECT_EQ(headless.loop_cycle_p99_us(), 0.0);
+  EXPECT_EQ(headless.safe_state_entries(), 1u);
+  EXPECT_EQ(headless.can_bus_errors(), 0u);
+}
+
 TEST(HandForSample, ForceSamplesPushAndPositionSamplesGripTheScope) {
   training::InputSample push;
   push.thrust_mode = training::ThrustMode::kForce;

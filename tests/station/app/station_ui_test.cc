@@ -15,11 +15,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 
+#include "station/sync/outbox.h"
+#include "station/sync/station_paths.h"
 #include "station/ui/training_screen.h"
 #include "tests/station/app/station_fixture.h"
 #include "tests/station/app/xwd_image.h"
@@ -369,6 +373,34 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   EXPECT_EQ(quit.exit_code, 0) << quit.out << quit.err;
   EXPECT_FALSE(CommittedUuid(quit.out).empty()) << quit.out;
   EXPECT_NE(quit.out.find("hard_faults=0"), std::string::npos) << quit.out;
+
+  // The committed record carries the health the real-time loop measured
+  // (docs/station-run.md, "Station health"): the figures of the device line.
+  sync::Outbox outbox(sync::ResolveStationPaths(data.string()).outbox_db());
+  const std::optional<ves::v1::SessionRecord> record = outbox.Find(CommittedUuid(quit.out));
+  ASSERT_TRUE(record.has_value());
+  const ves::v1::StationHealth& health = record->station_health();
+  std::cout << "station health of the interactive run: " << health.ShortDebugString() << "\n";
+  const auto figure = [&](const std::string& key) {
+    const size_t at = quit.out.find(" " + key + "=");
+    if (at == std::string::npos) return std::string("missing");
+    const size_t from = at + key.size() + 2;
+    return quit.out.substr(from, quit.out.find_first_of(" \n", from) - from);
+  };
+  EXPECT_EQ(health.device(), "sim");
+  EXPECT_EQ(health.loop_budget_us(), 1000.0);
+  EXPECT_GT(health.loop_cycles(), 0u);
+  EXPECT_EQ(std::to_string(health.loop_cycles()), figure("loop_cycles")) << quit.out;
+  EXPECT_EQ(std::to_string(health.loop_overruns()), figure("overruns")) << quit.out;
+  char p99[32];
+  std::snprintf(p99, sizeof p99, "%.0f", health.loop_cycle_p99_us());
+  EXPECT_EQ(p99, figure("p99_cycle_end_us")) << quit.out;
+  EXPECT_GT(health.loop_cycle_p99_us(), 0.0);
+  // Each 30 ms stop above ends at least one cycle past its next deadline.
+  EXPECT_GE(health.loop_overruns(), 5u);
+  EXPECT_EQ(health.safe_state_entries(), 0u);  // hard_faults=0
+  EXPECT_EQ(std::to_string(health.can_bus_errors()), figure("bus_errors")) << quit.out;
+  EXPECT_EQ(std::to_string(health.can_lost_frames()), figure("lost_frames")) << quit.out;
 }
 
 TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {

@@ -123,6 +123,9 @@ TEST(HapticLoop, RunsOnTheWallClockWithTheDeviceOnItsOwnThread) {
 
   EXPECT_GE(loop.stats().cycles, 100u);
   EXPECT_EQ(loop.stats().period_error.count(), loop.stats().cycles);
+  // Every cycle's end is counted, and none ends before its own deadline.
+  EXPECT_EQ(loop.stats().cycle_end.count(), loop.stats().cycles);
+  EXPECT_GE(loop.stats().cycle_end.PercentileNs(0.5), loop.stats().period_error.PercentileNs(0.5));
   EXPECT_GT(latest.cycle, 0u);
   HapticSnapshot popped;
   std::uint64_t popped_count = 0;
