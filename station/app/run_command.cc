@@ -262,14 +262,7 @@ class FrameWriter {
   std::string EndoscopeJpeg(const training::SessionRunner& runner, training::ViewMode mode) {
     if (!views_) return {};
     render::FillSceneFromModel(params_, runner.state(), &runner.output(), {}, &scene_);
-    const cv::Mat image = views_->Endoscope(scene_, mode);
-    if (image.empty()) return {};
-    cv::Mat small;
-    cv::resize(image, small, cv::Size(320, std::max(1, image.rows * 320 / std::max(1, image.cols))),
-               0, 0, cv::INTER_AREA);
-    std::vector<uchar> bytes;
-    if (!cv::imencode(".jpg", small, bytes, {cv::IMWRITE_JPEG_QUALITY, 70})) return {};
-    return std::string(bytes.begin(), bytes.end());
+    return EncodeLiveJpeg(views_->Endoscope(scene_, mode));
   }
 
  private:
@@ -592,15 +585,17 @@ int Run(RunOptions o) {
   std::vector<ves::v1::SessionRecord> records;
   for (;;) {
     try {
+      const InteractiveLiveTarget live{o.live ? o.server : std::nullopt, obtained->entry.id,
+                                       obtained->entry.version};
       interactive = RunInteractive(run, obtained->colon_case, o.seconds, std::move(device),
                                    o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
-                                   o.lesson_plan ? nullptr : &choices);
+                                   o.lesson_plan ? nullptr : &choices, &live);
     } catch (const std::exception& error) {  // no display, the device did not come up
       std::cerr << kName << ": " << error.what() << "\n";
       if (records.empty()) return kExitFailed;
       break;  // what the earlier runs recorded is still committed below
     }
-    std::cout << interactive.device_report << "\n";
+    std::cout << interactive.device_report << "\n" << interactive.live_report;
     for (auto& record : interactive.records) records.push_back(std::move(record));
     if (!interactive.next_case || !interactive.next_scope) break;
     try {

@@ -1,13 +1,16 @@
 #include "station/app/run_interactive.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -15,6 +18,7 @@
 #include "patient_db/case_geometry.h"
 #include "patient_db/case_regions.h"
 #include "station/app/haptic_session.h"
+#include "station/app/live_publish.h"
 #include "station/app/run_sync.h"
 #include "station/app/run_views.h"
 #include "station/haptics/candump_log.h"
@@ -59,6 +63,11 @@ struct PanelNumbers {
   double loop_s{0.0};
   double xray_s{0.0};
   double redout_fraction{0.0};
+  // For live proctoring (the UI thread streams them): the session's uuid
+  // (the record's) and the figures of its latest step; fixed sizes, so the
+  // loop copies them without allocating.
+  std::array<char, 40> session_uuid{};
+  LiveFigures live;
 };
 struct Published {
   model::ModelState state;
@@ -120,6 +129,7 @@ class LoopSession {
       repeats_done_ = requested;
       FinishAndKeep();
       runner_.Repeat();
+      session_uuid_ = training::NewUuidV4();  // a one-off, like FinishAndKeep's record
       final_published_ = false;
       source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
     });
@@ -161,6 +171,10 @@ class LoopSession {
     numbers.loop_s = metrics.loop_s;
     numbers.xray_s = metrics.xray_s;
     numbers.redout_fraction = runner_.observation().redout_fraction;
+    std::memset(numbers.session_uuid.data(), 0, numbers.session_uuid.size());
+    std::memcpy(numbers.session_uuid.data(), session_uuid_.data(),
+                std::min(session_uuid_.size(), numbers.session_uuid.size() - 1));
+    numbers.live = LiveFiguresOf(runner_);
     ++published_->sequence;
     return true;
   }
@@ -173,8 +187,8 @@ class LoopSession {
     result_.result = training::ResultOf(runner_);
     const auto duration_ms =
         static_cast<std::int64_t>(std::llround(result_.result.metrics.duration_s * 1e3));
-    ves::v1::SessionRecord record =
-        session.ToRecord(training::NewUuidV4(), start_ms_ + duration_ms);
+    // The uuid its live stream used: the server's live view and record agree.
+    ves::v1::SessionRecord record = session.ToRecord(session_uuid_, start_ms_ + duration_ms);
     *record.mutable_replay_setup() = training::MakeReplaySetup(colon_case_, {}, time_limit_s_);
     result_.records.push_back(std::move(record));
   }
@@ -191,6 +205,7 @@ class LoopSession {
   int steps_since_publish_{0};
   bool final_published_{false};
   std::int64_t start_ms_{0};
+  std::string session_uuid_{training::NewUuidV4()};
   InteractiveResult result_;
 };
 
@@ -428,7 +443,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
                              const ves::v1::LessonAids* lesson_aids,
                              const InteractiveChoices* choices, const std::string& device_label,
                              ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
-                             haptics::SeqLock<HandTarget>* hand) {
+                             haptics::SeqLock<HandTarget>* hand, InteractiveLive* live) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
   auto enforce_aids = [lesson_aids](ui::ControlState* c) {
@@ -455,9 +470,9 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   PanelNumbers numbers;
   std::uint64_t shown_sequence = 0;
   while (!controls.quit_requested) {
-    if (loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers)) {
-      render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
-    }
+    const bool fresh =
+        loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
+    if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
     cv::Mat endoscope;
@@ -470,6 +485,15 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       fluoro.damage_display = controls.damage_display;
       endoscope = views->Endoscope(scene, controls.view_mode);
       if (controls.fluoroscopy_visible) fluoroscopy = views->Fluoroscopy(scene, fluoro);
+    }
+    if (fresh) {
+      // Built here, not in the loop: the 1 kHz thread only copied plain values.
+      live->OnPublication(
+          numbers.session_uuid.data(), numbers.state == training::SessionState::kRunning,
+          numbers.live.t_s, [&] { return MakeLiveFrame(shown_state, numbers.live); },
+          [&] { return EncodeLiveJpeg(endoscope); });
+    } else {
+      live->Poll();
     }
     window->Show(ui::ComposeScreen(window->layout(), endoscope, fluoroscopy, screen, controls));
     window->Poll(kPollMs, screen, &controls);
@@ -497,16 +521,23 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
-                                 const InteractiveChoices* choices) {
+                                 const InteractiveChoices* choices,
+                                 const InteractiveLiveTarget* live_target) {
   ui::TrainingWindow window;  // throws first when there is no display
   SessionViews views(run.params, colon_case);
   haptics::SeqLock<HandTarget> hand;
   InteractiveRig rig(std::move(device), run.params.dt_s, &hand);
+  InteractiveLive live(live_target ? live_target->server : std::nullopt, run.config.trainee_id,
+                       live_target ? live_target->case_id : colon_case.id(),
+                       live_target ? live_target->case_version : 0);
   CoupledLoop loop(run, colon_case, time_limit_s, &rig);
   const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
-                                            &window, &views, &loop, &hand);
+                                            &window, &views, &loop, &hand, &live);
   loop.Stop();
   InteractiveResult result = loop.Finish();
+  std::ostringstream live_report;
+  live.Finish(live_report);
+  result.live_report = live_report.str();
   result.next_case = exit.next_case;
   result.next_scope = exit.next_scope;
   return result;

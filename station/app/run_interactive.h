@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "station/haptics/can_bus.h"
+#include "station/sync/server_client.h"
 #include "station/training/case_run.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
@@ -22,6 +23,7 @@ struct InteractiveResult {
   std::vector<ves::v1::SessionRecord> records;
   training::RunResult result;  // of the last one
   std::string device_report;   // DeviceReportLine of the run
+  std::string live_report;     // "live: ..." when it streamed; "" otherwise
   // Set when the trainee chose another case or scope on the panel and pressed
   // "repeat": indices into InteractiveChoices; the caller starts that run.
   std::optional<int> next_case;
@@ -44,6 +46,14 @@ struct InteractiveDevice {
   std::string can_log;  // candump log of every frame; empty: none
 };
 
+// Live proctoring of the run's sessions (docs/station-run.md): each session
+// streams to `server` while it runs; nullopt (no --server, --no-live): none.
+struct InteractiveLiveTarget {
+  std::optional<sync::ServerEndpoint> server;
+  std::string case_id;
+  uint32_t case_version{0};
+};
+
 // Runs until the trainee quits (q / Esc) or the time limit of a session
 // passes and the trainee quits. Throws std::runtime_error when there is no
 // display or the device does not come up, render::RenderError when the views
@@ -53,10 +63,12 @@ struct InteractiveDevice {
 // the wireframe view falls back to flat polygons.
 // `choices`: the panel's case and scope lists; choosing another entry and
 // pressing "repeat" ends this run with next_case/next_scope set.
+// `live`: where the sessions stream (null: nowhere).
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
                                  const ves::v1::LessonAids* lesson_aids = nullptr,
-                                 const InteractiveChoices* choices = nullptr);
+                                 const InteractiveChoices* choices = nullptr,
+                                 const InteractiveLiveTarget* live = nullptr);
 
 }  // namespace ves::station

@@ -75,6 +75,31 @@ LiveStreamStats LiveStreamer::Close(int wait_ms) {
   return out;
 }
 
+void LiveStreamer::RequestClose(int wait_ms) {
+  std::lock_guard lock(mutex_);
+  if (closing_) return;
+  closing_ = true;
+  cancel_at_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
+  cv_.notify_all();
+}
+
+bool LiveStreamer::Reap(LiveStreamStats* stats) {
+  if (!finished_.load(std::memory_order_acquire)) {
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    // A stream stuck on a dead network is cancelled rather than waited for.
+    if (lock.owns_lock() && closing_ && context_ != nullptr &&
+        std::chrono::steady_clock::now() >= cancel_at_) {
+      context_->TryCancel();
+    }
+    return false;
+  }
+  if (thread_.joinable()) thread_.join();  // it has returned: no wait
+  std::lock_guard lock(mutex_);
+  *stats = stats_;
+  stats->dropped = dropped_.load();
+  return true;
+}
+
 void LiveStreamer::Run() {
   for (int attempt = 0; attempt < kMaxConnectAttempts; ++attempt) {
     {
@@ -94,6 +119,7 @@ void LiveStreamer::Run() {
   if (!closing_) stats_.gave_up = true;
   connected_ = false;
   cv_.notify_all();
+  finished_.store(true, std::memory_order_release);
 }
 
 bool LiveStreamer::Stream() {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -49,6 +50,14 @@ class LiveStreamer {
   // Ends the stream (WritesDone, Finish), waiting at most `wait_ms` before
   // cancelling it, and joins the thread.
   LiveStreamStats Close(int wait_ms = 2000);
+  // Hands the end of the stream to the streamer's own thread and returns at
+  // once (interactive runs: a session ends while the windows keep drawing).
+  // Offers after it drop. Poll with Reap; Close still works afterwards.
+  void RequestClose(int wait_ms = 2000);
+  // After RequestClose, never blocks: true (and `*stats` set) once the thread
+  // has ended and been joined; a stream still open `wait_ms` after the
+  // request is cancelled here.
+  bool Reap(LiveStreamStats* stats);
 
  private:
   void Run();
@@ -64,6 +73,8 @@ class LiveStreamer {
   grpc::ClientContext* context_ = nullptr;  // the live call's, guarded by mutex_
   LiveStreamStats stats_;                   // guarded by mutex_
   std::atomic<uint64_t> dropped_{0};
+  std::atomic<bool> finished_{false};  // Run() returned
+  std::chrono::steady_clock::time_point cancel_at_{};  // guarded by mutex_
   std::thread thread_;
 };
 

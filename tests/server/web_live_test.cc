@@ -4,7 +4,8 @@
 // roles and no authentication are refused; a viewer that never reads does
 // not hold up the station or a reading viewer; malformed frames end the
 // stream with INVALID_ARGUMENT naming the field; the station's LiveStreamer
-// streams when the server is there and never blocks when it is not.
+// streams when the server is there and never blocks when it is not, and
+// ends a stream in the background (RequestClose, Reap) for interactive runs.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -408,6 +409,47 @@ TEST_F(WebLiveTest, StationStreamerReachesAViewer) {
   EXPECT_EQ(stats.last_error, "");
 }
 
+// Interactive runs end a session's stream without waiting (RequestClose);
+// the stream's own thread finishes it and the viewer sees it end.
+TEST_F(WebLiveTest, AStreamEndedInTheBackgroundEndsForTheViewer) {
+  sync::ServerEndpoint endpoint;
+  endpoint.address = server_.address();
+  endpoint.token = station_;
+  sync::LiveStreamer streamer(endpoint, FirstFrame(uuid_, "t1"));
+  ASSERT_TRUE(WaitListed(uuid_));
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(port(), uuid_, supervisor_), 101) << viewer.body();
+  std::atomic<bool> seen{false};
+  std::thread offerer([&] {
+    for (int k = 1; k <= 2000 && !seen; ++k) {
+      streamer.Offer(FrameAt(k));
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  });
+  const json f = viewer.Read();
+  seen = true;
+  offerer.join();
+  ASSERT_FALSE(f.is_null());
+  streamer.RequestClose();
+  streamer.Offer(FrameAt(5000));  // after the request: dropped, not sent
+  json last;
+  do {
+    last = viewer.Read();
+  } while (!last.is_null() && !last.value("ended", false));
+  EXPECT_EQ(last.value("ended", false), true) << last.dump();
+  sync::LiveStreamStats stats;
+  bool reaped = false;
+  for (int i = 0; i < 1000 && !(reaped = streamer.Reap(&stats)); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(reaped) << "the stream's thread did not end";
+  EXPECT_GT(stats.sent, 0u);
+  EXPECT_GE(stats.dropped, 1u);
+  EXPECT_EQ(stats.last_error, "");
+  EXPECT_FALSE(stats.gave_up);
+  EXPECT_TRUE(LiveList(supervisor_).empty());
+}
+
 TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
   // A port nothing listens on: the stream cannot start; offers only drop.
   asio::io_context io;
@@ -422,6 +464,29 @@ TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
   const sync::LiveStreamStats stats = streamer.Close(0);
   EXPECT_EQ(stats.sent, 0u);
   EXPECT_EQ(stats.dropped, 100u);
+}
+
+TEST(LiveStreamerOffline, RequestCloseLeavesTheEndToItsThread) {
+  asio::io_context io;
+  tcp::acceptor probe(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
+  const int closed_port = probe.local_endpoint().port();
+  probe.close();
+  sync::ServerEndpoint endpoint;
+  endpoint.address = "127.0.0.1:" + std::to_string(closed_port);
+  endpoint.token = "0123456789abcdef";
+  sync::LiveStreamer streamer(endpoint, FirstFrame("u", "t1"));
+  for (int k = 0; k < 50; ++k) streamer.Offer(FrameAt(k));
+  streamer.RequestClose();
+  sync::LiveStreamStats stats;
+  bool reaped = false;
+  for (int i = 0; i < 1000 && !(reaped = streamer.Reap(&stats)); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(reaped) << "the stream's thread did not end";
+  EXPECT_EQ(stats.sent, 0u);
+  EXPECT_EQ(stats.dropped, 50u);
+  // Reaped: Close has nothing left to wait for.
+  EXPECT_EQ(streamer.Close(0).dropped, 50u);
 }
 
 TEST(LiveStreamerEndpoint, RefusesTheTokenInClearOffLoopback) {

@@ -45,14 +45,19 @@ void StationFixture::TearDown() {
   std::filesystem::remove_all(dir_, ignored);
 }
 
-void StationFixture::StartServer(int port) {
+void StationFixture::StartServer(int port, bool http) {
   const auto port_file = dir_ / "port";
+  const auto http_port_file = dir_ / "http-port";
   std::filesystem::remove(port_file);
-  server_ = std::make_unique<ChildProcess>(
-      std::vector<std::string>{kServerBin, "--listen", "127.0.0.1:" + std::to_string(port),
-                               "--db", db_, "--insecure-loopback", "--port-file",
-                               port_file.string(), "--drain-s", "2", "--quiet"},
-      dir_ / ("server-" + std::to_string(++log_counter_)));
+  std::filesystem::remove(http_port_file);
+  std::vector<std::string> argv = {kServerBin, "--listen", "127.0.0.1:" + std::to_string(port),
+                                   "--db", db_, "--insecure-loopback", "--port-file",
+                                   port_file.string(), "--drain-s", "2", "--quiet"};
+  if (http) {
+    argv.insert(argv.end(),
+                {"--http", "127.0.0.1:0", "--http-port-file", http_port_file.string()});
+  }
+  server_ = std::make_unique<ChildProcess>(argv, dir_ / ("server-" + std::to_string(++log_counter_)));
   for (int i = 0; i < 300 && !std::filesystem::exists(port_file); ++i) {
     ASSERT_TRUE(server_->Running()) << ReadFile(dir_ / ("server-" + std::to_string(log_counter_) +
                                                         ".err"));
@@ -60,6 +65,14 @@ void StationFixture::StartServer(int port) {
   }
   ASSERT_TRUE(std::filesystem::exists(port_file)) << "ves-server did not start";
   port_ = std::stoi(ReadFile(port_file));
+  http_port_ = 0;
+  if (http) {
+    for (int i = 0; i < 300 && ReadFile(http_port_file).empty(); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    ASSERT_FALSE(ReadFile(http_port_file).empty()) << "ves-server wrote no --http-port-file";
+    http_port_ = std::stoi(ReadFile(http_port_file));
+  }
   address_ = "127.0.0.1:" + std::to_string(port_);
 }
 

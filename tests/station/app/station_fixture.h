@@ -28,8 +28,9 @@ class StationFixture : public ::testing::Test {
   void SetUp() override;
   void TearDown() override;
 
-  // Starts ves-server on `port` (0: a free one) over the fixture's database.
-  void StartServer(int port = 0);
+  // Starts ves-server on `port` (0: a free one) over the fixture's database;
+  // with `http`, also its web listener on a free loopback port (http_port_).
+  void StartServer(int port = 0, bool http = false);
   void StopServer();
   ProcessResult Admin(std::vector<std::string> args);
   // `ves-station ARGS`; `env` NAME=VALUE added.
@@ -47,6 +48,7 @@ class StationFixture : public ::testing::Test {
   std::string db_;
   std::string address_;
   int port_{0};
+  int http_port_{0};
   std::string admin_token_;
   std::string station_token_;
   std::string supervisor_token_;

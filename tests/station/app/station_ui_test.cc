@@ -8,12 +8,22 @@
 // VES_TEST_SHOTS_DIR set, the screenshots are also written there as PNG.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+#include <mutex>
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iostream>
 #include <opencv2/core.hpp>
@@ -25,6 +35,7 @@
 #include "station/sync/outbox.h"
 #include "station/sync/station_paths.h"
 #include "station/ui/training_screen.h"
+#include "tests/server/web_client.h"
 #include "tests/station/app/station_fixture.h"
 #include "tests/station/app/xwd_image.h"
 
@@ -56,6 +67,41 @@ bool OnPath(const std::string& program) {
   }
   return false;
 }
+
+// A supervisor's WebSocket view of one live session (docs/web.md): reads
+// fail after 10 s of silence rather than hang the test.
+class LiveViewer {
+ public:
+  int Connect(int http_port, const std::string& session_uuid, const std::string& token) {
+    namespace beast = boost::beast;
+    boost::asio::ip::tcp::resolver resolver(io_);
+    boost::asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(http_port)));
+    const timeval timeout{10, 0};
+    ::setsockopt(ws_.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &timeout,
+                 sizeof timeout);
+    ws_.set_option(beast::websocket::stream_base::decorator(
+        [=](beast::websocket::request_type& req) {
+          req.set(beast::http::field::authorization, "Bearer " + token);
+        }));
+    beast::websocket::response_type res;
+    beast::error_code ec;
+    ws_.handshake(res, "127.0.0.1:" + std::to_string(http_port),
+                  "/api/v1/live/ws?session=" + session_uuid, ec);
+    return static_cast<int>(res.result_int());
+  }
+  // The next frame; null when the socket closed or stayed silent.
+  nlohmann::json Read() {
+    boost::beast::flat_buffer buffer;
+    boost::beast::error_code ec;
+    ws_.read(buffer, ec);
+    if (ec) return nlohmann::json();
+    return nlohmann::json::parse(boost::beast::buffers_to_string(buffer.data()));
+  }
+
+ private:
+  boost::asio::io_context io_;
+  boost::beast::websocket::stream<boost::asio::ip::tcp::socket> ws_{io_};
+};
 
 // Share of the pixels of `region` that changed between two screenshots.
 double ChangedShare(const cv::Mat& a, const cv::Mat& b, const cv::Rect& region) {
@@ -492,6 +538,141 @@ TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) 
   EXPECT_NE(quit.out.find("fluoroscopy not allowed: xray_s 0 = 0: ok"), std::string::npos)
       << quit.out;
   EXPECT_NE(quit.out.find("wireframe not allowed: not used"), std::string::npos) << quit.out;
+}
+
+// Live proctoring of an interactive run (docs/station-run.md, "Live
+// proctoring"): each session streams while it runs, a repeat ends one stream
+// and opens the next, a supervisor's viewer sees the tip move while the keys
+// push the scope; the server killed mid-session stalls neither the loop nor
+// the windows: the session runs to its time limit, frames are dropped and
+// counted, no safe state.
+TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
+  StopServer();
+  StartServer(0, /*http=*/true);
+  const fs::path data = dir_ / "station";
+  StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--server", address_,
+                "--token", station_token_, "--data-dir", data.string(), "--seconds", "45"});
+  ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(WaitForScreen().empty());
+  // The uuids of the sessions the server lists as live now.
+  std::string last_list;  // the last answer, for failure messages
+  const auto live_list = [&] {
+    std::vector<std::string> uuids;
+    const server::testing::HttpResult r = server::testing::HttpCall(
+        http_port_, "GET", "/api/v1/live", {{"Authorization", "Bearer " + supervisor_token_}});
+    last_list = std::to_string(r.status) + " " + r.body;
+    if (r.status != 200) return uuids;
+    const nlohmann::json listed = nlohmann::json::parse(r.body);
+    for (const auto& l : listed["live"]) {
+      if (l.value("trainee_id", "") == std::string(kTrainee)) {
+        uuids.push_back(l.value("session_uuid", ""));
+      }
+    }
+    return uuids;
+  };
+  const auto wait_list = [&](const std::function<bool(const std::vector<std::string>&)>& ok) {
+    std::vector<std::string> uuids;
+    for (int i = 0; i < 300; ++i) {
+      uuids = live_list();
+      if (ok(uuids)) break;
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+    return uuids;
+  };
+  const std::vector<std::string> first =
+      wait_list([](const auto& u) { return u.size() == 1; });
+  ASSERT_EQ(first.size(), 1u) << "the first session is not live: " << last_list << "\n"
+                               << ReadFile(dir_ / "interactive.out")
+                               << ReadFile(dir_ / "interactive.err");
+  // r: a new session (45 s from now); its stream replaces the first one's.
+  Keys({"r"});
+  const std::vector<std::string> second = wait_list(
+      [&](const auto& u) { return u.size() == 1 && u[0] != first[0]; });
+  ASSERT_EQ(second.size(), 1u) << "the repeated session is not live alone: " << last_list;
+  ASSERT_NE(second[0], first[0]);
+
+  LiveViewer viewer;
+  ASSERT_EQ(viewer.Connect(http_port_, second[0], supervisor_token_), 101);
+  std::mutex seen_mutex;
+  std::vector<double> tip_arc_m;
+  double last_t_s = 0.0;
+  int jpegs = 0;
+  std::thread reader([&] {
+    for (;;) {
+      const nlohmann::json f = viewer.Read();
+      if (f.is_null() || f.value("ended", false)) return;
+      std::lock_guard lock(seen_mutex);
+      tip_arc_m.push_back(f["tip_arc_m"].get<double>());
+      last_t_s = f["t_s"].get<double>();
+      if (f.contains("jpeg_base64")) ++jpegs;
+    }
+  });
+  // w (x12): the hand pushes the scope in 60 mm; the viewer sees the tip go deeper.
+  Keys({"w", "w", "w", "w", "w", "w", "w", "w", "w", "w", "w", "w"});
+  double moved_m = 0.0;
+  for (int i = 0; i < 100 && moved_m < 0.02; ++i) {
+    std::this_thread::sleep_for(milliseconds(200));
+    std::lock_guard lock(seen_mutex);
+    if (!tip_arc_m.empty()) {
+      moved_m = *std::max_element(tip_arc_m.begin(), tip_arc_m.end()) - tip_arc_m.front();
+    }
+  }
+  size_t frames_seen = 0;
+  double t_at_kill_s = 0.0;
+  {
+    std::lock_guard lock(seen_mutex);
+    frames_seen = tip_arc_m.size();
+    t_at_kill_s = last_t_s;
+  }
+  EXPECT_GT(moved_m, 0.02) << frames_seen << " frames seen";
+  EXPECT_GE(frames_seen, 10u);
+  EXPECT_GT(jpegs, 0) << "no endoscope image among " << frames_seen << " frames";
+  EXPECT_LT(t_at_kill_s, 40.0) << "the session nearly ended before the server was killed";
+
+  // The server dies mid-session: the viewer's socket closes; the station goes on.
+  ASSERT_EQ(::kill(server_->pid(), SIGKILL), 0);
+  server_->Wait(seconds(30));
+  server_.reset();
+  reader.join();
+  // The windows go on: the session clock runs and the figures follow the keys.
+  const cv::Mat before = Shot("server-killed");
+  Keys({"s", "s", "s", "s"});
+  const cv::Mat after = Shot("pulled-back");
+  EXPECT_GT(ChangedShare(before, after, layout_.status), 0.0) << "the session clock stopped";
+  EXPECT_GT(ChangedShare(before, after, layout_.figures), 0.0) << "the figures stopped";
+  // The session runs to its 45 s time limit: the "session over" banner.
+  cv::Mat over;
+  for (int i = 0; i < 60 && !BannerShown(over, layout_.banner); ++i) {
+    std::this_thread::sleep_for(seconds(2));
+    over = Shot("waiting-for-the-end");
+    ASSERT_TRUE(station_->Running()) << ReadFile(dir_ / "interactive.err");
+  }
+  ASSERT_TRUE(BannerShown(over, layout_.banner)) << "the session did not run to its end";
+
+  Keys({"q"});
+  const ProcessResult quit = station_->Wait(seconds(60));
+  std::cout << "the interactive run's output:\n" << quit.out;
+  EXPECT_EQ(quit.exit_code, 0) << quit.out << quit.err;
+  EXPECT_NE(quit.out.find("hard_faults=0"), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find("outcome=timed_out"), std::string::npos) << quit.out;
+  // Both sessions' records carry the uuids their streams used.
+  EXPECT_NE(quit.out.find("session " + first[0] + " committed"), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find("session " + second[0] + " committed"), std::string::npos) << quit.out;
+  // "live: 2 sessions, N frames streamed, M dropped (...)": frames went out
+  // before the kill, and were dropped (counted) after it.
+  unsigned long long sent = 0, dropped = 0;
+  const size_t at = quit.out.find("live: 2 sessions, ");
+  ASSERT_NE(at, std::string::npos) << quit.out;
+  ASSERT_EQ(std::sscanf(quit.out.c_str() + at, "live: 2 sessions, %llu frames streamed, %llu dropped",
+                        &sent, &dropped),
+            2)
+      << quit.out;
+  EXPECT_GE(sent, frames_seen);
+  EXPECT_GT(dropped, 0u);
+  sync::Outbox outbox(sync::ResolveStationPaths(data.string()).outbox_db());
+  const std::optional<ves::v1::SessionRecord> record = outbox.Find(second[0]);
+  ASSERT_TRUE(record.has_value());
+  EXPECT_EQ(record->station_health().safe_state_entries(), 0u);
 }
 
 }  // namespace
