@@ -163,6 +163,8 @@ int main(int argc, char** argv) {
   bool stiffened = false;
   bool was_pulling = false;
   double last_reduce_tip_m = -1.0;
+  double hold_until_s = 0.0;
+  double stall_tip_m = 0.0, stall_since_s = 0.0;  // PROBE_HOLD_S: hold still this long after a reduction
   std::printf("t_s inserted_m tip_arc_m base_N roll_Nm stretch_m@arc wall_N fixed_mm "
               "min_pleat knob_up knob_right\n");
   double next_print_s = 0.0;
@@ -221,7 +223,14 @@ int main(int argc, char** argv) {
         // pushing on is taut before the tip moves.
         const bool deeper = state.tip_arc_m > last_reduce_tip_m + EnvOr("PROBE_REDUCE_AGAIN_M", 0.10);
         const bool full = state.inserted_m > params.scope.working_length_m - 0.08;
-        if (phase == 0 && ((loop_m > limit_m && deeper) || (full && deeper))) {
+        // A stall with the scope all in: the tip has not advanced for a while.
+        if (state.tip_arc_m > stall_tip_m + 0.005) {
+          stall_tip_m = state.tip_arc_m;
+          stall_since_s = state.time_s;
+        }
+        const bool stalled = state.time_s - stall_since_s > EnvOr("PROBE_STALL_S", 1e9);
+        if (phase == 0 && ((loop_m > limit_m && deeper) || (full && (deeper || stalled)))) {
+          stall_since_s = state.time_s;
           last_reduce_tip_m = state.tip_arc_m;
           pinned_tip_W = state.X_WTip.translation();
           std::printf("  reduce at t=%.2f: loop %.3f m, tip %.3f m (%s), inserted %.3f m\n",
@@ -238,6 +247,8 @@ int main(int argc, char** argv) {
             std::printf("  advance at t=%.2f: tip %.3f m, inserted %.3f m\n", state.time_s,
                         state.tip_arc_m, state.inserted_m);
             phase = 0;
+            hold_until_s = state.time_s + EnvOr("PROBE_HOLD_S", 0.0);
+            if (std::getenv("PROBE_UNHOOK")) in.knob_up_rad = in.knob_right_rad = 0.0;
             // Experiment: PROBE_STIFFEN=R stiffens the insertion tube R times
             // after the first reduction (a variable-stiffness colonoscope).
             if (!stiffened && EnvOr("PROBE_STIFFEN", 1.0) != 1.0) {
@@ -263,7 +274,7 @@ int main(int argc, char** argv) {
         withdraw_at_m_next =
             withdraw_every_m > 0.0 ? withdraw_at_reached_m + withdraw_every_m : 1e9;
       }
-      if (phase == 0) command_m += speed_m_per_s * params.dt_s;
+      if (phase == 0 && state.time_s >= hold_until_s) command_m += speed_m_per_s * params.dt_s;
       if (phase == 1) {
         command_m -= speed_m_per_s * params.dt_s;
         in.roll_rad += roll_rate * params.dt_s;

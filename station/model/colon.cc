@@ -19,6 +19,9 @@ void Require(bool ok, const std::string& what, double value, const char* rule) {
 
 bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
+// A mobile point hanging less than this far from its root has no side.
+constexpr double kMinHang_m = 0.01;
+
 }  // namespace
 
 bool IsMobileByDefault(Region region) {
@@ -75,6 +78,8 @@ void ValidateColon(const ColonSpec& colon) {
   const int n = static_cast<int>(colon.points.size());
   Require(InRange(colon.mesentery_shear_ratio, 1.0, 100.0), "mesentery_shear_ratio",
           colon.mesentery_shear_ratio, "must be in [1, 100]");
+  Require(InRange(colon.mesentery_crossing_m, 0.0, 1.0), "mesentery_crossing_m",
+          colon.mesentery_crossing_m, "must be in [0, 1] m");
   Require(n >= 3 && n <= 20000, "points.size", n, "must be in [3, 20000]");
   for (int i = 0; i < n; ++i) {
     const ColonPoint& p = colon.points[i];
@@ -153,6 +158,7 @@ void CalcMesenteryAnchors(ColonSpec* colon) {
       pts[i].tether_anchor_m = pts[i].rest_position_m;
       pts[i].tether_length_m = pts[i].tissue.mesentery_length_m;
       pts[i].tether_root_direction.setZero();
+      pts[i].tether_side.setZero();
       ++i;
       continue;
     }
@@ -170,6 +176,9 @@ void CalcMesenteryAnchors(ColonSpec* colon) {
       p.tether_anchor_m = root_a + s * chord;
       p.tether_root_direction =
           chord2 > 1e-12 ? Eigen::Vector3d(chord / std::sqrt(chord2)) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d hang = p.rest_position_m - p.tether_anchor_m;
+      p.tether_side = hang.norm() > kMinHang_m ? Eigen::Vector3d(hang.normalized())
+                                               : Eigen::Vector3d::Zero();
       p.tether_length_m = std::max(
           p.tissue.mesentery_length_m,
           CalcTetherDistance(p.rest_position_m - p.tether_anchor_m, p.tether_root_direction,

@@ -95,6 +95,10 @@ struct ColonPoint {
   // it shears the mesentery sheet, so it counts mesentery_shear_ratio times
   // (ModelParams) toward the reach; zero for fixed points (isotropic).
   Eigen::Vector3d tether_root_direction{Eigen::Vector3d::Zero()};
+  // Mobile points: the unit direction from the anchor to the rest position,
+  // the side of the root the colon hangs on; it cannot swing through the
+  // root to the other side (zero: no side, at or near the root).
+  Eigen::Vector3d tether_side{Eigen::Vector3d::Zero()};
   bool operator==(const ColonPoint&) const = default;
 };
 
@@ -105,6 +109,9 @@ struct ColonSpec {
   // How many times a move along a mobile point's mesentery root counts
   // toward its reach (the sheet shears rather than swings; docs/model.md).
   double mesentery_shear_ratio{4.0};
+  // How far a mobile point may cross its root to the other side before the
+  // mesentery pulls it back (its stiffness is the mesentery's).
+  double mesentery_crossing_m{0.01};
   bool operator==(const ColonSpec&) const = default;
 };
 

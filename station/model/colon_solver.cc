@@ -177,6 +177,14 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       rhs[i] -= (dt * k * (rho - p.tether_length_m)) * g;
       diag[i] += (dt * k) * (g * g.transpose() + across * (G - g * g.transpose()));
     }
+    // The colon hangs on one side of its root: swung through it by more
+    // than mesentery_crossing_m, the mesentery pulls it back.
+    const double crossed_m = -(r.dot(p.tether_side) + params.colon.mesentery_crossing_m);
+    if (crossed_m > 0.0 && p.tether_side.squaredNorm() > 0.5) {
+      const double k = sc->colon_tether_N_per_m[i];
+      rhs[i] += (dt * k * crossed_m) * p.tether_side;
+      diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
+    }
   }
   // Neighbour pairs (i, i+1): the axial link and the kink tension.
   for (int i = 0; i < end; ++i) {

@@ -62,8 +62,14 @@ InputSample ExpertOperator::Act(const Perception& p) {
     const bool hooked = p.tip_into_fixed_colon_m >= kHookDepth_m;
     const bool scope_used_up = p.inserted_m > p.working_length_m - kScopeLeft_m;
     const bool deeper = p.tip_arc_m > last_reduce_tip_m_ + kReduceAgainDepth_m;
-    if (deeper && ((hooked && loop_m > k.loop_limit_m) || scope_used_up)) {
+    if (p.tip_arc_m > stall_tip_m_ + kStallAdvance_m) {
+      stall_tip_m_ = p.tip_arc_m;
+      stall_since_s_ = p.t_s;
+    }
+    const bool stalled = p.t_s - stall_since_s_ > kStall_s;
+    if ((deeper && hooked && loop_m > k.loop_limit_m) || (scope_used_up && (deeper || stalled))) {
       reducing_ = true;
+      stall_since_s_ = p.t_s;
       last_reduce_tip_m_ = p.tip_arc_m;
       reduce_start_s_ = p.t_s;
       reduce_start_inserted_m_ = p.inserted_m;
@@ -77,6 +83,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
         reduce_start_inserted_m_ - p.inserted_m > kMaxWithdraw_m ||
         p.t_s - reduce_start_s_ > kMaxReduce_s) {
       reducing_ = false;
+      settle_until_s_ = p.t_s + k.settle_s;
     }
   }
 
@@ -104,8 +111,12 @@ InputSample ExpertOperator::Act(const Perception& p) {
       knob_up_rad_ *= kKnobMax_rad / bend_rad;
       knob_right_rad_ *= kKnobMax_rad / bend_rad;
     }
-    target_speed_m_per_s = k.advance_speed_m_per_s;
-    roll_rad_ *= std::max(0.0, 1.0 - kRollRelax_per_s * dt_s_);
+    if (p.t_s < settle_until_s_) {
+      target_speed_m_per_s = 0.0;  // settling: hold still, the shaft kept turned
+    } else {
+      target_speed_m_per_s = k.advance_speed_m_per_s;
+      roll_rad_ *= std::max(0.0, 1.0 - kRollRelax_per_s * dt_s_);
+    }
   }
   // The hand: its force follows the speed error, within its limits.
   const double speed_m_per_s = (p.inserted_m - last_inserted_m_) / dt_s_;

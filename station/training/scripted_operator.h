@@ -81,6 +81,9 @@ class ExpertOperator final : public ScriptedOperator {
     // LoopIndex) at which it reduces, once the tip is hooked in fixed colon.
     double loop_limit_m{0.10};
     double roll_rate_rad_per_s{0.5};      // clockwise turn of the shaft while reducing
+    // After a reduction it holds still this long, the shaft turned, so the
+    // colon settles onto the straightened scope before it pushes on.
+    double settle_s{0.0};
     bool operator==(const Settings&) const = default;
   };
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
@@ -92,8 +95,11 @@ class ExpertOperator final : public ScriptedOperator {
   // After a reduction, the next waits until the tip is this much deeper: a
   // loop re-formed by pushing on is taut before the tip moves again.
   static constexpr double kReduceAgainDepth_m = 0.10;
-  // With this little scope left outside, the loops must come out.
+  // With this little scope left outside, the loops must come out: once the
+  // tip is deeper than at the last reduction, or has stalled this long.
   static constexpr double kScopeLeft_m = 0.08;
+  static constexpr double kStall_s = 15.0;
+  static constexpr double kStallAdvance_m = 0.005;
   static constexpr double kTipBack_m = 0.015;      // the tip coming back this far: loop out
   static constexpr double kMaxWithdraw_m = 0.30;   // longest single pull-back
   static constexpr double kMaxReduce_s = 40.0;
@@ -111,6 +117,9 @@ class ExpertOperator final : public ScriptedOperator {
   bool started_{false};
   LoopIndex loop_index_;
   double last_reduce_tip_m_{-1.0};
+  double stall_tip_m_{0.0};
+  double stall_since_s_{0.0};
+  double settle_until_s_{0.0};
   // The hand: its force and the scope's last position (for its speed).
   double hand_N_{0.0};
   double last_inserted_m_{0.0};
