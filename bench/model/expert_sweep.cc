@@ -3,7 +3,7 @@
 // results, for parameter sweeps (docs/model.md, "Probing an insertion").
 //   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
 // Keys: mobile_kc_scale, relax_s, meso_k, shear, pleat, pleat_k, toe_k,
-// passive_m, passive_ei, mu_scale, and the expert's advance, withdraw, push,
+// passive_m, passive_ei, mu_scale, pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
 // pull, loop_limit, roll_rate, settle.
 #include <cmath>
 #include <cstdio>
@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.colon_pleat_stiffness_N = get("pleat_k", params.colon_pleat_stiffness_N);
   params.colon_toe_stiffness_N = get("toe_k", params.colon_toe_stiffness_N);
+  params.colon_pleat_set_s = get("pleat_set_s", params.colon_pleat_set_s);
+  params.colon_pleat_release_s = get("pleat_release_s", params.colon_pleat_release_s);
   params.scope.passive_section_length_m = get("passive_m", params.scope.passive_section_length_m);
   params.scope.passive_section_rigidity_N_m2 =
       get("passive_ei", params.scope.passive_section_rigidity_N_m2);

@@ -121,6 +121,8 @@ int main(int argc, char** argv) {
   params.colon_pleat_stiffness_N = EnvOr("PROBE_PLEAT_K", params.colon_pleat_stiffness_N);
   params.colon_toe_stiffness_N = EnvOr("PROBE_TOE_K", params.colon_toe_stiffness_N);
   params.colon_toe_strain = EnvOr("PROBE_TOE_STRAIN", params.colon_toe_strain);
+  params.colon_pleat_set_s = EnvOr("PROBE_PLEAT_SET_S", params.colon_pleat_set_s);
+  params.colon_pleat_release_s = EnvOr("PROBE_PLEAT_RELEASE_S", params.colon_pleat_release_s);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -366,6 +368,23 @@ int main(int argc, char** argv) {
         }
       }
       if (lost > 0) std::printf("    %d samples beyond 2 cm of their lumen\n", lost);
+      if (std::getenv("PROBE_SIDE")) {  // the mobile point farthest through its root
+        double worst = 1e9;
+        int at = -1;
+        for (size_t i = 0; i < params.colon.points.size(); ++i) {
+          const auto& pt = params.colon.points[i];
+          if (pt.tether_side.squaredNorm() < 0.5) continue;
+          const double h = (state.p_WColon[i] - pt.tether_anchor_m).dot(pt.tether_side);
+          if (h < worst) worst = h, at = static_cast<int>(i);
+        }
+        if (at >= 0) {
+          const auto& pt = params.colon.points[at];
+          const Eigen::Vector3d& x = state.p_WColon[at];
+          std::printf("    side: point %d arc %.3f h %.3f at (%.3f %.3f %.3f) anchor (%.3f %.3f %.3f)\n", at,
+                      pt.arc_m, worst, x.x(), x.y(), x.z(), pt.tether_anchor_m.x(),
+                      pt.tether_anchor_m.y(), pt.tether_anchor_m.z());
+        }
+      }
       if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples
         std::printf("    track");
         for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); k += 3) {

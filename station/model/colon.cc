@@ -80,6 +80,8 @@ void ValidateColon(const ColonSpec& colon) {
           colon.mesentery_shear_ratio, "must be in [1, 100]");
   Require(InRange(colon.mesentery_crossing_m, 0.0, 1.0), "mesentery_crossing_m",
           colon.mesentery_crossing_m, "must be in [0, 1] m");
+  Require(InRange(colon.root_wall_stiffness_N_per_m2, 0.0, 1.0e7), "root_wall_stiffness_N_per_m2",
+          colon.root_wall_stiffness_N_per_m2, "must be in [0, 1e7]");
   Require(n >= 3 && n <= 20000, "points.size", n, "must be in [3, 20000]");
   for (int i = 0; i < n; ++i) {
     const ColonPoint& p = colon.points[i];

@@ -110,8 +110,9 @@ struct ColonSpec {
   // toward its reach (the sheet shears rather than swings; docs/model.md).
   double mesentery_shear_ratio{4.0};
   // How far a mobile point may cross its root to the other side before the
-  // mesentery pulls it back (its stiffness is the mesentery's).
+  // body wall behind the root holds it, with this stiffness per metre.
   double mesentery_crossing_m{0.01};
+  double root_wall_stiffness_N_per_m2{1.0e5};
   bool operator==(const ColonSpec&) const = default;
 };
 

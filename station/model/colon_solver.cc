@@ -178,10 +178,10 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       diag[i] += (dt * k) * (g * g.transpose() + across * (G - g * g.transpose()));
     }
     // The colon hangs on one side of its root: swung through it by more
-    // than mesentery_crossing_m, the mesentery pulls it back.
+    // than mesentery_crossing_m, it meets the body wall behind the root.
     const double crossed_m = -(r.dot(p.tether_side) + params.colon.mesentery_crossing_m);
     if (crossed_m > 0.0 && p.tether_side.squaredNorm() > 0.5) {
-      const double k = sc->colon_tether_N_per_m[i];
+      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
       rhs[i] += (dt * k * crossed_m) * p.tether_side;
       diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
     }
@@ -190,9 +190,13 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
   for (int i = 0; i < end; ++i) {
     const Eigen::Vector3d seg = x[i + 1] - x[i];
     const double g = seg.norm();
-    const double g0 = sc->colon_pair_gap_m[i];
+    // Strain against the gap's rest length (shorter where folds have set);
+    // the folds pack at pleat_limit of the natural gap.
+    const double g0 = s->colon_pair_rest_gap_m[i];
+    const double natural_gap_m = sc->colon_pair_gap_m[i];
     const Eigen::Vector3d u = g > 1e-12 ? Eigen::Vector3d(seg / g) : pts[i].rest_tangent;
-    const PairAxial a = CalcPairAxial(params, sc->colon_pair_pleat_limit[i], g / g0 - 1.0);
+    const double pleat_limit = sc->colon_pair_pleat_limit[i] * natural_gap_m / g0;
+    const PairAxial a = CalcPairAxial(params, std::min(pleat_limit, 1.0), g / g0 - 1.0);
     // Tension also resists the pair turning (a taut string); compression does
     // not push it sideways (dropping that term keeps the matrix definite).
     Eigen::Matrix3d C = (a.slope_N / g0) * u * u.transpose();
@@ -206,7 +210,7 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
                                                 s->colon_tangent[i] + s->colon_tangent[i + 1],
                                                 sc->colon_pair_rest_direction[i], u);
     const Eigen::Matrix3d Pm = I - m * m.transpose();
-    const double k = sc->colon_pair_kink_N_per_m[i];
+    const double k = sc->colon_pair_kink_N_per_m[i];  // T over the natural gap
     C.noalias() += k * Pm;
     const Eigen::Vector3d F = a.force_N * u + k * (Pm * seg);  // on point i; -F on i+1
     diag[i] += dt * C;
@@ -303,6 +307,20 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
     const double relax_s = pts[i].tissue.suspension_relaxation_s;
     if (relax_s > 0.0) {
       s->colon_reference_m[i] += (dt / (relax_s + dt)) * (s->p_WColon[i] - s->colon_reference_m[i]);
+    }
+  }
+  // Folds set where a gap is held shortened, and release slowly elsewhere.
+  if (params.colon_pleat_set_s > 0.0) {
+    for (int i = 0; i < std::min(last + 1, N - 1); ++i) {
+      const double g = (s->p_WColon[i + 1] - s->p_WColon[i]).norm();
+      double& rest_m = s->colon_pair_rest_gap_m[i];
+      const double natural_m = sc->colon_pair_gap_m[i];
+      if (g < rest_m) {
+        const double floor_m = sc->colon_pair_pleat_limit[i] * natural_m;
+        rest_m += (dt / (params.colon_pleat_set_s + dt)) * (std::max(g, floor_m) - rest_m);
+      } else if (rest_m < natural_m) {
+        rest_m += (dt / (params.colon_pleat_release_s + dt)) * (natural_m - rest_m);
+      }
     }
   }
   rhs[0].setZero();

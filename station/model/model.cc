@@ -63,6 +63,10 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, colon_tension_stiffness_N]");
   Require(InRange(p.colon_packed_stiffness_N, 1.0, 1e5), "colon_packed_stiffness_N",
           p.colon_packed_stiffness_N, "must be in [1, 1e5] N");
+  Require(InRange(p.colon_pleat_set_s, 0.0, 1e6), "colon_pleat_set_s", p.colon_pleat_set_s,
+          "must be in [0, 1e6] s (0: never)");
+  Require(InRange(p.colon_pleat_release_s, 0.0, 1e6), "colon_pleat_release_s",
+          p.colon_pleat_release_s, "must be in [0, 1e6] s (0: at once)");
   Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 25.0),
           "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 25]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
@@ -123,6 +127,11 @@ ModelState MakeInitialState(const ModelParams& params) {
 
   const int N = static_cast<int>(params.colon.points.size());
   s.colon_displacement_m.assign(N, Eigen::Vector3d::Zero());
+  s.colon_pair_rest_gap_m.assign(N, 1.0);
+  for (int i = 0; i + 1 < N; ++i) {
+    s.colon_pair_rest_gap_m[i] =
+        (params.colon.points[i + 1].rest_position_m - params.colon.points[i].rest_position_m).norm();
+  }
   s.colon_reference_m.resize(N);
   for (int i = 0; i < N; ++i) s.colon_reference_m[i] = params.colon.points[i].rest_position_m;
   s.colon_velocity_m_per_s.assign(N, Eigen::Vector3d::Zero());

@@ -54,6 +54,12 @@ struct ModelParams {
   double colon_tension_stiffness_N{500.0};
   double colon_pleat_stiffness_N{1.0};
   double colon_packed_stiffness_N{500.0};
+  // Folds set: a gap held shortened takes its length as its rest length with
+  // this time constant (the gathered colon stays on the scope), and returns
+  // to its natural rest length with the release time constant once no longer
+  // shortened. 0: never (the gap's rest length stays the natural one).
+  double colon_pleat_set_s{2.0};
+  double colon_pleat_release_s{60.0};
   bool operator==(const ModelParams&) const = default;
 };
 
@@ -125,6 +131,9 @@ struct ModelState {
   // Where the paper's suspension pulls each point (its rest position, or
   // where it has settled: TissueParams::suspension_relaxation_s).
   std::vector<Eigen::Vector3d> colon_reference_m;
+  // Rest length of the gap between points i and i+1: the natural one, or
+  // shorter where folds have set (ModelParams::colon_pleat_set_s).
+  std::vector<double> colon_pair_rest_gap_m;
   std::vector<Eigen::Vector3d> colon_velocity_m_per_s;
   std::vector<Eigen::Vector3d> p_WColon;     // current r_i
   // Current unit tangent of the tube at each point (central difference of the
