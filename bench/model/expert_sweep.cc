@@ -3,7 +3,7 @@
 // results, for parameter sweeps (docs/model.md, "Probing an insertion").
 //   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
 // Keys: mobile_kc_scale, relax_s, meso_k, shear, pleat, pleat_k, toe_k,
-// passive_m, passive_ei, mu_scale, pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
+// passive_m, passive_ei, mu_scale, abdomen (margin of the cavity box, m), pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
 // pull, loop_limit, roll_rate, settle.
 #include <cmath>
 #include <cstdio>
@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
     t.pleat_limit = get("pleat", t.pleat_limit);
   }
   params.colon.mesentery_shear_ratio = get("shear", params.colon.mesentery_shear_ratio);
+  params.colon.abdomen_margin_m = get("abdomen", params.colon.abdomen_margin_m);
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.colon_pleat_stiffness_N = get("pleat_k", params.colon_pleat_stiffness_N);
   params.colon_toe_stiffness_N = get("toe_k", params.colon_toe_stiffness_N);

@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
     t.suspension_relaxation_s = EnvOr("PROBE_RELAX_S", t.suspension_relaxation_s);
   }
   params.colon.mesentery_shear_ratio = EnvOr("PROBE_SHEAR", params.colon.mesentery_shear_ratio);
+  params.colon.abdomen_margin_m = EnvOr("PROBE_ABDOMEN", params.colon.abdomen_margin_m);
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.scope.flexural_rigidity_N_m2 *= EnvOr("PROBE_EI", 1.0);
   params.scope.link_count = static_cast<int>(EnvOr("PROBE_LINKS", params.scope.link_count));

@@ -188,6 +188,16 @@ void CalcMesenteryAnchors(ColonSpec* colon) {
     }
     i = end;
   }
+  if (n > 0) {
+    Eigen::Vector3d lo = pts[0].rest_position_m;
+    Eigen::Vector3d hi = lo;
+    for (const ColonPoint& p : pts) {
+      lo = lo.cwiseMin(p.rest_position_m);
+      hi = hi.cwiseMax(p.rest_position_m);
+    }
+    colon->abdomen_min_m = lo - Eigen::Vector3d::Constant(colon->abdomen_margin_m);
+    colon->abdomen_max_m = hi + Eigen::Vector3d::Constant(colon->abdomen_margin_m);
+  }
 }
 
 void MakeSuspensionStiff(ColonSpec* colon) {

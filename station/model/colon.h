@@ -113,6 +113,13 @@ struct ColonSpec {
   // body wall behind the root holds it, with this stiffness per metre.
   double mesentery_crossing_m{0.01};
   double root_wall_stiffness_N_per_m2{1.0e5};
+  // The abdominal cavity: the colon stays within the box of its rest
+  // centerline grown by abdomen_margin_m (the abdominal wall, diaphragm,
+  // liver and pelvis hold it; a loop stretches the wall only a little).
+  // Set by CalcMesenteryAnchors; held with root_wall_stiffness_N_per_m2.
+  double abdomen_margin_m{10.0};  // off: 0.03 m measured worse (docs/wip)
+  Eigen::Vector3d abdomen_min_m{Eigen::Vector3d::Constant(-1e9)};
+  Eigen::Vector3d abdomen_max_m{Eigen::Vector3d::Constant(1e9)};
   bool operator==(const ColonSpec&) const = default;
 };
 

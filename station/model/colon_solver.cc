@@ -185,6 +185,16 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       rhs[i] += (dt * k * crossed_m) * p.tether_side;
       diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
     }
+    // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
+    for (int axis = 0; axis < 3; ++axis) {
+      const double below_m = params.colon.abdomen_min_m[axis] - x[i][axis];
+      const double above_m = x[i][axis] - params.colon.abdomen_max_m[axis];
+      const double out_m = below_m > 0.0 ? below_m : (above_m > 0.0 ? -above_m : 0.0);
+      if (out_m == 0.0) continue;
+      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
+      rhs[i][axis] += dt * k * out_m;
+      diag[i](axis, axis) += dt * k;
+    }
   }
   // Neighbour pairs (i, i+1): the axial link and the kink tension.
   for (int i = 0; i < end; ++i) {
