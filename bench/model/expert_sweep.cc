@@ -75,6 +75,18 @@ int main(int argc, char** argv) {
       break;
     }
   }
+  // The assistant presses over a mobile region once the tip is
+  // press_past m beyond its end (keys press_sig, press_trans: the pressure).
+  double region_end_m[9] = {0};
+  for (const auto& point : params.colon.points) {
+    region_end_m[static_cast<int>(point.region)] = point.arc_m;
+  }
+  const double press_past_m = get("press_past", 0.10);
+  const double press[9] = {0, 0, get("press_sig", 0.0), get("press_desc", 0.0), 0,
+                           get("press_trans", 0.0), 0, 0, 0};
+  params.abdominal_pressure_stiffness_N_per_m2 =
+      get("press_k", params.abdominal_pressure_stiffness_N_per_m2);
+  params.abdominal_pressure_slack_m = get("press_slack", params.abdominal_pressure_slack_m);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
@@ -85,9 +97,21 @@ int main(int argc, char** argv) {
   double window_sum = 0.0;  // 10 ms mean of |force|
   double window[10] = {0};
   int wi = 0;
+  double pull_s = 0.0, reduced_to_m = 0.0;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
-    ves::model::Step(params, ves::training::ToStepInput(op->Act(p)), &state, &scratch, &out);
+    const auto sample = op->Act(p);
+    auto input = ves::training::ToStepInput(sample);
+    // A reduction (the hand pulling for a while) straightens what the tip
+    // has passed; from then on the assistant holds it.
+    pull_s = sample.push_force_N < -1.0 ? pull_s + params.dt_s : 0.0;
+    if (pull_s > 2.0) reduced_to_m = std::max(reduced_to_m, state.tip_arc_m);
+    for (int r = 0; r < 9; ++r) {
+      if (press[r] > 0.0 && reduced_to_m > region_end_m[r] + press_past_m) {
+        input.abdominal_pressure[r] = press[r];
+      }
+    }
+    ves::model::Step(params, input, &state, &scratch, &out);
     if (!out.finite) {
       std::printf("%s %s %s diverged at %.3f\n", argv[1], argv[2], tag.c_str(), state.time_s);
       return 1;
@@ -99,7 +123,7 @@ int main(int argc, char** argv) {
     peak_force = std::max(peak_force, window_sum / 10.0);
     if (f > 10.0) ++over10;
     ++steps;
-    peak_roll = std::max(peak_roll, std::abs(out.roll_torque_N_m));
+    peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
     peak_fixed = std::max(peak_fixed, out.peak_fixed_displacement_m);
     max_tip = std::max(max_tip, state.tip_arc_m);
     if (out.peak_stretch_m > 0.015) pain15_s += params.dt_s;

@@ -106,6 +106,8 @@ int main(int argc, char** argv) {
     t.mesentery_stiffness_N_per_m2 = EnvOr("PROBE_MESENTERY_K", t.mesentery_stiffness_N_per_m2);
     t.pleat_limit = EnvOr("PROBE_PLEAT", t.pleat_limit);
     t.suspension_relaxation_s = EnvOr("PROBE_RELAX_S", t.suspension_relaxation_s);
+    t.neighbor_tension_N = EnvOr("PROBE_TENSION", t.neighbor_tension_N);
+    t.mesentery_length_m = EnvOr("PROBE_MESO_M", t.mesentery_length_m);
   }
   params.colon.mesentery_shear_ratio = EnvOr("PROBE_SHEAR", params.colon.mesentery_shear_ratio);
   params.colon.abdomen_margin_m = EnvOr("PROBE_ABDOMEN", params.colon.abdomen_margin_m);
@@ -304,18 +306,18 @@ int main(int argc, char** argv) {
     max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
     max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
     max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
-    max_roll_Nm = std::max(max_roll_Nm, std::abs(out.roll_torque_N_m));
+    max_roll_Nm = std::max(max_roll_Nm, std::abs(out.roll_torque_Nm));
     max_fixed_m = std::max(max_fixed_m, out.peak_fixed_displacement_m);
     if (std::abs(out.base_force_N) > 10.0) ++over_10N_steps;
     for (int t = 0; t < 4; ++t) {
       if (out.peak_stretch_m > 0.01 * (t + 1)) stretch_over_s[t] += params.dt_s;
     }
     ++steps;
-    if ((std::abs(out.base_force_N) > 30.0 || std::abs(out.roll_torque_N_m) > 1.0) &&
+    if ((std::abs(out.base_force_N) > 30.0 || std::abs(out.roll_torque_Nm) > 1.0) &&
         spikes_printed < 5) {
       ++spikes_printed;
       std::printf("  spike t=%.3f base %.1f N roll %.2f N m push %.2f roll_in %.3f\n",
-                  state.time_s, out.base_force_N, out.roll_torque_N_m, in.push_force_N,
+                  state.time_s, out.base_force_N, out.roll_torque_Nm, in.push_force_N,
                   in.roll_rad);
       if (spike_detail) {
         // What moved in the step before: the largest sample and colon point moves.
@@ -386,6 +388,35 @@ int main(int argc, char** argv) {
                       pt.tether_anchor_m.y(), pt.tether_anchor_m.z());
         }
       }
+      if (std::getenv("PROBE_REGIONS") && static_cast<long>(state.time_s) % static_cast<long>(EnvOr("PROBE_REGIONS", 10)) == 0) {
+        // Where the scope lies: per region, the scope length tracked to it,
+        // the colon's current path length, its rest length and its chord.
+        double scope_m[9] = {0}, path_m[9] = {0}, rest_m[9] = {0};
+        int first[9], last[9];
+        std::fill(first, first + 9, -1);
+        std::fill(last, last + 9, -1);
+        const auto& pts = params.colon.points;
+        for (size_t i = 1; i < pts.size(); ++i) {
+          const int r = static_cast<int>(pts[i].region);
+          path_m[r] += (state.p_WColon[i] - state.p_WColon[i - 1]).norm();
+          rest_m[r] += (pts[i].rest_position_m - pts[i - 1].rest_position_m).norm();
+          if (first[r] < 0) first[r] = static_cast<int>(i);
+          last[r] = static_cast<int>(i);
+        }
+        for (int k = state.first_inside_sample + 1; k < static_cast<int>(state.contact.size()); ++k) {
+          if (!state.contact[k].inside) continue;
+          const int r = static_cast<int>(pts[state.contact[k].segment].region);
+          scope_m[r] += (state.p_WSample[k] - state.p_WSample[k - 1]).norm();
+        }
+        std::printf("    regions (scope/path/rest/chord m):");
+        const char* names[9] = {"?", "rect", "sig", "desc", "splen", "trans", "hep", "asc", "cec"};
+        for (int r = 1; r < 9; ++r) {
+          if (first[r] < 0) continue;
+          std::printf(" %s %.2f/%.2f/%.2f/%.2f", names[r], scope_m[r], path_m[r], rest_m[r],
+                      (state.p_WColon[last[r]] - state.p_WColon[first[r] - 1]).norm());
+        }
+        std::printf("\n");
+      }
       if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples
         std::printf("    track");
         for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); k += 3) {
@@ -412,7 +443,7 @@ int main(int argc, char** argv) {
       }
       std::printf("%5.1f %.3f %.3f %6.2f %5.2f %.3f@%.2f %5.2f %4.1f %.2f %5.2f %5.2f\n",
                   state.time_s, state.inserted_m, state.tip_arc_m, out.base_force_N,
-                  out.roll_torque_N_m, out.peak_stretch_m, out.peak_stretch_arc_m,
+                  out.roll_torque_Nm, out.peak_stretch_m, out.peak_stretch_arc_m,
                   out.peak_wall_force_N, 1e3 * out.peak_fixed_displacement_m, min_pleat,
                   in.knob_up_rad, in.knob_right_rad);
       if (std::getenv("PROBE_INPUT")) {

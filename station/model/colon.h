@@ -107,8 +107,11 @@ struct ColonPoint {
 struct ColonSpec {
   std::vector<ColonPoint> points;
   // How many times a move along a mobile point's mesentery root counts
-  // toward its reach (the sheet shears rather than swings; docs/model.md).
-  double mesentery_shear_ratio{4.0};
+  // toward its reach (the sheet shearing rather than swinging). 1: the
+  // tether is isotropic; 4 held the pleats where they formed but needed
+  // 18-20 N to reduce a loop with the tip pinned, against 0.5 N at 1
+  // (docs/wip/issue-17-shortening-colon.md).
+  double mesentery_shear_ratio{1.0};
   // How far a mobile point may cross its root to the other side before the
   // body wall behind the root holds it, with this stiffness per metre.
   double mesentery_crossing_m{0.01};

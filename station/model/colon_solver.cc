@@ -137,7 +137,7 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   }
 }
 
-void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
+void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
   const double dt = params.dt_s;
@@ -184,6 +184,19 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
       rhs[i] += (dt * k * crossed_m) * p.tether_side;
       diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
+    }
+    // The assistant's hand: a pressed mobile point is held within the slack
+    // of its root (isotropic; the same implicit form as the tether).
+    const double pressure = input.abdominal_pressure[static_cast<int>(p.region)];
+    if (pressure > 0.0 && p.tissue.mobile) {
+      const double d = r.norm();
+      const double slack = params.abdominal_pressure_slack_m;
+      if (d > slack) {
+        const double k = pressure * params.abdominal_pressure_stiffness_N_per_m2 * p.length_m;
+        const Eigen::Vector3d g = r / d;
+        rhs[i] -= (dt * k * (d - slack)) * g;
+        diag[i] += (dt * k) * (g * g.transpose() + (1.0 - slack / d) * (I - g * g.transpose()));
+      }
     }
     // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
     for (int axis = 0; axis < 3; ++axis) {

@@ -54,7 +54,8 @@ void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
 // shape): suspension, mesentery, axial links, kink tension and contact
 // stiffness in one block-tridiagonal solve. Writes the points' increments into
 // scratch->colon_rhs and updates their tangents.
-void SolveColon(const ModelParams& params, ModelState* state, Scratch* scratch);
+void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
+                Scratch* scratch);
 
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -45,11 +46,13 @@ struct ModelParams {
   // ratio used is at least 1.2/(smallest pleat_limit). 0: no limit.
   double tracking_arc_ratio{1.5};
   // The colon wall along the tube (docs/model.md, "Axial links"), per unit
-  // strain of a gap (so independent of N). In tension it is J-shaped like
-  // other soft tissue: a compliant toe up to colon_toe_strain, then the
-  // wall's linear modulus (EA). Shortened, it folds onto the scope (pleats)
+  // strain of a gap (so independent of N). In tension it may be J-shaped
+  // like other soft tissue (a compliant toe up to colon_toe_strain, then the
+  // wall's linear modulus EA); by default it has no toe: with a 10 N toe the
+  // scope stretched the sigmoid and transverse by 20 % and the expert got
+  // less deep (docs/wip). Shortened, it folds onto the scope (pleats)
   // softly down to each region's pleat_limit, then the folds are packed.
-  double colon_toe_stiffness_N{10.0};
+  double colon_toe_stiffness_N{500.0};
   double colon_toe_strain{0.2};
   double colon_tension_stiffness_N{500.0};
   double colon_pleat_stiffness_N{1.0};
@@ -60,6 +63,11 @@ struct ModelParams {
   // shortened. 0: never (the gap's rest length stays the natural one).
   double colon_pleat_set_s{2.0};
   double colon_pleat_release_s{60.0};
+  // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
+  // full pressure a pressed region's points are held within the slack of
+  // their mesentery root with this stiffness per metre of colon.
+  double abdominal_pressure_stiffness_N_per_m2{2000.0};
+  double abdominal_pressure_slack_m{0.03};
   bool operator==(const ModelParams&) const = default;
 };
 
@@ -74,6 +82,10 @@ struct StepInput {
   double knob_up_rad{0.0};     // + up, - down (clamped to the scope's angulation)
   double knob_right_rad{0.0};  // + right, - left
   Eigen::Vector3d tip_force_W_N{Eigen::Vector3d::Zero()};  // external load at the tip
+  // The assistant's hand pressing over a region (index: Region), 0..1: it
+  // flattens that region's mobile colon onto its mesentery root, so a
+  // straightened loop cannot bow out again (docs/model.md).
+  std::array<double, 9> abdominal_pressure{};
 };
 
 // A point along the scope where contact and gravity act (fixed at creation).

@@ -63,7 +63,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   internal::UpdateScopeKinematics(params, s);
 
   // 3. Colon: suspension, mesentery, axial links, contacts, linearly implicit, O(N).
-  internal::SolveColon(params, s, sc);
+  internal::SolveColon(params, input, s, sc);
 
   // 4. Friction memory: the stick spring stretches by the tangential relative
   //    displacement of scope surface and wall during the step (the surface
@@ -83,7 +83,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
         (1.0 - c.segment_t) * sc->colon_rhs[k] + c.segment_t * sc->colon_rhs[k + 1];
     const Eigen::Vector3d& n = sc->sample_normal_W[i];
     const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
-    out->roll_torque_N_m -= scope_radius_m * n.cross(sc->sample_friction_W_N[i]).dot(axis);
+    out->roll_torque_Nm -= scope_radius_m * n.cross(sc->sample_friction_W_N[i]).dot(axis);
     Eigen::Vector3d rel = dp + (spin_rad * scope_radius_m) * axis.cross(n) - dc;
     rel -= rel.dot(n) * n;
     if (c.sliding && rel.norm() < kRestickSpeed_m_per_s * dt) {
