@@ -172,9 +172,13 @@ void CalcMesenteryAnchors(ColonSpec* colon) {
     const double chord2 = chord.squaredNorm();
     for (int k = i; k < end; ++k) {
       ColonPoint& p = pts[k];
+      const double arc_a = pts[std::max(i - 1, 0)].arc_m;
+      const double arc_b = pts[std::min(end, n - 1)].arc_m;
       const double s =
-          chord2 > 1e-12 ? std::clamp((p.rest_position_m - root_a).dot(chord) / chord2, 0.0, 1.0)
-                         : 0.0;
+          colon->mesentery_anchor_by_arc && arc_b > arc_a
+              ? std::clamp((p.arc_m - arc_a) / (arc_b - arc_a), 0.0, 1.0)
+          : chord2 > 1e-12 ? std::clamp((p.rest_position_m - root_a).dot(chord) / chord2, 0.0, 1.0)
+                           : 0.0;
       p.tether_anchor_m = root_a + s * chord;
       p.tether_root_direction =
           chord2 > 1e-12 ? Eigen::Vector3d(chord / std::sqrt(chord2)) : Eigen::Vector3d::Zero();

@@ -112,6 +112,10 @@ struct ColonSpec {
   // 18-20 N to reduce a loop with the tip pinned, against 0.5 N at 1
   // (docs/wip/issue-17-shortening-colon.md).
   double mesentery_shear_ratio{1.0};
+  // Where on its root a mobile point is anchored: false, its rest
+  // position's projection; true, its arc fraction of the run along the
+  // chord (where a uniformly gathered run would put it; experiment).
+  bool mesentery_anchor_by_arc{false};
   // How far a mobile point may cross its root to the other side before the
   // body wall behind the root holds it, with this stiffness per metre.
   double mesentery_crossing_m{0.01};
