@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   }
   params.colon.mesentery_shear_ratio = get("shear", params.colon.mesentery_shear_ratio);
   params.colon.mesentery_anchor_by_arc = get("anchor_arc", 0.0) != 0.0;
+  params.mesentery_reach_gathers = get("reach_gathers", 0.0) != 0.0;
   params.colon.abdomen_margin_m = get("abdomen", params.colon.abdomen_margin_m);
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.colon_pleat_stiffness_N = get("pleat_k", params.colon_pleat_stiffness_N);

@@ -112,6 +112,7 @@ int main(int argc, char** argv) {
   params.colon.mesentery_shear_ratio = EnvOr("PROBE_SHEAR", params.colon.mesentery_shear_ratio);
   params.colon.abdomen_margin_m = EnvOr("PROBE_ABDOMEN", params.colon.abdomen_margin_m);
   params.colon.mesentery_anchor_by_arc = EnvOr("PROBE_ANCHOR_ARC", 0.0) != 0.0;
+  params.mesentery_reach_gathers = EnvOr("PROBE_REACH_GATHERS", 0.0) != 0.0;
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.scope.flexural_rigidity_N_m2 *= EnvOr("PROBE_EI", 1.0);
   params.scope.link_count = static_cast<int>(EnvOr("PROBE_LINKS", params.scope.link_count));

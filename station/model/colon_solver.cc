@@ -168,13 +168,20 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
     // with g = G r / rho (positive semidefinite: G is).
     const Eigen::Vector3d r = x[i] - p.tether_anchor_m;
     const double rho = CalcTetherDistance(r, p.tether_root_direction, shear_ratio);
-    if (rho > p.tether_length_m && rho > 1e-12) {
+    double reach_m = p.tether_length_m;
+    if (params.mesentery_reach_gathers && p.tissue.mobile && i > 0 && i < N - 1) {
+      const double now = (x[i + 1] - x[i]).norm() + (x[i] - x[i - 1]).norm();
+      const double natural = sc->colon_pair_gap_m[i] + sc->colon_pair_gap_m[i - 1];
+      const double ratio = natural > 1e-12 ? std::min(1.0, now / natural) : 1.0;
+      reach_m = std::max(p.tissue.mesentery_length_m, p.tether_length_m * ratio);
+    }
+    if (rho > reach_m && rho > 1e-12) {
       const double k = sc->colon_tether_N_per_m[i];
       const Eigen::Vector3d& c = p.tether_root_direction;
       const Eigen::Matrix3d G = I + (shear_ratio * shear_ratio - 1.0) * c * c.transpose();
       const Eigen::Vector3d g = G * r / rho;
-      const double across = 1.0 - p.tether_length_m / rho;
-      rhs[i] -= (dt * k * (rho - p.tether_length_m)) * g;
+      const double across = 1.0 - reach_m / rho;
+      rhs[i] -= (dt * k * (rho - reach_m)) * g;
       diag[i] += (dt * k) * (g * g.transpose() + across * (G - g * g.transpose()));
     }
     // The colon hangs on one side of its root: swung through it by more

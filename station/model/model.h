@@ -68,6 +68,11 @@ struct ModelParams {
   // their mesentery root with this stiffness per metre of colon.
   double abdominal_pressure_stiffness_N_per_m2{2000.0};
   double abdominal_pressure_slack_m{0.03};
+  // Experiment (docs/wip): a mobile point's tether reach shrinks with the
+  // local gathering of the colon (reach times the pleat ratio of its two
+  // gaps, never below the mesentery length), so gathered colon lies on its
+  // root. false: the reach is fixed.
+  bool mesentery_reach_gathers{false};
   bool operator==(const ModelParams&) const = default;
 };
 
