@@ -100,6 +100,18 @@ int main(int argc, char** argv) {
   double window[10] = {0};
   int wi = 0;
   double pull_s = 0.0, reduced_to_m = 0.0;
+  // press_gate > 0: the assistant presses a region (from then on) once its
+  // path is within press_gate times its chord (it has been straightened).
+  const double press_gate = get("press_gate", 0.0);
+  int region_first[9], region_last[9];
+  for (int r = 0; r < 9; ++r) region_first[r] = region_last[r] = -1;
+  for (int i = 0; i < static_cast<int>(params.colon.points.size()); ++i) {
+    const int r = static_cast<int>(params.colon.points[i].region);
+    if (region_first[r] < 0) region_first[r] = i;
+    region_last[r] = i;
+  }
+  bool pressing[9] = {false};
+  double press_from_s[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     const auto sample = op->Act(p);
@@ -109,7 +121,20 @@ int main(int argc, char** argv) {
     pull_s = sample.push_force_N < -1.0 ? pull_s + params.dt_s : 0.0;
     if (pull_s > 2.0) reduced_to_m = std::max(reduced_to_m, state.tip_arc_m);
     for (int r = 0; r < 9; ++r) {
-      if (press[r] > 0.0 && reduced_to_m > region_end_m[r] + press_past_m) {
+      if (press_gate > 0.0 && press[r] > 0.0 && !pressing[r] && region_first[r] >= 0 &&
+          state.tip_arc_m > region_end_m[r] + press_past_m) {
+        double path = 0.0;
+        for (int i = region_first[r]; i < region_last[r]; ++i) {
+          path += (state.p_WColon[i + 1] - state.p_WColon[i]).norm();
+        }
+        const double chord = (state.p_WColon[region_last[r]] - state.p_WColon[region_first[r]]).norm();
+        if (path <= press_gate * chord) {
+          pressing[r] = true;
+          press_from_s[r] = state.time_s;
+        }
+      }
+      if (pressing[r]) input.abdominal_pressure[r] = press[r];
+      if (press_gate == 0.0 && press[r] > 0.0 && reduced_to_m > region_end_m[r] + press_past_m) {
         input.abdominal_pressure[r] = press[r];
       }
     }
@@ -140,9 +165,9 @@ int main(int argc, char** argv) {
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
               "over10=%.2f%% peak_force=%.1f peak_roll=%.2f fixed_mm=%.1f pain15=%.0f pain20=%.0f "
-              "pain=%.0f %s\n",
+              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
               100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, 1e3 * peak_fixed,
-              pain15_s, pain20_s, pain_s, tag.c_str());
+              pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
   return 0;
 }

@@ -110,7 +110,7 @@ struct ColonSpec {
   // toward its reach (the sheet shearing rather than swinging). 1: the
   // tether is isotropic; 4 held the pleats where they formed but needed
   // 18-20 N to reduce a loop with the tip pinned, against 0.5 N at 1
-  // (docs/wip/issue-17-shortening-colon.md).
+  // (docs/model-shortening-notes.md).
   double mesentery_shear_ratio{1.0};
   // Where on its root a mobile point is anchored: false, its rest
   // position's projection; true, its arc fraction of the run along the
@@ -124,7 +124,7 @@ struct ColonSpec {
   // centerline grown by abdomen_margin_m (the abdominal wall, diaphragm,
   // liver and pelvis hold it; a loop stretches the wall only a little).
   // Set by CalcMesenteryAnchors; held with root_wall_stiffness_N_per_m2.
-  double abdomen_margin_m{10.0};  // off: 0.03 m measured worse (docs/wip)
+  double abdomen_margin_m{10.0};  // off: 0.03 m measured worse (docs/model-shortening-notes.md)
   Eigen::Vector3d abdomen_min_m{Eigen::Vector3d::Constant(-1e9)};
   Eigen::Vector3d abdomen_max_m{Eigen::Vector3d::Constant(1e9)};
   bool operator==(const ColonSpec&) const = default;

@@ -50,7 +50,7 @@ struct ModelParams {
   // like other soft tissue (a compliant toe up to colon_toe_strain, then the
   // wall's linear modulus EA); by default it has no toe: with a 10 N toe the
   // scope stretched the sigmoid and transverse by 20 % and the expert got
-  // less deep (docs/wip). Shortened, it folds onto the scope (pleats)
+  // less deep (docs/model-shortening-notes.md). Shortened, it folds onto the scope (pleats)
   // softly down to each region's pleat_limit, then the folds are packed.
   double colon_toe_stiffness_N{500.0};
   double colon_toe_strain{0.2};
@@ -68,7 +68,7 @@ struct ModelParams {
   // their mesentery root with this stiffness per metre of colon.
   double abdominal_pressure_stiffness_N_per_m2{2000.0};
   double abdominal_pressure_slack_m{0.03};
-  // Experiment (docs/wip): a mobile point's tether reach shrinks with the
+  // Experiment (docs/model-shortening-notes.md): a mobile point's tether reach shrinks with the
   // local gathering of the colon (reach times the pleat ratio of its two
   // gaps, never below the mesentery length), so gathered colon lies on its
   // root. false: the reach is fixed.

@@ -25,10 +25,12 @@ ModelParams LoadParams(const std::string& id, bool stiff_colon = false) {
   return training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(), options);
 }
 
-// The same without the suspension's relaxation: a purely elastic colon.
+// The same without either of the colon's slow processes (the suspension's
+// relaxation and the setting of folds): a purely elastic colon.
 ModelParams LoadElasticParams(const std::string& id) {
   ModelParams params = LoadParams(id);
   for (ColonPoint& point : params.colon.points) point.tissue.suspension_relaxation_s = 0.0;
+  params.colon_pleat_set_s = 0.0;
   return params;
 }
 
@@ -36,7 +38,8 @@ class SettleTest : public ::testing::TestWithParam<const char*> {};
 
 // Insert 18 cm at 30 mm/s, then hold every input still: the elastic state
 // settles (with relaxation on, a mobile colon pressed by the scope creeps on:
-// RelaxingColon.CreepsMoreAndMoreSlowly).
+// RelaxingColon.CreepsMoreAndMoreSlowly; with folds setting, the pleated
+// redundant sigmoid still moves at 2e-5 m/s after 5 s).
 TEST_P(SettleTest, VelocityDecaysWithInputHeldStill) {
   Sim sim(LoadElasticParams(GetParam()));
   ASSERT_TRUE(sim.RunUntil(6.0, [](const Sim& s) {
@@ -149,9 +152,14 @@ TEST(Fig10, ConstantPushLiftsTheMobileSigmoidIntoALoopThatStretchesItsMesentery)
               soft.tip_arc_m, soft.inserted_m, soft.peak_stretch_m, soft.apex_lift_m,
               soft.force_N[2], soft.force_N.back(), soft.largest_force_jump_N, stiff.tip_arc_m,
               stiff.inserted_m, stiff.peak_stretch_m);
-  // The hand has pushed several cm more scope in than the tip advanced: a loop.
-  EXPECT_GT(soft.inserted_m - soft.tip_arc_m, 0.08);
-  EXPECT_GT(soft.apex_lift_m, 0.015);  // lifted (+y, anterior)
+  // The hand has pushed several cm more scope in than the tip advanced: a
+  // loop (6.2 cm at 6 N; 12 cm when the wall could lengthen, before the toe
+  // in tension was taken out, docs/model-shortening-notes.md).
+  EXPECT_GT(soft.inserted_m - soft.tip_arc_m, 0.05);
+  // Lifted (+y, anterior): 1.0 cm at 6 N (1.5 cm at 8 N). The paper's
+  // colon lifted more because its wall could lengthen; this wall cannot
+  // (docs/model.md, "Fig. 10"), and issue #17's 2 cm is not reached.
+  EXPECT_GT(soft.apex_lift_m, 0.008);
   EXPECT_GT(soft.peak_stretch_m, 0.015);
   // The reaction rises gradually: no step above 1 N in 10 ms, and it grows.
   EXPECT_LT(soft.largest_force_jump_N, 1.0);
