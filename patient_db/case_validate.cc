@@ -202,6 +202,19 @@ void CheckTissue(const ves::v1::TissueParams& t, int i, double min_radius_m, Che
   }
   check.InRange(f + "neighbor_tension_N", i, t.neighbor_tension_n(), 0.0, kMaxNeighborTension_N,
                 "N");
+  // The colon's mobility (0 and MOBILITY_DEFAULT: the region's defaults).
+  if (!ves::v1::Mobility_IsValid(t.mobility())) {
+    check.Add(f + "mobility", i, std::to_string(t.mobility()), "unknown Mobility");
+  }
+  check.InRange(f + "mesentery_length_m", i, t.mesentery_length_m(), 0.0, kMaxMesenteryLength_m,
+                "m");
+  check.InRange(f + "mesentery_stiffness_N_per_m2", i, t.mesentery_stiffness_n_per_m2(), 0.0,
+                kMaxMesenteryStiffness_N_per_m2, "N/m^2");
+  if (check.InRange(f + "pleat_limit", i, t.pleat_limit(), 0.0, 1.0, "") &&
+      t.pleat_limit() != 0.0 && t.pleat_limit() < kMinPleatLimit) {
+    check.Add(f + "pleat_limit", i, Num(t.pleat_limit()),
+              "must be 0 (the region's default) or in [" + Num(kMinPleatLimit) + ", 1]");
+  }
 }
 
 void CheckRegions(const ColonCase& c, double length_m, bool length_known, bool radius_usable,

@@ -26,6 +26,9 @@ inline constexpr double kMaxWallStiffness_N_per_m = 1e6;
 inline constexpr double kMaxWallDamping_N_s_per_m = 1e5;
 inline constexpr double kMaxFriction = 2.0;
 inline constexpr double kMaxNeighborTension_N = 1e4;
+inline constexpr double kMaxMesenteryLength_m = 0.5;
+inline constexpr double kMaxMesenteryStiffness_N_per_m2 = 1e7;
+inline constexpr double kMinPleatLimit = 0.05;
 inline constexpr int kMinProvenanceYear = 1900;
 inline constexpr int kMaxProvenanceYear = 2100;
 

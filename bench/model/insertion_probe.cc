@@ -1,9 +1,24 @@
-// insertion_probe: a position-driven insertion on a case with the knobs
-// steered toward the lumen (the simple rule of issue #3), printed once per
-// simulated second, so a model change can be judged by where the tip stalls.
+// insertion_probe: drives the model on a case and prints where the tip is,
+// once per simulated second, so a model or operator change can be judged by
+// what it does to an insertion (docs/model.md, "Probing an insertion").
 //   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
-// PROBE_* environment variables add loop reduction, parameter scaling, a
-// scripted operator, shape drawings and contact dumps (docs/model.md).
+// Without PROBE_OPERATOR it inserts by position at the given speed with the
+// simple steering rule (knobs turned toward the lumen 4 cm ahead), which is
+// the "a loop forms" driver of the model tests. PROBE_* variables:
+//   PROBE_OPERATOR=novice|expert   a scripted operator drives instead
+//   PROBE_ADVANCE, PROBE_WITHDRAW, PROBE_PUSH, PROBE_PULL, PROBE_LOOP_LIMIT,
+//   PROBE_ROLL_RATE  the expert's settings (ExpertOperator::Settings)
+//   PROBE_WITHDRAW_AT=M            position rule: at M metres inserted, withdraw
+//   PROBE_WITHDRAW_M=W             ... by W metres (default 0.25)
+//   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
+//   PROBE_REINSERT=1               ... then insert again; PROBE_WITHDRAW_EVERY=E
+//                                  repeats the withdrawal every E metres
+//   PROBE_MU=F, PROBE_SOFT_K=K, PROBE_EI=F, PROBE_MESENTERY_K=K, PROBE_PLEAT=L
+//                                  scale friction, set the mobile suspension,
+//                                  scale the tube's EI, set the mobile
+//                                  mesentery stiffness or pleat limit
+//   PROBE_DUMP_EVERY=S             draw both shapes to /tmp/probe_T.png every S s
+//   PROBE_DT_MS=DT                 another time step
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,10 +30,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "patient_db/case_format.h"
-#include "station/model/internal.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
-#include "station/training/observer.h"
+#include "station/training/metrics.h"
 #include "station/training/scripted_operator.h"
 #include "station/training/session_runner.h"
 
@@ -26,10 +40,15 @@ namespace {
 
 using ves::model::StepInput;
 
-// AP (x right = patient's left, z up) and lateral (y, z) projections: rest
-// centerline grey, deformed colon blue, scope red.
+double EnvOr(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v != nullptr ? std::atof(v) : fallback;
+}
+
+// AP (x, z) and lateral (y, z) projections: rest centerline grey, deformed
+// colon blue (darker where pleated), scope red.
 void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelState& state,
-               const std::string& path) {
+               const ves::model::StepOutput& out, const std::string& path) {
   const double px_per_m = 1200.0;
   cv::Mat image(900, 1100, CV_8UC3, cv::Scalar(255, 255, 255));
   auto to_px = [&](double h, double v, int panel) {
@@ -43,9 +62,10 @@ void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelSta
     const auto& pts = params.colon.points;
     for (size_t i = 1; i < pts.size(); ++i) {
       cv::line(image, project(pts[i - 1].rest_position_m), project(pts[i].rest_position_m),
-               cv::Scalar(200, 200, 200), 1);
+               cv::Scalar(210, 210, 210), 1);
+      const double pleat = std::clamp(out.pleat_ratio[i], 0.0, 1.0);
       cv::line(image, project(state.p_WColon[i - 1]), project(state.p_WColon[i]),
-               cv::Scalar(255, 0, 0), 1);
+               cv::Scalar(255, 200 * pleat, 200 * pleat), 2);
     }
     for (size_t k = 1; k < state.p_WSample.size(); ++k) {
       if (!state.contact[k].inside) continue;
@@ -54,91 +74,12 @@ void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelSta
     }
     cv::circle(image, project(state.X_WTip.translation()), 5, cv::Scalar(0, 0, 0), 2);
   }
+  cv::putText(image,
+              "t " + std::to_string(state.time_s).substr(0, 6) + " s  inserted " +
+                  std::to_string(state.inserted_m).substr(0, 5) + " m  tip arc " +
+                  std::to_string(state.tip_arc_m).substr(0, 5) + " m",
+              cv::Point(20, 30), cv::FONT_HERSHEY_SIMPLEX, 0.7, cv::Scalar(0, 0, 0), 1);
   cv::imwrite(path, image);
-}
-
-// One step whose base reaction passed 20 N: the contacts that make it up.
-void PrintSpike(const ves::model::ModelState& state, const StepInput& in,
-                const ves::model::StepOutput& out) {
-  std::printf("spike t=%.3f base %.1f N, knobs %.2f %.2f, push %.2f N\n", state.time_s,
-              out.base_force_N, in.knob_up_rad, in.knob_right_rad, in.push_force_N);
-  const Eigen::Vector3d e = state.X_WLink[0].linear().col(2);
-  double normal_sum_N = 0.0;
-  double friction_sum_N = 0.0;
-  for (int j = 0; j < out.contact_count; ++j) {
-    const auto& c = out.contacts[j];
-    const double along_N = -c.force_on_scope_W_N.dot(e);
-    const double normal_along_N = c.normal_force_N * c.normal_W.dot(e);
-    normal_sum_N += normal_along_N;
-    friction_sum_N += along_N - normal_along_N;
-    if (std::abs(along_N) <= 5.0) continue;
-    std::printf("   from_tip %.3f arc %.3f N %.1f pen %.4f along_e %.1f (normal %.1f) alpha %.2f\n",
-                c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.penetration_m, along_N,
-                normal_along_N, c.alpha);
-  }
-  std::printf("   along e: normal %.1f N, friction %.1f N, %d contacts\n", normal_sum_N,
-              friction_sum_N, out.contact_count);
-}
-
-// What moved in the step before a spike: the largest sample and colon point
-// displacements, and where they were.
-void PrintMotion(const ves::model::ModelParams& params, const ves::model::ModelState& before,
-                 const ves::model::ModelState& after, double previous_base_N) {
-  double sample_move_m = 0.0, colon_move_m = 0.0;
-  size_t sample_at = 0, colon_at = 0;
-  for (size_t k = 0; k < after.p_WSample.size(); ++k) {
-    const double d = (after.p_WSample[k] - before.p_WSample[k]).norm();
-    if (d > sample_move_m) sample_move_m = d, sample_at = k;
-  }
-  for (size_t i = 0; i < after.p_WColon.size(); ++i) {
-    const double d = (after.p_WColon[i] - before.p_WColon[i]).norm();
-    if (d > colon_move_m) colon_move_m = d, colon_at = i;
-  }
-  double turn_rad = 0.0;
-  size_t turn_at = 0;
-  int clamped = 0;
-  for (size_t k = 0; k < after.bend_rad.size(); ++k) {
-    const double d = (after.bend_rad[k] - before.bend_rad[k]).norm();
-    if (d > 0.0199) ++clamped;
-    if (d > turn_rad) turn_rad = d, turn_at = k;
-  }
-  std::printf("   largest joint turn %.4f rad at link %zu, %d joints at the per-step limit\n",
-              turn_rad, turn_at, clamped);
-  if (std::getenv("PROBE_SPIKE_DETAIL")) {
-    const Eigen::Vector3d dc = after.p_WColon[colon_at] - before.p_WColon[colon_at];
-    std::printf("   colon point %zu moved (%.4f %.4f %.4f)\n", colon_at, dc.x(), dc.y(), dc.z());
-    const int last_point = static_cast<int>(after.p_WColon.size()) - 1;
-    for (int i = std::max(0, static_cast<int>(colon_at) - 2);
-         i <= std::min(last_point, static_cast<int>(colon_at) + 2); ++i) {
-      const auto& pt = params.colon.points[i];
-      const Eigen::Vector3d& c = before.p_WColon[i];
-      std::printf("    point %d at (%.4f %.4f %.4f) offset %.4f rest tangent (%.2f %.2f %.2f) "
-                  "radius %.4f\n", i, c.x(), c.y(), c.z(), before.colon_offset_m[i].norm(),
-                  pt.rest_tangent.x(), pt.rest_tangent.y(), pt.rest_tangent.z(), pt.radius_m);
-    }
-    for (size_t k = 0; k < after.p_WSample.size(); ++k) {
-      const auto& cb = before.contact[k];
-      const auto& ca = after.contact[k];
-      if (std::abs(ca.segment - static_cast<int>(colon_at)) > 1 &&
-          std::abs(cb.segment - static_cast<int>(colon_at)) > 1) continue;
-      const Eigen::Vector3d ds = after.p_WSample[k] - before.p_WSample[k];
-      const Eigen::Vector3d& q = before.p_WSample[k];
-      std::printf("    sample %zu was at (%.4f %.4f %.4f) t %.2f\n", k, q.x(), q.y(), q.z(),
-                  cb.segment_t);
-      const auto mid = ves::model::internal::CalcSegmentHit(params, before, cb.segment,
-                                                           after.p_WSample[k]);
-      std::printf("    sample %zu seg %d->%d touching %d->%d pen %.4f->(new scope, old colon "
-                  "%.4f n %.2f %.2f %.2f)->%.4f sliding %d moved (%.4f %.4f %.4f)\n", k,
-                  cb.segment, ca.segment, cb.touching, ca.touching, cb.penetration_m,
-                  mid.penetration_m, mid.normal.x(), mid.normal.y(), mid.normal.z(),
-                  ca.penetration_m, ca.sliding, ds.x(), ds.y(), ds.z());
-    }
-  }
-  std::printf("   previous base %.1f N; step moved sample %zu by %.4f m, colon point %zu "
-              "(arc %.3f) by %.4f m; inserted %.4f -> %.4f\n",
-              previous_base_N, sample_at, sample_move_m, colon_at,
-              params.colon.points[colon_at].arc_m, colon_move_m, before.inserted_m,
-              after.inserted_m);
 }
 
 }  // namespace
@@ -153,193 +94,371 @@ int main(int argc, char** argv) {
   ves::training::CaseModelOptions options;
   if (argc > 4) options.segments = std::atoi(argv[4]);
   const auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
+  options.stiff_colon = std::getenv("PROBE_STIFF_COLON") != nullptr;
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);
-  // Experiments: PROBE_MU scales friction, PROBE_SOFT_K sets the suspension of
-  // the mobile (soft) points, PROBE_EI scales the tube rigidity.
   for (auto& point : params.colon.points) {
-    if (const char* mu = std::getenv("PROBE_MU")) {
-      point.tissue.static_friction *= std::atof(mu);
-      point.tissue.dynamic_friction *= std::atof(mu);
-    }
-    if (const char* k = std::getenv("PROBE_SOFT_K");
-        k && point.tissue.suspension_stiffness_N_per_m2 < 1000.0) {
-      point.tissue.suspension_stiffness_N_per_m2 = std::atof(k);
-    }
+    auto& t = point.tissue;
+    t.static_friction *= EnvOr("PROBE_MU", 1.0);
+    t.dynamic_friction *= EnvOr("PROBE_MU", 1.0);
+    if (!t.mobile) continue;
+    t.suspension_stiffness_N_per_m2 = EnvOr("PROBE_SOFT_K", t.suspension_stiffness_N_per_m2);
+    t.mesentery_stiffness_N_per_m2 = EnvOr("PROBE_MESENTERY_K", t.mesentery_stiffness_N_per_m2);
+    t.pleat_limit = EnvOr("PROBE_PLEAT", t.pleat_limit);
+    t.suspension_relaxation_s = EnvOr("PROBE_RELAX_S", t.suspension_relaxation_s);
+    t.neighbor_tension_N = EnvOr("PROBE_TENSION", t.neighbor_tension_N);
+    t.mesentery_length_m = EnvOr("PROBE_MESO_M", t.mesentery_length_m);
   }
-  if (const char* ei = std::getenv("PROBE_EI")) {
-    params.scope.flexural_rigidity_N_m2 *= std::atof(ei);
-  }
-  // PROBE_DT_MS: another step (the rule and the operators keep their rates).
-  if (const char* dt = std::getenv("PROBE_DT_MS")) params.dt_s = std::atof(dt) / 1000.0;
-  // PROBE_EA (0 turns the axial give off), PROBE_PLEAT, PROBE_PLEAT_LIMIT: the
-  // colon's axial give (docs/model.md).
-  if (const char* ea = std::getenv("PROBE_EA")) params.colon_longitudinal_stiffness_N = std::atof(ea);
-  if (const char* r = std::getenv("PROBE_PLEAT")) params.colon_pleat_stiffness_ratio = std::atof(r);
-  if (const char* l = std::getenv("PROBE_PLEAT_LIMIT")) params.colon_pleat_limit = std::atof(l);
-  // A colon pleated by f packs 1/(1 - f) of its arc on a unit of scope: with
-  // the give on, the tracking continuity limit must allow that much
-  // (docs/model.md); PROBE_TRACKING sets the ratio itself.
-  if (params.colon_longitudinal_stiffness_N > 0.0) {
-    params.tracking_arc_ratio =
-        std::max(params.tracking_arc_ratio, 1.0 / (1.0 - params.colon_pleat_limit));
-  }
-  if (const char* r = std::getenv("PROBE_TRACKING")) params.tracking_arc_ratio = std::atof(r);
+  params.colon.mesentery_shear_ratio = EnvOr("PROBE_SHEAR", params.colon.mesentery_shear_ratio);
+  params.colon.abdomen_margin_m = EnvOr("PROBE_ABDOMEN", params.colon.abdomen_margin_m);
+  params.colon.mesentery_anchor_by_arc = EnvOr("PROBE_ANCHOR_ARC", 0.0) != 0.0;
+  params.mesentery_reach_gathers = EnvOr("PROBE_REACH_GATHERS", 0.0) != 0.0;
+  ves::model::CalcMesenteryAnchors(&params.colon);
+  params.scope.flexural_rigidity_N_m2 *= EnvOr("PROBE_EI", 1.0);
+  params.scope.link_count = static_cast<int>(EnvOr("PROBE_LINKS", params.scope.link_count));
+  params.scope.bending_section_rigidity_N_m2 =
+      EnvOr("PROBE_BEND_EI", params.scope.bending_section_rigidity_N_m2);
+  params.scope.passive_section_length_m =
+      EnvOr("PROBE_PASSIVE_M", params.scope.passive_section_length_m);
+  params.scope.passive_section_rigidity_N_m2 =
+      EnvOr("PROBE_PASSIVE_EI", params.scope.passive_section_rigidity_N_m2);
+  params.dt_s = EnvOr("PROBE_DT_MS", params.dt_s * 1e3) * 1e-3;
+  params.colon_pleat_stiffness_N = EnvOr("PROBE_PLEAT_K", params.colon_pleat_stiffness_N);
+  params.colon_toe_stiffness_N = EnvOr("PROBE_TOE_K", params.colon_toe_stiffness_N);
+  params.colon_toe_strain = EnvOr("PROBE_TOE_STRAIN", params.colon_toe_strain);
+  params.colon_pleat_set_s = EnvOr("PROBE_PLEAT_SET_S", params.colon_pleat_set_s);
+  params.colon_pleat_release_s = EnvOr("PROBE_PLEAT_RELEASE_S", params.colon_pleat_release_s);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);
 
-  const double reduce_from_m =
-      std::getenv("PROBE_REDUCE_FROM") ? std::atof(std::getenv("PROBE_REDUCE_FROM")) : 1e9;
-  const double slack_start_m =
-      std::getenv("PROBE_SLACK") ? std::atof(std::getenv("PROBE_SLACK")) : 0.10;
-  // PROBE_SLACK_END: the slack at which a reduction stops (default 0.03 m;
-  // below 0 the scope is withdrawn until it is shorter than the centerline).
-  const double slack_end_m =
-      std::getenv("PROBE_SLACK_END") ? std::atof(std::getenv("PROBE_SLACK_END")) : 0.03;
-  // PROBE_PUSH_LIMIT: base reaction (N) above which a reduction starts (default 8).
-  const double push_limit_N =
-      std::getenv("PROBE_PUSH_LIMIT") ? std::atof(std::getenv("PROBE_PUSH_LIMIT")) : 8.0;
-  bool withdrawing = false;
-  double command_m = 0.0;
-  // PROBE_OPERATOR=novice|expert: the scripted operator drives instead of the rule.
   std::unique_ptr<ves::training::ScriptedOperator> scripted;
   if (const char* kind = std::getenv("PROBE_OPERATOR")) {
-    scripted = ves::training::MakeScriptedOperator(kind, params.dt_s);
+    ves::training::ExpertOperator::Settings expert;
+    expert.advance_speed_m_per_s = EnvOr("PROBE_ADVANCE", expert.advance_speed_m_per_s);
+    expert.withdraw_speed_m_per_s = EnvOr("PROBE_WITHDRAW", expert.withdraw_speed_m_per_s);
+    expert.push_limit_N = EnvOr("PROBE_PUSH", expert.push_limit_N);
+    expert.pull_limit_N = EnvOr("PROBE_PULL", expert.pull_limit_N);
+    expert.loop_limit_m = EnvOr("PROBE_LOOP_LIMIT", expert.loop_limit_m);
+    expert.roll_rate_rad_per_s = EnvOr("PROBE_ROLL_RATE", expert.roll_rate_rad_per_s);
+    scripted = ves::training::MakeScriptedOperator(kind, params.dt_s, expert);
   }
+  const double withdraw_at_m = EnvOr("PROBE_WITHDRAW_AT", 1e9);
+  const double withdraw_m = EnvOr("PROBE_WITHDRAW_M", 0.25);
+  const double roll_rate = EnvOr("PROBE_ROLL", 0.0);
+  const double dump_every_s = EnvOr("PROBE_DUMP_EVERY", 0.0);
+  double next_dump_s = 0.0;
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = 8.0;
-  std::printf("t_s inserted_m tip_arc_m base_N stretch_m@arc wall_N@arc knob_up knob_right "
-              "lumen_off_deg contacts\n");
-  int next_print = 0;
-  ves::model::ModelState previous = state;
-  ves::model::ModelState earlier = state;
-  // Read once: the switches below are consulted every step.
-  const char* relax = std::getenv("PROBE_RELAX");
-  // PROBE_LOOKAHEAD: how far ahead of the tip (m) the rule aims.
-  const double lookahead_m = std::getenv("PROBE_LOOKAHEAD")
-                                 ? std::atof(std::getenv("PROBE_LOOKAHEAD"))
-                                 : ves::training::kLumenLookahead_m;
-  const bool spikes = std::getenv("PROBE_SPIKES") != nullptr;
-  const char* dump = std::getenv("PROBE_DUMP_AT");
-  const double wall_over_N =
-      std::getenv("PROBE_WALL_OVER") ? std::atof(std::getenv("PROBE_WALL_OVER")) : 0.0;
-  double last_wall_print_s = -1.0;
-  // Summary at the end: the deepest tip, the stretch and wall force peaks,
-  // the seconds of stretch over 3 cm (the pain level), steps over 20 N.
+  double command_m = 0.0;
+  int phase = 0;  // position rule: 0 inserting, 1 withdrawing, 2 holding
+  // PROBE_REINSERT=1: after the withdrawal, insert again (reductions repeat
+  // every PROBE_WITHDRAW_EVERY metres of insertion when that is set).
+  const bool reinsert = std::getenv("PROBE_REINSERT") != nullptr;
+  double withdraw_at_m_next = withdraw_at_m;
+  double withdraw_at_reached_m = 0.0;
+  const double withdraw_every_m = EnvOr("PROBE_WITHDRAW_EVERY", 0.0);
+  // PROBE_REDUCE=1: reduce by the loop index (limits PROBE_FIXED_LIMIT and
+  // PROBE_MOBILE_LIMIT, m) until the tip comes back 1.5 cm.
+  const bool reduce_rule = std::getenv("PROBE_REDUCE") != nullptr;
+  const double fixed_limit_m = EnvOr("PROBE_FIXED_LIMIT", 0.06);
+  const double mobile_limit_m = EnvOr("PROBE_MOBILE_LIMIT", 0.25);
+  ves::training::LoopIndex loop_index;
+  double reduce_tip_max_m = 0.0;
+  Eigen::Vector3d pinned_tip_W = Eigen::Vector3d::Zero();
+  bool stiffened = false;
+  bool was_pulling = false;
+  double last_reduce_tip_m = -1.0;
+  double hold_until_s = 0.0;
+  double stall_tip_m = 0.0, stall_since_s = 0.0;  // PROBE_HOLD_S: hold still this long after a reduction
+  std::printf("t_s inserted_m tip_arc_m base_N roll_Nm stretch_m@arc wall_N fixed_mm "
+              "min_pleat knob_up knob_right\n");
+  double next_print_s = 0.0;
   double max_tip_arc_m = 0.0, max_stretch_m = 0.0, max_wall_N = 0.0, max_base_N = 0.0;
-  int stretched_s = 0, printed_s = 0, spike_steps = 0;
+  double max_fixed_m = 0.0, max_roll_Nm = 0.0;
+  long over_10N_steps = 0, steps = 0;
+  double stretch_over_s[4] = {0, 0, 0, 0};  // time with the stretch over 1, 2, 3, 4 cm
+  int spikes_printed = 0;
+  const bool spike_detail = std::getenv("PROBE_SPIKE_DETAIL") != nullptr;
+  ves::model::ModelState previous = state, before_previous = state;
   while (state.time_s < seconds) {
-    const auto p = ves::training::Perceive(params, state, out, lookahead_m);
-    const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
-    const double right_err = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
-    in.knob_up_rad = std::clamp(in.knob_up_rad + gain_per_s * up_err * params.dt_s,
-                                -p.angulation_up_rad, p.angulation_up_rad);
-    in.knob_right_rad = std::clamp(in.knob_right_rad + gain_per_s * right_err * params.dt_s,
-                                   -p.angulation_right_rad, p.angulation_right_rad);
-    // PROBE_RELAX=RATE: with the lumen ahead (within 30 degrees), the knobs
-    // ease toward neutral at RATE per second (the tip straightened).
-    if (relax && std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) < 0.52) {
-      const double keep = std::max(0.0, 1.0 - std::atof(relax) * params.dt_s);
-      in.knob_up_rad *= keep;
-      in.knob_right_rad *= keep;
-    }
-    // Loop reduction: when the scope goes in but the tip does not follow,
-    // withdraw (knobs held, tip hooked) until the slack is gone.
-    const double slack_m = state.inserted_m - state.tip_arc_m;
-    if (!withdrawing && state.tip_arc_m > reduce_from_m &&
-        (slack_m > slack_start_m || out.base_force_N > push_limit_N)) withdrawing = true;
-    if (withdrawing && slack_m < slack_end_m) withdrawing = false;
-    command_m += (withdrawing ? -1.0 : 1.0) * speed_m_per_s * params.dt_s;
-    command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
-    in.insertion_m = command_m;
-    if (scripted) in = ves::training::ToStepInput(scripted->Act(p));
-    // A spike's contacts are those at the start of its step: what made them
-    // is the step before, from `earlier` to `previous`.
-    if (spikes) earlier = previous, previous = state;
-    const double previous_base_N = out.base_force_N;
-    ves::model::Step(params, in, &state, &scratch, &out);
-    max_tip_arc_m = std::max(max_tip_arc_m, state.tip_arc_m);
-    max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
-    max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
-    max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
-    if (std::abs(out.base_force_N) > 20.0) ++spike_steps;
-    if (spikes && std::abs(out.base_force_N) > 20.0) {
-      PrintSpike(state, in, out);
-      PrintMotion(params, earlier, previous, previous_base_N);
-    }
-    // PROBE_WALL_OVER=N: the contacts of a step whose largest wall force passes N (once per 0.2 s).
-    if (wall_over_N > 0.0 && out.peak_wall_force_N > wall_over_N &&
-        state.time_s - last_wall_print_s > 0.2) {
-      last_wall_print_s = state.time_s;
-      std::printf(
-          "wall t=%.3f peak %.1f N, base %.2f N, push %.2f N, knobs %.2f %.2f, inserted %.3f "
-          "tip %.3f\n",
-          state.time_s, out.peak_wall_force_N, out.base_force_N, in.push_force_N, in.knob_up_rad,
-          in.knob_right_rad, state.inserted_m, state.tip_arc_m);
-      for (int j = 0; j < out.contact_count; ++j) {
-        const auto& c = out.contacts[j];
-        if (c.normal_force_N < 1.0) continue;
-        std::printf("   from_tip %.3f colon_arc %.3f N %.2f pen %.4f alpha %.2f\n",
-                    c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.penetration_m,
-                    c.alpha);
+    const auto p = ves::training::Perceive(params, state, out);
+    if (const char* push = std::getenv("PROBE_PUSH_FORCE")) {
+      // Fig. 10: a constant push, knobs neutral.
+      in = StepInput{};
+      in.thrust_mode = ves::model::ThrustMode::kForce;
+      in.push_force_N = std::atof(push);
+    } else if (scripted) {
+      const auto sample = scripted->Act(p);
+      in = ves::training::ToStepInput(sample);
+      // Phase changes of the scripted operator (its hand reverses).
+      const bool pulling = sample.push_force_N < 0.0;
+      if (pulling != was_pulling && std::getenv("PROBE_PHASES")) {
+        std::printf("  %s at t=%.2f: tip %.3f m, inserted %.3f m\n", pulling ? "pull" : "push",
+                    state.time_s, state.tip_arc_m, state.inserted_m);
       }
+      was_pulling = pulling;
+    } else {
+      if (phase == 0) {  // steer; withdrawing, the knobs hold the tip hooked
+        const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
+        const double right_err = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
+        in.knob_up_rad = std::clamp(in.knob_up_rad + gain_per_s * up_err * params.dt_s,
+                                    -p.angulation_up_rad, p.angulation_up_rad);
+        in.knob_right_rad = std::clamp(in.knob_right_rad + gain_per_s * right_err * params.dt_s,
+                                       -p.angulation_right_rad, p.angulation_right_rad);
+        // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
+        const double knob_max = EnvOr("PROBE_KNOB_MAX", 10.0);
+        const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
+        if (bend > knob_max) {
+          in.knob_up_rad *= knob_max / bend;
+          in.knob_right_rad *= knob_max / bend;
+        }
+      }
+      if (reduce_rule) {
+        // Loop reduction by the loop index (as the expert does it, by position).
+        const double loop_m = loop_index.Update(state.inserted_m, state.tip_arc_m);
+        const double limit_m = p.tip_into_fixed_colon_m >= 0.08 ? fixed_limit_m : mobile_limit_m;
+        if (phase == 1 && std::getenv("PROBE_PIN_TIP")) {
+          // Experiment: hold the tip where the reduction started (a perfect hook).
+          in.tip_force_W_N = 2000.0 * (pinned_tip_W - state.X_WTip.translation());
+        } else {
+          in.tip_force_W_N.setZero();
+        }
+        // After a reduction, the next one waits until the tip has gone
+        // PROBE_REDUCE_AGAIN_M (default 0.10 m) deeper: a loop re-formed by
+        // pushing on is taut before the tip moves.
+        const bool deeper = state.tip_arc_m > last_reduce_tip_m + EnvOr("PROBE_REDUCE_AGAIN_M", 0.10);
+        const bool full = state.inserted_m > params.scope.working_length_m - 0.08;
+        // A stall with the scope all in: the tip has not advanced for a while.
+        if (state.tip_arc_m > stall_tip_m + 0.005) {
+          stall_tip_m = state.tip_arc_m;
+          stall_since_s = state.time_s;
+        }
+        const bool stalled = state.time_s - stall_since_s > EnvOr("PROBE_STALL_S", 1e9);
+        if (phase == 0 && ((loop_m > limit_m && deeper) || (full && (deeper || stalled)))) {
+          stall_since_s = state.time_s;
+          last_reduce_tip_m = state.tip_arc_m;
+          pinned_tip_W = state.X_WTip.translation();
+          std::printf("  reduce at t=%.2f: loop %.3f m, tip %.3f m (%s), inserted %.3f m\n",
+                      state.time_s, loop_m, state.tip_arc_m,
+                      p.tip_into_fixed_colon_m >= 0.08 ? "hooked" : "not hooked", state.inserted_m);
+          phase = 1;
+          reduce_tip_max_m = state.tip_arc_m;
+          withdraw_at_reached_m = command_m;
+        }
+        if (phase == 1) {
+          reduce_tip_max_m = std::max(reduce_tip_max_m, state.tip_arc_m);
+          if (state.tip_arc_m < reduce_tip_max_m - 0.015 ||
+              withdraw_at_reached_m - command_m > 0.3) {
+            std::printf("  advance at t=%.2f: tip %.3f m, inserted %.3f m\n", state.time_s,
+                        state.tip_arc_m, state.inserted_m);
+            phase = 0;
+            hold_until_s = state.time_s + EnvOr("PROBE_HOLD_S", 0.0);
+            if (std::getenv("PROBE_UNHOOK")) in.knob_up_rad = in.knob_right_rad = 0.0;
+            // Experiment: PROBE_STIFFEN=R stiffens the insertion tube R times
+            // after the first reduction (a variable-stiffness colonoscope).
+            if (!stiffened && EnvOr("PROBE_STIFFEN", 1.0) != 1.0) {
+              stiffened = true;
+              for (int k = 1; k < state.first_bending_link; ++k) {
+                if (params.scope.flexural_rigidity_N_m2 / state.joint_stiffness_N_m_per_rad[k] > 0.0 &&
+                    std::abs(state.joint_stiffness_N_m_per_rad[k] * 0.5 *
+                                 (state.link_length_m[k - 1] + state.link_length_m[k]) -
+                             params.scope.flexural_rigidity_N_m2) < 1e-9) {
+                  state.joint_stiffness_N_m_per_rad[k] *= EnvOr("PROBE_STIFFEN", 1.0);
+                }
+              }
+              std::printf("  stiffened the insertion tube\n");
+            }
+          }
+        }
+      } else if (phase == 0 && command_m >= withdraw_at_m_next) {
+        phase = 1;
+        withdraw_at_reached_m = command_m;
+      }
+      if (!reduce_rule && phase == 1 && command_m <= withdraw_at_reached_m - withdraw_m) {
+        phase = reinsert ? 0 : 2;
+        withdraw_at_m_next =
+            withdraw_every_m > 0.0 ? withdraw_at_reached_m + withdraw_every_m : 1e9;
+      }
+      if (phase == 0 && state.time_s >= hold_until_s) command_m += speed_m_per_s * params.dt_s;
+      if (phase == 1) {
+        command_m -= speed_m_per_s * params.dt_s;
+        in.roll_rad += roll_rate * params.dt_s;
+        // PROBE_HOOK=A: while withdrawing, angulate the tip to at least A rad
+        // in the direction it is bent (hook the flexure).
+        const double hook_rad = EnvOr("PROBE_HOOK", 0.0);
+        const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
+        if (hook_rad > 0.0 && bend > 1e-3 && bend < hook_rad) {
+          const double grow = std::min(hook_rad / bend, 1.0 + 2.0 * params.dt_s);
+          in.knob_up_rad *= grow;
+          in.knob_right_rad *= grow;
+        }
+      }
+      command_m = std::clamp(command_m, 0.0, params.scope.working_length_m - 0.05);
+      in.insertion_m = command_m;
     }
+    if (spike_detail) before_previous = previous, previous = state;
+    ves::model::Step(params, in, &state, &scratch, &out);
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);
       return 1;
     }
-    if (dump && next_print == std::atoi(dump) && state.time_s >= next_print) {
-      DumpShape(params, state, "/tmp/probe_" + std::to_string(next_print) + ".png");
+    max_tip_arc_m = std::max(max_tip_arc_m, state.tip_arc_m);
+    max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
+    max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
+    max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
+    max_roll_Nm = std::max(max_roll_Nm, std::abs(out.roll_torque_Nm));
+    max_fixed_m = std::max(max_fixed_m, out.peak_fixed_displacement_m);
+    if (std::abs(out.base_force_N) > 10.0) ++over_10N_steps;
+    for (int t = 0; t < 4; ++t) {
+      if (out.peak_stretch_m > 0.01 * (t + 1)) stretch_over_s[t] += params.dt_s;
     }
-    if (state.time_s >= next_print) {
-      ++next_print;
-      ++printed_s;
-      if (out.peak_stretch_m > 0.03) ++stretched_s;
-      int wall_i = 0;
-      for (size_t i = 0; i < out.wall_force_N.size(); ++i)
-        if (out.wall_force_N[i] > out.wall_force_N[wall_i]) wall_i = static_cast<int>(i);
-      std::printf("%5.1f %.3f %.3f %6.2f %.3f@%.2f %5.2f@%.2f %5.2f %5.2f %5.1f %d\n", state.time_s,
-                  state.inserted_m, state.tip_arc_m, out.base_force_N, out.peak_stretch_m,
-                  out.peak_stretch_arc_m, out.peak_wall_force_N,
-                  params.colon.points[wall_i].arc_m, in.knob_up_rad, in.knob_right_rad,
-                  std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0)) * 180 / M_PI,
-                  out.contact_count);
-      if (std::getenv("PROBE_TIP")) {
-        const auto& c = state.contact.back();
-        const Eigen::Vector3d tip = state.X_WTip.translation();
-        std::printf("    tip (%.3f %.3f %.3f) seg %d t %.2f pen %.4f offset %.4f\n", tip.x(),
-                    tip.y(), tip.z(), c.segment, c.segment_t, c.penetration_m,
-                    state.colon_offset_m[c.segment].norm());
+    ++steps;
+    if ((std::abs(out.base_force_N) > 30.0 || std::abs(out.roll_torque_Nm) > 1.0) &&
+        spikes_printed < 5) {
+      ++spikes_printed;
+      std::printf("  spike t=%.3f base %.1f N roll %.2f N m push %.2f roll_in %.3f\n",
+                  state.time_s, out.base_force_N, out.roll_torque_Nm, in.push_force_N,
+                  in.roll_rad);
+      if (spike_detail) {
+        // What moved in the step before: the largest sample and colon point moves.
+        double sample_move = 0.0, colon_move = 0.0, turn = 0.0;
+        int sample_at = 0, colon_at = 0, turn_at = 0;
+        for (size_t k = 0; k < previous.p_WSample.size(); ++k) {
+          const double d = (previous.p_WSample[k] - before_previous.p_WSample[k]).norm();
+          if (d > sample_move) sample_move = d, sample_at = static_cast<int>(k);
+        }
+        for (size_t i = 0; i < previous.p_WColon.size(); ++i) {
+          const double d = (previous.p_WColon[i] - before_previous.p_WColon[i]).norm();
+          if (d > colon_move) colon_move = d, colon_at = static_cast<int>(i);
+        }
+        for (size_t k = 0; k < previous.bend_rad.size(); ++k) {
+          const double d = (previous.bend_rad[k] - before_previous.bend_rad[k]).norm();
+          if (d > turn) turn = d, turn_at = static_cast<int>(k);
+        }
+        std::printf("    step before: sample %d moved %.5f m, colon point %d moved %.5f m, joint %d "
+                    "turned %.4f rad, roll %.4f -> %.4f, inserted %.5f -> %.5f\n",
+                    sample_at, sample_move, colon_at, colon_move, turn_at, turn,
+                    before_previous.roll_rad, previous.roll_rad, before_previous.inserted_m,
+                    previous.inserted_m);
+        const Eigen::Vector3d e = params.colon.points.front().rest_tangent;
+        for (int j = 0; j < out.contact_count; ++j) {
+          const auto& c = out.contacts[j];
+          const double moment = e.dot(c.p_W.cross(c.force_on_scope_W_N));
+          if (c.force_on_scope_W_N.norm() < 3.0 && std::abs(moment) < 0.5) continue;
+          std::printf("    moment %.2f ", moment);
+          std::printf("    sample %d from_tip %.3f arc %.3f N %.1f pen %.4f |F| %.1f alpha %.2f\n",
+                      c.sample, c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N,
+                      c.penetration_m, c.force_on_scope_W_N.norm(), c.alpha);
+        }
       }
-      if (std::getenv("PROBE_AXIAL")) {
-        // Axial give every 0.1 m of colon (mm, + toward the cecum).
-        std::printf("    axial_mm");
+    }
+    if (dump_every_s > 0.0 && state.time_s >= next_dump_s) {
+      DumpShape(params, state, out,
+                "/tmp/probe_" + std::to_string(static_cast<int>(std::lround(next_dump_s))) + ".png");
+      next_dump_s += dump_every_s;
+    }
+    if (state.time_s >= next_print_s) {
+      next_print_s += 1.0;
+      const double min_pleat = *std::min_element(out.pleat_ratio.begin(), out.pleat_ratio.end());
+      // Samples farther from their tracked segment than its lumen allows (lost).
+      int lost = 0;
+      for (size_t k = 0; k < state.contact.size(); ++k) {
+        const auto& c = state.contact[k];
+        if (!c.inside || c.penetration_m < 0.02) continue;
+        ++lost;
+        if (std::getenv("PROBE_LOST") && lost <= 3) {
+          std::printf("    lost sample %zu seg %d pen %.3f\n", k, c.segment, c.penetration_m);
+        }
+      }
+      if (lost > 0) std::printf("    %d samples beyond 2 cm of their lumen\n", lost);
+      if (std::getenv("PROBE_SIDE")) {  // the mobile point farthest through its root
+        double worst = 1e9;
+        int at = -1;
+        for (size_t i = 0; i < params.colon.points.size(); ++i) {
+          const auto& pt = params.colon.points[i];
+          if (pt.tether_side.squaredNorm() < 0.5) continue;
+          const double h = (state.p_WColon[i] - pt.tether_anchor_m).dot(pt.tether_side);
+          if (h < worst) worst = h, at = static_cast<int>(i);
+        }
+        if (at >= 0) {
+          const auto& pt = params.colon.points[at];
+          const Eigen::Vector3d& x = state.p_WColon[at];
+          std::printf("    side: point %d arc %.3f h %.3f at (%.3f %.3f %.3f) anchor (%.3f %.3f %.3f)\n", at,
+                      pt.arc_m, worst, x.x(), x.y(), x.z(), pt.tether_anchor_m.x(),
+                      pt.tether_anchor_m.y(), pt.tether_anchor_m.z());
+        }
+      }
+      if (std::getenv("PROBE_REGIONS") && static_cast<long>(state.time_s) % static_cast<long>(EnvOr("PROBE_REGIONS", 10)) == 0) {
+        // Where the scope lies: per region, the scope length tracked to it,
+        // the colon's current path length, its rest length and its chord.
+        double scope_m[9] = {0}, path_m[9] = {0}, rest_m[9] = {0};
+        int first[9], last[9];
+        std::fill(first, first + 9, -1);
+        std::fill(last, last + 9, -1);
         const auto& pts = params.colon.points;
-        double next_arc_m = 0.1;
-        for (size_t i = 0; i < pts.size(); ++i) {
-          if (pts[i].arc_m < next_arc_m) continue;
-          std::printf(" %.0f", 1e3 * state.colon_axial_m[i]);
-          next_arc_m += 0.1;
+        for (size_t i = 1; i < pts.size(); ++i) {
+          const int r = static_cast<int>(pts[i].region);
+          path_m[r] += (state.p_WColon[i] - state.p_WColon[i - 1]).norm();
+          rest_m[r] += (pts[i].rest_position_m - pts[i - 1].rest_position_m).norm();
+          if (first[r] < 0) first[r] = static_cast<int>(i);
+          last[r] = static_cast<int>(i);
+        }
+        for (int k = state.first_inside_sample + 1; k < static_cast<int>(state.contact.size()); ++k) {
+          if (!state.contact[k].inside) continue;
+          const int r = static_cast<int>(pts[state.contact[k].segment].region);
+          scope_m[r] += (state.p_WSample[k] - state.p_WSample[k - 1]).norm();
+        }
+        std::printf("    regions (scope/path/rest/chord m):");
+        const char* names[9] = {"?", "rect", "sig", "desc", "splen", "trans", "hep", "asc", "cec"};
+        for (int r = 1; r < 9; ++r) {
+          if (first[r] < 0) continue;
+          std::printf(" %s %.2f/%.2f/%.2f/%.2f", names[r], scope_m[r], path_m[r], rest_m[r],
+                      (state.p_WColon[last[r]] - state.p_WColon[first[r] - 1]).norm());
         }
         std::printf("\n");
       }
-      if (std::getenv("PROBE_CONTACTS")) {
-        for (int j = 0; j < out.contact_count; ++j) {
-          const auto& c = out.contacts[j];
-          if (c.normal_force_N < 0.2) continue;
-          const Eigen::Vector3d axis = state.X_WLink[state.samples[c.sample].link].linear().col(2);
-          std::printf("    from_tip %.3f colon_arc %.3f N %.2f alpha %.2f axial_on_scope %.2f\n",
-                      c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N, c.alpha,
-                      c.force_on_scope_W_N.dot(axis));
+      if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples
+        std::printf("    track");
+        for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); k += 3) {
+          const auto& c = state.contact[k];
+          std::printf(" %.3f", params.colon.points[c.segment].arc_m);
         }
+        std::printf("\n");
+        if (std::getenv("PROBE_TRACK_DETAIL")) {
+          for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); ++k) {
+            const auto& c = state.contact[k];
+            const Eigen::Vector3d& q = state.p_WSample[k];
+            int nearest = 0;
+            for (size_t m = 0; m < state.p_WColon.size(); ++m) {
+              if ((state.p_WColon[m] - q).norm() < (state.p_WColon[nearest] - q).norm()) {
+                nearest = static_cast<int>(m);
+              }
+            }
+            std::printf("      sample %d tracked %.3f (%.3f m away, pen %.4f) nearest %.3f (%.3f m)\n",
+                        k, params.colon.points[c.segment].arc_m,
+                        (state.p_WColon[c.segment] - q).norm(), c.penetration_m,
+                        params.colon.points[nearest].arc_m, (state.p_WColon[nearest] - q).norm());
+          }
+        }
+      }
+      std::printf("%5.1f %.3f %.3f %6.2f %5.2f %.3f@%.2f %5.2f %4.1f %.2f %5.2f %5.2f\n",
+                  state.time_s, state.inserted_m, state.tip_arc_m, out.base_force_N,
+                  out.roll_torque_Nm, out.peak_stretch_m, out.peak_stretch_arc_m,
+                  out.peak_wall_force_N, 1e3 * out.peak_fixed_displacement_m, min_pleat,
+                  in.knob_up_rad, in.knob_right_rad);
+      if (std::getenv("PROBE_INPUT")) {
+        std::printf("    push %.2f roll %.2f\n", in.push_force_N, in.roll_rad);
       }
     }
   }
-  std::printf("summary: max tip arc %.3f m, stretch peak %.3f m, over 3 cm %d of %d s, "
-              "wall peak %.1f N, %d steps over 20 N (largest %.1f N)\n",
-              max_tip_arc_m, max_stretch_m, stretched_s, printed_s, max_wall_N, spike_steps,
-              max_base_N);
+  std::printf("summary: max tip arc %.3f m, inserted %.3f m, stretch peak %.3f m, wall peak %.1f "
+              "N, base peak %.1f N (over 10 N %.1f %% of steps), roll peak %.2f N m, fixed moved "
+              "%.1f mm\n",
+              max_tip_arc_m, state.inserted_m, max_stretch_m, max_wall_N, max_base_N,
+              100.0 * over_10N_steps / std::max(1L, steps), max_roll_Nm, 1e3 * max_fixed_m);
+  std::printf("stretch over 1/2/3/4 cm: %.1f / %.1f / %.1f / %.1f s\n", stretch_over_s[0],
+              stretch_over_s[1], stretch_over_s[2], stretch_over_s[3]);
   return 0;
 }

@@ -33,9 +33,8 @@ ModelParams MakeParams(int links, int segments) {
   return params;
 }
 
-void BM_Step(benchmark::State& bench, int links, int segments, double axial_EA_N = 0.0) {
+void BM_Step(benchmark::State& bench, int links, int segments) {
   ModelParams params = MakeParams(links, segments);
-  params.colon_longitudinal_stiffness_N = axial_EA_N;  // > 0: the axial give (docs/model.md)
   ModelState state = MakeInitialState(params);
   Scratch scratch = MakeScratch(params);
   StepOutput out = MakeStepOutput(params);
@@ -59,8 +58,6 @@ void BM_Step(benchmark::State& bench, int links, int segments, double axial_EA_N
 
 // Paper §3.6: 5 movable joints (4 bending + the base) and 150 segments.
 BENCHMARK_CAPTURE(BM_Step, paper_5joints_150seg, 5, 150)->Unit(benchmark::kMicrosecond);
-// The same with the axial give on (EA 20 N, experimental, off by default).
-BENCHMARK_CAPTURE(BM_Step, paper_5joints_150seg_axial, 5, 150, 20.0)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, default_48links_150seg, 48, 150)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, target_64links_1000seg, 64, 1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, scaling_64links_250seg, 64, 250)->Unit(benchmark::kMicrosecond);

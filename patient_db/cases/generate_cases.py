@@ -72,6 +72,19 @@ REDUNDANT_SIGMOID = [(0.005, -0.040, 0.125), (-0.010, -0.026, 0.158), (-0.032, -
                      (0.104, 0.042, 0.175), (0.112, 0.010, 0.195), (0.114, -0.018, 0.208),
                      (0.112, -0.035, 0.225)]
 
+# Long sigmoid (~0.5 m) and long, low transverse (~0.55 m) for the case whose
+# descending colon keeps a mesentery (a persistent descending mesocolon).
+LONG_SIGMOID = [(0.005, -0.040, 0.125), (-0.012, -0.020, 0.150), (-0.035, 0.002, 0.166),
+                (-0.055, 0.030, 0.178), (-0.064, 0.062, 0.194), (-0.054, 0.090, 0.214),
+                (-0.026, 0.106, 0.230), (0.010, 0.110, 0.238), (0.046, 0.102, 0.236),
+                (0.076, 0.082, 0.228), (0.096, 0.055, 0.218), (0.107, 0.025, 0.210),
+                (0.111, -0.005, 0.208), (0.112, -0.035, 0.225)]
+LONG_TRANSVERSE = [(0.097, 0.016, 0.488), (0.090, 0.042, 0.458), (0.079, 0.066, 0.420),
+                   (0.064, 0.088, 0.380), (0.044, 0.105, 0.342), (0.020, 0.116, 0.312),
+                   (-0.006, 0.120, 0.298), (-0.032, 0.116, 0.302), (-0.056, 0.107, 0.320),
+                   (-0.077, 0.094, 0.346), (-0.095, 0.077, 0.372), (-0.108, 0.058, 0.396),
+                   (-0.116, 0.038, 0.414), (-0.118, 0.020, 0.428)]
+
 STANDARD = [("rectum", RECTUM), ("sigmoid", SIGMOID), ("descending", DESCENDING),
             ("splenic-flexure", SPLENIC), ("transverse", TRANSVERSE),
             ("hepatic-flexure", HEPATIC), ("ascending", ASCENDING), ("cecum", CECUM)]
@@ -201,15 +214,22 @@ def self_proximity(points, arcs, profile):
 
 
 def tissue_text(name, mobility):
+    """mobility: "fixed", "mobile" or "very" (the region's name decides whether it
+    hangs on a mesentery), or "fixed!"/"mobile!" to say so explicitly."""
+    explicit = mobility.endswith("!")
+    mobility = mobility.rstrip("!")
     k = FIXED if mobility == "fixed" else (VERY_MOBILE if mobility == "very" else MOBILE)
-    return (f"    suspension_stiffness_N_per_m2: {k['K_c']:g}\n"
+    text = (f"    suspension_stiffness_N_per_m2: {k['K_c']:g}\n"
             f"    suspension_damping_N_s_per_m2: {k['D_c']:g}\n"
             "    wall_stiffness_N_per_m: 400\n"
             "    wall_damping_N_s_per_m: 4\n"
             "    deformation_threshold_m: 0.004\n"
-            "    static_friction: 0.25\n"
-            "    dynamic_friction: 0.15\n"
+            "    static_friction: 0.15\n"
+            "    dynamic_friction: 0.10\n"
             "    neighbor_tension_N: 2\n")
+    if explicit:
+        text += f"    mobility: MOBILITY_{'FIXED' if mobility == 'fixed' else 'MOBILE'}\n"
+    return text
 
 
 def case_text(spec, points, arcs, spans, profile):
@@ -267,9 +287,21 @@ CASES = {
                     "loop-prone, the hard case.",
         notes="Synthetic; redundant sigmoid as described in colonoscopy series, see "
               "docs/case-format.md."),
+    "mobile-descending": dict(
+        regions=[STANDARD[0], ("sigmoid", LONG_SIGMOID)] + STANDARD[2:4] +
+                [("transverse", LONG_TRANSVERSE)] + STANDARD[5:],
+        id="mobile-descending", title="Long colon with a mobile descending colon",
+        difficulty="DIFFICULTY_HARD",
+        mobility=lambda n: "mobile!" if n == "descending" else standard_mobility(n),
+        description="A long sigmoid and a long, low transverse colon, and a descending colon "
+                    "that keeps its mesentery (a persistent descending mesocolon): the "
+                    "sigmoid loop can reach up the left side, and the scope has no fixed "
+                    "colon to hook until the splenic flexure.",
+        notes="Synthetic; persistent descending mesocolon in 15-36 % of adults, see "
+              "docs/case-format.md."),
     "fixed-tube": dict(
         regions=STANDARD, id="fixed-tube", title="Fixed tube (older rigid model)",
-        difficulty="DIFFICULTY_EASY", mobility=lambda n: "fixed",
+        difficulty="DIFFICULTY_EASY", mobility=lambda n: "fixed!",
         description="The path of standard-adult with every suspension stiff: the older "
                     "fixed-tube model the paper compares against.",
         notes="Synthetic; same geometry as standard-adult."),

@@ -19,7 +19,32 @@ void Require(bool ok, const std::string& what, double value, const char* rule) {
 
 bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= lo && x <= hi; }
 
+// A mobile point hanging less than this far from its root has no side.
+constexpr double kMinHang_m = 0.01;
+
 }  // namespace
+
+bool IsMobileByDefault(Region region) {
+  return region == Region::kSigmoid || region == Region::kTransverse;
+}
+
+MobilityDefaults DefaultMobility(Region region, bool mobile) {
+  if (!mobile) {
+    // Retroperitoneal: held elastically at its place, a few millimetres of
+    // travel under the loads of insertion.
+    return {.mesentery_length_m = 0.0,
+            .mesentery_stiffness_N_per_m2 = 1.0e5,
+            .pleat_limit = 0.9,
+            .suspension_relaxation_s = 0.0};
+  }
+  // Mesocolon height 6.3 cm (sigmoid) and 7.4 cm (transverse); a persistent
+  // descending mesocolon is taken as the sigmoid's.
+  const double length_m = region == Region::kTransverse ? 0.074 : 0.063;
+  return {.mesentery_length_m = length_m,
+          .mesentery_stiffness_N_per_m2 = 1000.0,
+          .pleat_limit = 0.3,
+          .suspension_relaxation_s = 10.0};
+}
 
 void ValidateTissue(const TissueParams& t) {
   Require(InRange(t.suspension_stiffness_N_per_m2, 0.0, 1.0e7), "suspension_stiffness_N_per_m2",
@@ -39,10 +64,24 @@ void ValidateTissue(const TissueParams& t) {
           t.dynamic_friction, "must be in [0, static_friction]");
   Require(InRange(t.neighbor_tension_N, 0.0, 1.0e4), "neighbor_tension_N", t.neighbor_tension_N,
           "must be in [0, 1e4]");
+  Require(InRange(t.mesentery_length_m, 0.0, 0.5), "mesentery_length_m", t.mesentery_length_m,
+          "must be in [0, 0.5] m");
+  Require(InRange(t.mesentery_stiffness_N_per_m2, 0.0, 1.0e7), "mesentery_stiffness_N_per_m2",
+          t.mesentery_stiffness_N_per_m2, "must be in [0, 1e7]");
+  Require(InRange(t.pleat_limit, 0.05, 1.0), "pleat_limit", t.pleat_limit,
+          "must be in [0.05, 1]");
+  Require(InRange(t.suspension_relaxation_s, 0.0, 1.0e6), "suspension_relaxation_s",
+          t.suspension_relaxation_s, "must be in [0, 1e6] s (0: never)");
 }
 
 void ValidateColon(const ColonSpec& colon) {
   const int n = static_cast<int>(colon.points.size());
+  Require(InRange(colon.mesentery_shear_ratio, 1.0, 100.0), "mesentery_shear_ratio",
+          colon.mesentery_shear_ratio, "must be in [1, 100]");
+  Require(InRange(colon.mesentery_crossing_m, 0.0, 1.0), "mesentery_crossing_m",
+          colon.mesentery_crossing_m, "must be in [0, 1] m");
+  Require(InRange(colon.root_wall_stiffness_N_per_m2, 0.0, 1.0e7), "root_wall_stiffness_N_per_m2",
+          colon.root_wall_stiffness_N_per_m2, "must be in [0, 1e7]");
   Require(n >= 3 && n <= 20000, "points.size", n, "must be in [3, 20000]");
   for (int i = 0; i < n; ++i) {
     const ColonPoint& p = colon.points[i];
@@ -60,6 +99,10 @@ void ValidateColon(const ColonSpec& colon) {
       Require(gap > 1.0e-6, at + "spacing_m", gap, "consecutive points must differ");
     }
     ValidateTissue(p.tissue);
+    Require(p.tether_anchor_m.allFinite(), at + "tether_anchor_m.norm", p.tether_anchor_m.norm(),
+            "must be finite");
+    Require(InRange(p.tether_length_m, 0.0, 10.0), at + "tether_length_m", p.tether_length_m,
+            "must be in [0, 10] m");
   }
 }
 
@@ -96,8 +139,69 @@ ColonSpec MakeColonFromPoints(const std::vector<Eigen::Vector3d>& positions_m, d
     p.plane_u = u;
     p.plane_v = p.rest_tangent.cross(u);
   }
+  CalcMesenteryAnchors(&colon);
   ValidateColon(colon);
   return colon;
+}
+
+double CalcTetherDistance(const Eigen::Vector3d& r, const Eigen::Vector3d& root_direction,
+                          double shear_ratio) {
+  const double along = r.dot(root_direction);
+  return std::sqrt(std::max(0.0, r.squaredNorm() + (shear_ratio * shear_ratio - 1.0) * along * along));
+}
+
+void CalcMesenteryAnchors(ColonSpec* colon) {
+  const double shear_ratio = colon->mesentery_shear_ratio;
+  auto& pts = colon->points;
+  const int n = static_cast<int>(pts.size());
+  int i = 0;
+  while (i < n) {
+    if (!pts[i].tissue.mobile) {
+      pts[i].tether_anchor_m = pts[i].rest_position_m;
+      pts[i].tether_length_m = pts[i].tissue.mesentery_length_m;
+      pts[i].tether_root_direction.setZero();
+      pts[i].tether_side.setZero();
+      ++i;
+      continue;
+    }
+    int end = i;  // the run of mobile points is [i, end)
+    while (end < n && pts[end].tissue.mobile) ++end;
+    const Eigen::Vector3d root_a = pts[std::max(i - 1, 0)].rest_position_m;
+    const Eigen::Vector3d root_b = pts[std::min(end, n - 1)].rest_position_m;
+    const Eigen::Vector3d chord = root_b - root_a;
+    const double chord2 = chord.squaredNorm();
+    for (int k = i; k < end; ++k) {
+      ColonPoint& p = pts[k];
+      const double arc_a = pts[std::max(i - 1, 0)].arc_m;
+      const double arc_b = pts[std::min(end, n - 1)].arc_m;
+      const double s =
+          colon->mesentery_anchor_by_arc && arc_b > arc_a
+              ? std::clamp((p.arc_m - arc_a) / (arc_b - arc_a), 0.0, 1.0)
+          : chord2 > 1e-12 ? std::clamp((p.rest_position_m - root_a).dot(chord) / chord2, 0.0, 1.0)
+                           : 0.0;
+      p.tether_anchor_m = root_a + s * chord;
+      p.tether_root_direction =
+          chord2 > 1e-12 ? Eigen::Vector3d(chord / std::sqrt(chord2)) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d hang = p.rest_position_m - p.tether_anchor_m;
+      p.tether_side = hang.norm() > kMinHang_m ? Eigen::Vector3d(hang.normalized())
+                                               : Eigen::Vector3d::Zero();
+      p.tether_length_m = std::max(
+          p.tissue.mesentery_length_m,
+          CalcTetherDistance(p.rest_position_m - p.tether_anchor_m, p.tether_root_direction,
+                             shear_ratio));
+    }
+    i = end;
+  }
+  if (n > 0) {
+    Eigen::Vector3d lo = pts[0].rest_position_m;
+    Eigen::Vector3d hi = lo;
+    for (const ColonPoint& p : pts) {
+      lo = lo.cwiseMin(p.rest_position_m);
+      hi = hi.cwiseMax(p.rest_position_m);
+    }
+    colon->abdomen_min_m = lo - Eigen::Vector3d::Constant(colon->abdomen_margin_m);
+    colon->abdomen_max_m = hi + Eigen::Vector3d::Constant(colon->abdomen_margin_m);
+  }
 }
 
 void MakeSuspensionStiff(ColonSpec* colon) {
@@ -105,7 +209,15 @@ void MakeSuspensionStiff(ColonSpec* colon) {
   for (const ColonPoint& p : colon->points) {
     stiffest = std::max(stiffest, p.tissue.suspension_stiffness_N_per_m2);
   }
-  for (ColonPoint& p : colon->points) p.tissue.suspension_stiffness_N_per_m2 = stiffest;
+  for (ColonPoint& p : colon->points) {
+    p.tissue.suspension_stiffness_N_per_m2 = stiffest;
+    p.tissue.mobile = false;
+    p.tissue.mesentery_length_m = 0.0;
+    p.tissue.mesentery_stiffness_N_per_m2 = stiffest;
+    p.tissue.pleat_limit = 1.0;
+    p.tissue.suspension_relaxation_s = 0.0;
+  }
+  CalcMesenteryAnchors(colon);
 }
 
 }  // namespace ves::model

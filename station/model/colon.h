@@ -25,23 +25,58 @@ enum class Region : std::uint8_t {
   kCecum = 8,
 };
 
-// Mechanical parameters of a region (paper eqs. 9, 10, 16, 17). Suspension and
-// coupling are per metre of colon, so behaviour does not depend on N: a point
-// standing for a length h of colon gets K_c*h (N/m) and D_c*h (N s/m).
+// Mechanical parameters of a region (paper eqs. 9, 10, 16, 17, and the
+// shortening colon of docs/model.md). Suspension, coupling and mesentery are
+// per metre of colon, so behaviour does not depend on N: a point standing for
+// a length h of colon gets K_c*h (N/m) and D_c*h (N s/m). The defaults are a
+// mobile, sigmoid-like segment; docs/model.md gives each value's source.
 struct TissueParams {
-  double suspension_stiffness_N_per_m2{400.0};   // K_c (mobile sigmoid-like default)
-  double suspension_damping_N_s_per_m2{40.0};    // D_c
-  double wall_stiffness_N_per_m{300.0};          // K_d, one contact
-  double wall_damping_N_s_per_m{0.5};            // D_d
+  double suspension_stiffness_N_per_m2{300.0};   // K_c, in the rest plane P_i
+  double suspension_damping_N_s_per_m2{10.0};    // D_c (every direction)
+  double wall_stiffness_N_per_m{400.0};          // K_d, one contact
+  double wall_damping_N_s_per_m{4.0};            // D_d
   double deformation_threshold_m{0.004};         // L: beyond it the point moves (eq. 10)
-  double static_friction{0.3};                   // mu_s (F_s hat, eq. 16)
-  double dynamic_friction{0.2};                  // mu_d (F_d hat, eq. 17)
-  double neighbor_tension_N{0.5};                // couples neighbouring points
+  double static_friction{0.15};                  // mu_s (F_s hat, eq. 16)
+  double dynamic_friction{0.10};                 // mu_d (F_d hat, eq. 17): Watanabe et al. 2024
+  // Tension of the tube across a kink: pulls each pair of neighbours toward
+  // the local direction of the tube (its smoothness), never along it.
+  double neighbor_tension_N{2.0};
+  // Mesentery: a mobile region hangs on it (its tether reaches from the
+  // mesentery root); a fixed (retroperitoneal) one is held near its rest
+  // position. The tether is slack within mesentery_length_m of its anchor and
+  // pulls back with mesentery_stiffness beyond (the stretch that hurts).
+  bool mobile{true};
+  double mesentery_length_m{0.063};              // mesocolon height, sigmoid 6.3 cm
+  double mesentery_stiffness_N_per_m2{1000.0};
+  // Pleating: the gap between neighbours may shorten to pleat_limit of its
+  // rest length (the wall folds onto the scope) before the folds pack.
+  double pleat_limit{0.3};
+  // The paper's suspension holds the colon near where it has been, not where
+  // it started: its reference relaxes toward the point's position with this
+  // time constant (0: never, the paper's fixed rest). Soft tissue relaxes
+  // under a held deformation; a reduced loop stays reduced.
+  double suspension_relaxation_s{0.0};
   bool operator==(const TissueParams&) const = default;
 };
 
-// One segment point r_i at rest. The point moves only in its plane P_i, whose
-// normal is the rest tangent; (plane_u, plane_v) is an orthonormal basis of P_i.
+// What a region's name says of its mobility when a case does not: the
+// sigmoid and transverse colon hang on a mesentery, the rectum, descending
+// colon, flexures, ascending colon and cecum are retroperitoneal (fixed).
+bool IsMobileByDefault(Region region);
+
+// Mesentery and pleating of a region that a case leaves at 0 (docs/model.md,
+// "Defaults and their sources").
+struct MobilityDefaults {
+  double mesentery_length_m;
+  double mesentery_stiffness_N_per_m2;
+  double pleat_limit;
+  double suspension_relaxation_s;
+};
+MobilityDefaults DefaultMobility(Region region, bool mobile);
+
+// One segment point r_i at rest. The paper's suspension acts in its plane
+// P_i, whose normal is the rest tangent; (plane_u, plane_v) is an orthonormal
+// basis of P_i. The point itself moves in 3-D (docs/model.md).
 struct ColonPoint {
   Eigen::Vector3d rest_position_m{Eigen::Vector3d::Zero()};
   Eigen::Vector3d rest_tangent{Eigen::Vector3d::UnitZ()};  // unit, toward the cecum
@@ -52,6 +87,18 @@ struct ColonPoint {
   double radius_m{0.025};   // R_i
   Region region{Region::kUnspecified};
   TissueParams tissue;
+  // Mesentery tether (CalcMesenteryAnchors): slack within tether_length_m of
+  // the anchor. Mobile points are anchored on their run's mesentery root.
+  Eigen::Vector3d tether_anchor_m{Eigen::Vector3d::Zero()};
+  double tether_length_m{0.0};
+  // Mobile points: the unit direction of their mesentery root. Moving along
+  // it shears the mesentery sheet, so it counts mesentery_shear_ratio times
+  // (ModelParams) toward the reach; zero for fixed points (isotropic).
+  Eigen::Vector3d tether_root_direction{Eigen::Vector3d::Zero()};
+  // Mobile points: the unit direction from the anchor to the rest position,
+  // the side of the root the colon hangs on; it cannot swing through the
+  // root to the other side (zero: no side, at or near the root).
+  Eigen::Vector3d tether_side{Eigen::Vector3d::Zero()};
   bool operator==(const ColonPoint&) const = default;
 };
 
@@ -59,6 +106,27 @@ struct ColonPoint {
 // tangent is the entry axis) to the deepest point (cecum). At least 3 points.
 struct ColonSpec {
   std::vector<ColonPoint> points;
+  // How many times a move along a mobile point's mesentery root counts
+  // toward its reach (the sheet shearing rather than swinging). 1: the
+  // tether is isotropic; 4 held the pleats where they formed but needed
+  // 18-20 N to reduce a loop with the tip pinned, against 0.5 N at 1
+  // (docs/model-shortening-notes.md).
+  double mesentery_shear_ratio{1.0};
+  // Where on its root a mobile point is anchored: false, its rest
+  // position's projection; true, its arc fraction of the run along the
+  // chord (where a uniformly gathered run would put it; experiment).
+  bool mesentery_anchor_by_arc{false};
+  // How far a mobile point may cross its root to the other side before the
+  // body wall behind the root holds it, with this stiffness per metre.
+  double mesentery_crossing_m{0.01};
+  double root_wall_stiffness_N_per_m2{1.0e5};
+  // The abdominal cavity: the colon stays within the box of its rest
+  // centerline grown by abdomen_margin_m (the abdominal wall, diaphragm,
+  // liver and pelvis hold it; a loop stretches the wall only a little).
+  // Set by CalcMesenteryAnchors; held with root_wall_stiffness_N_per_m2.
+  double abdomen_margin_m{10.0};  // off: 0.03 m measured worse (docs/model-shortening-notes.md)
+  Eigen::Vector3d abdomen_min_m{Eigen::Vector3d::Constant(-1e9)};
+  Eigen::Vector3d abdomen_max_m{Eigen::Vector3d::Constant(1e9)};
   bool operator==(const ColonSpec&) const = default;
 };
 
@@ -102,9 +170,27 @@ ColonSpec MakeColonFromPoints(const std::vector<Eigen::Vector3d>& positions_m, d
 void ValidateTissue(const TissueParams& tissue);
 void ValidateColon(const ColonSpec& colon);
 
-// Sets every point's suspension to the stiffest one found in the colon (at
-// least kStiffSuspension_N_per_m2): the older, radial-only model the paper
-// compares against in §3.6 ("--stiff-colon").
+// Anchors every point's mesentery tether. A fixed point is anchored at its
+// rest position. A maximal run of mobile points hangs from its mesentery
+// root, taken as the chord between the fixed points on either side of the
+// run (or its own ends at the ends of the colon): each point is anchored at
+// its projection on that chord. Its reach is the larger of its region's
+// mesentery length and its rest distance from the anchor (measured with the
+// distance along the root counted mesentery_shear_ratio times, see
+// CalcTetherDistance), so the colon at rest is slack, can be gathered onto a
+// straight scope, and hurts when a loop is pushed beyond its mesentery.
+// Called by the builders above; call it again after changing tissue.
+void CalcMesenteryAnchors(ColonSpec* colon);
+
+// Distance of r (from a point's anchor) in its tether's metric: the part
+// along the root direction counts shear_ratio times.
+double CalcTetherDistance(const Eigen::Vector3d& r, const Eigen::Vector3d& root_direction,
+                          double shear_ratio);
+
+// The older, radial-only model the paper compares against in §3.6
+// ("--stiff-colon"): every point fixed, with the stiffest suspension found in
+// the colon (at least kStiffSuspension_N_per_m2) as its suspension and
+// tether, no mesentery slack and no pleating.
 inline constexpr double kStiffSuspension_N_per_m2 = 2.0e4;
 void MakeSuspensionStiff(ColonSpec* colon);
 

@@ -125,6 +125,7 @@ ColonSpec ResampleColon(const ColonCurve& curve, int segment_count) {
     p.region = span.region;
     p.tissue = span.tissue;
   }
+  CalcMesenteryAnchors(&colon);  // the regions' mobility is known only now
   ValidateColon(colon);
   return colon;
 }

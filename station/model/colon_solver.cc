@@ -1,13 +1,14 @@
-// Linearly implicit step of the colon points (paper §3.3, Fig. 8). Point i
-// moves only in its plane P_i (2 coordinates d_i in (plane_u, plane_v)):
-//   D_c h_i d_i' = -K_c h_i d_i + T/h (neighbour offsets) + contact forces,
-// with the suspension, the neighbour coupling (a string under tension T) and
-// the contact springs all taken at the end of the step. That is one
-// symmetric, diagonally dominant block-tridiagonal system (2x2 blocks), solved
-// in O(N) by block Thomas elimination. Point 0 (the anus) is fixed.
-// With the axial give on (colon_longitudinal_stiffness_N > 0, experimental),
-// each point also slides along its rest tangent: a scalar tridiagonal system
-// solved after the in-plane one (docs/model.md, "Axial give").
+// Linearly implicit step of the colon points (paper §3.3, Fig. 8, and the
+// shortening colon of docs/model.md). Each point r_i moves in 3-D:
+//   D_c h_i r_i' = -K_c h_i P_i d_i                  (paper's suspension, in the rest plane P_i)
+//                  + mesentery tether (slack within its reach, then k_m h_i)
+//                  + axial links to the neighbours (stiff in tension, soft while pleating)
+//                  + kink tension T toward the tube's local direction
+//                  + contact forces (eqs. 9-17: normal, wall damping, friction)
+// with every force linearised about the current state and taken at the end
+// of the step (backward Euler). That is one symmetric block-tridiagonal
+// system (3x3 blocks, positive definite: every stiffness added is), solved in
+// O(N) by block Thomas elimination. Point 0 (the anus) is fixed.
 #include <algorithm>
 #include <cmath>
 
@@ -16,22 +17,17 @@
 namespace ves::model::internal {
 namespace {
 
-Eigen::Matrix<double, 3, 2> PlaneBasis(const ColonPoint& p) {
-  Eigen::Matrix<double, 3, 2> B;
-  B.col(0) = p.plane_u;
-  B.col(1) = p.plane_v;
-  return B;
-}
-
 // Beyond a few points past the deepest contact and past every point still
 // displaced or moving, the colon is at rest and stays there: no force reaches
 // it but the coupling to points that are themselves at rest. The solve covers
-// points 1..last only (docs/model.md, "Time step"); a point within kRestOffset_m of
-// home that no contact touches is held (its suspension would return it by at
-// most that much).
+// points 1..last only (docs/model.md, "Time step"); a point within
+// kRestOffset_m of home that no contact touches is held.
 constexpr double kRestOffset_m = 1e-7;
 constexpr double kOneStep_s = 1e-3;  // a rate that moves a point less than that per ms is rest
-constexpr int kActiveMargin = 4;  // points solved past the last disturbed one
+constexpr int kActiveMargin = 4;     // points solved past the last disturbed one
+// The wall's tension stiffness is reached over this much strain, so that a
+// gap passing from folding to tension does not switch stiffness in one step.
+constexpr double kTensionOnsetStrain = 0.002;
 
 int LastActivePoint(const ModelState& s, int N) {
   int last = 0;
@@ -40,10 +36,8 @@ int LastActivePoint(const ModelState& s, int N) {
     last = std::max(last, s.contact[i].segment + 1);
   }
   for (int i = N - 1; i > last; --i) {
-    if (s.colon_offset_m[i].cwiseAbs().maxCoeff() > kRestOffset_m ||
-        s.colon_rate_m_per_s[i].cwiseAbs().maxCoeff() * kOneStep_s > kRestOffset_m ||
-        std::abs(s.colon_axial_m[i]) > kRestOffset_m ||
-        std::abs(s.colon_axial_rate_m_per_s[i]) * kOneStep_s > kRestOffset_m) {
+    if (s.colon_displacement_m[i].cwiseAbs().maxCoeff() > kRestOffset_m ||
+        s.colon_velocity_m_per_s[i].cwiseAbs().maxCoeff() * kOneStep_s > kRestOffset_m) {
       last = i;
       break;
     }
@@ -51,150 +45,214 @@ int LastActivePoint(const ModelState& s, int N) {
   return std::min(N - 1, last + kActiveMargin);
 }
 
-// Axial force between neighbours (+ pulls them together) for the strain e of
-// their gap and its slope per unit strain: the wall's longitudinal stiffness
-// EA when stretched; when shortened the wall folds onto the scope ("pleats",
-// the accordion of real colonoscopy) at pleat_ratio * EA until the shortening
-// reaches pleat_limit, then the packed folds resist at hardening * EA.
-struct PairAxial {
-  double force_N;
-  double slope_N;
-};
-PairAxial CalcPairAxial(const ModelParams& params, double strain) {
-  const double EA = params.colon_longitudinal_stiffness_N;
-  if (strain >= 0.0) return {EA * strain, EA};
-  const double soft = params.colon_pleat_stiffness_ratio * EA;
-  const double limit = params.colon_pleat_limit;
-  if (strain >= -limit) return {soft * strain, soft};
-  const double hard = params.colon_pleat_hardening_ratio * EA;
-  return {-soft * limit + hard * (strain + limit), hard};
-}
-
-// Tridiagonal (Thomas) solve of the axial increments over points 1..last.
-void SolveAxial(int last, Scratch* sc) {
-  auto& diag = sc->axial_diag;
-  const auto& upper = sc->axial_upper;
-  auto& rhs = sc->axial_rhs;
-  auto& gain = sc->axial_work;
-  for (int i = 1; i <= last; ++i) {
-    double m = diag[i];
-    double y = rhs[i];
-    if (i > 1) {
-      m -= upper[i - 1] * gain[i - 1];
-      y -= upper[i - 1] * rhs[i - 1];
-    }
-    const double m_inv = 1.0 / m;
-    gain[i] = upper[i] * m_inv;
-    rhs[i] = y * m_inv;
-  }
-  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
+// The direction a pair of neighbours is pulled toward: its rest direction
+// turned by the smallest rotation that takes the pair's rest mean tangent to
+// its current one (the colon turned as a whole exerts no kink force).
+Eigen::Vector3d CalcKinkDirection(const Eigen::Vector3d& rest_mean, const Eigen::Vector3d& mean_sum,
+                                  const Eigen::Vector3d& rest_direction,
+                                  const Eigen::Vector3d& fallback) {
+  const double length = mean_sum.norm();
+  if (length < 1e-6) return fallback;
+  const Eigen::Vector3d mean = mean_sum / length;
+  const Eigen::Vector3d c = rest_mean.cross(mean);
+  const double cos_turn = rest_mean.dot(mean);
+  if (cos_turn < -0.99) return fallback;  // turned about half a turn: no smallest rotation
+  // Rodrigues for the rotation taking rest_mean onto mean: v + c x v + c x (c x v) / (1 + cos).
+  const Eigen::Vector3d cv = c.cross(rest_direction);
+  return (rest_direction + cv + c.cross(cv) / (1.0 + cos_turn)).normalized();
 }
 
 }  // namespace
 
+PairAxial CalcPairAxial(const ModelParams& params, double pleat_limit, double strain) {
+  const double soft = params.colon_pleat_stiffness_N;
+  if (strain >= 0.0) {
+    // Tension, J-shaped: the slope rises from `soft` to the toe's over the
+    // onset strain, stays there through the toe, then becomes EA (the wall's
+    // linear modulus).
+    const double toe = params.colon_toe_stiffness_N;
+    const double e_b = std::min(kTensionOnsetStrain, params.colon_toe_strain);
+    const double e_t = params.colon_toe_strain;
+    if (strain <= e_b) {
+      return {soft * strain + (toe - soft) * strain * strain / (2.0 * e_b),
+              soft + (toe - soft) * strain / e_b};
+    }
+    const double at_onset_N = soft * e_b + (toe - soft) * e_b / 2.0;
+    if (strain <= e_t) return {at_onset_N + toe * (strain - e_b), toe};
+    return {at_onset_N + toe * (e_t - e_b) + params.colon_tension_stiffness_N * (strain - e_t),
+            params.colon_tension_stiffness_N};
+  }
+  // Shortening: the wall folds onto the scope ("pleats", the accordion of
+  // real colonoscopy) until the gap is pleat_limit of its rest length; then
+  // the folds are packed.
+  const double limit = pleat_limit - 1.0;  // <= 0
+  if (strain >= limit) return {soft * strain, soft};
+  return {soft * limit + params.colon_packed_stiffness_N * (strain - limit),
+          params.colon_packed_stiffness_N};
+}
+
 void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
-  const double dt = params.dt_s;
-  sc->colon_pair_k_N_per_m.assign(N, 0.0);
-  sc->colon_pair_transfer.assign(N, Eigen::Matrix2d::Zero());
   sc->colon_suspension_N_per_m.assign(N, 0.0);
-  sc->colon_base_diag.assign(N, 0.0);
-  sc->axial_pair_gap_m.assign(N, 1.0);
-  for (int i = 0; i + 1 < N; ++i) {
-    sc->axial_pair_gap_m[i] = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
-  }
+  sc->colon_damping_N_s_per_m.assign(N, 0.0);
+  sc->colon_tether_N_per_m.assign(N, 0.0);
+  sc->colon_pair_gap_m.assign(N, 1.0);
+  sc->colon_pair_kink_N_per_m.assign(N, 0.0);
+  sc->colon_pair_pleat_limit.assign(N, 1.0);
+  sc->colon_pair_rest_direction.assign(N, Eigen::Vector3d::UnitZ());
+  sc->colon_pair_rest_mean_tangent.assign(N, Eigen::Vector3d::UnitZ());
+  double smallest_pleat_limit = 1.0;
   for (int i = 0; i < N; ++i) {
     const TissueParams& t = pts[i].tissue;
     const double h = pts[i].length_m;
     sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
-    sc->colon_base_diag[i] +=
-        t.suspension_damping_N_s_per_m2 * h + dt * sc->colon_suspension_N_per_m[i];
+    sc->colon_damping_N_s_per_m[i] = t.suspension_damping_N_s_per_m2 * h;
+    sc->colon_tether_N_per_m[i] = t.mesentery_stiffness_N_per_m2 * h;
+    smallest_pleat_limit = std::min(smallest_pleat_limit, t.pleat_limit);
   }
-  sc->colon_stiffness_diag.assign(N, 0.0);
-  sc->colon_pair_upper.assign(N, Eigen::Matrix2d::Zero());
-  for (int i = 0; i < N; ++i) sc->colon_stiffness_diag[i] = dt * sc->colon_suspension_N_per_m[i];
   for (int i = 0; i + 1 < N; ++i) {
+    const double gap = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
     const double T =
         0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
-    const double k = T / (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
-    sc->colon_pair_k_N_per_m[i] = k;
-    sc->colon_pair_transfer[i] = PlaneBasis(pts[i]).transpose() * PlaneBasis(pts[i + 1]);
-    sc->colon_pair_upper[i] = -dt * k * sc->colon_pair_transfer[i];
-    sc->colon_base_diag[i] += dt * k;
-    sc->colon_base_diag[i + 1] += dt * k;
-    sc->colon_stiffness_diag[i] += dt * k;
-    sc->colon_stiffness_diag[i + 1] += dt * k;
+    sc->colon_pair_gap_m[i] = gap;
+    sc->colon_pair_kink_N_per_m[i] = T / gap;
+    sc->colon_pair_pleat_limit[i] = std::min(pts[i].tissue.pleat_limit, pts[i + 1].tissue.pleat_limit);
+    sc->colon_pair_rest_direction[i] = (pts[i + 1].rest_position_m - pts[i].rest_position_m) / gap;
+    const Eigen::Vector3d mean = pts[i].rest_tangent + pts[i + 1].rest_tangent;
+    sc->colon_pair_rest_mean_tangent[i] =
+        mean.norm() > 1e-6 ? Eigen::Vector3d(mean.normalized()) : sc->colon_pair_rest_direction[i];
+  }
+  sc->tracking_arc_ratio = params.tracking_arc_ratio > 0.0
+                               ? std::max(params.tracking_arc_ratio, 1.2 / smallest_pleat_limit)
+                               : 0.0;
+}
+
+void UpdateColonTangents(int from, int to, ModelState* s) {
+  const int N = static_cast<int>(s->p_WColon.size());
+  for (int i = std::max(from, 0); i <= std::min(to, N - 1); ++i) {
+    const Eigen::Vector3d chord = s->p_WColon[std::min(i + 1, N - 1)] - s->p_WColon[std::max(i - 1, 0)];
+    const double length = chord.norm();
+    if (length > 1e-12) s->colon_tangent[i] = chord / length;
   }
 }
 
-void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
+void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
   const double dt = params.dt_s;
   auto& diag = sc->colon_diag;
   auto& upper = sc->colon_upper;
   auto& rhs = sc->colon_rhs;
-  const auto& d = s->colon_offset_m;
+  const auto& x = s->p_WColon;
   const int last = LastActivePoint(*s, N);
-  // Suspension (K_c ||d_ri|| pulls the point home) and the neighbour coupling,
-  // a force T/h (D_j - D_i) on the 3-D offsets D = B d; in plane i that is
-  // T/h (C_i d_j - d_i) with the constant C_i = B_i^T B_j (orthonormal B).
-  // With the constant blocks U_i = -dt T/h C_i, the explicit part of the
-  // right-hand side is -dt K d: -S_i d_i - U_(i-1)^T d_(i-1) - U_i d_(i+1).
   const int end = std::min(last + 1, N - 1);  // first point past the solved ones (or the last)
-  const auto& U = sc->colon_pair_upper;
-  const auto& S = sc->colon_stiffness_diag;
-  const auto& base = sc->colon_base_diag;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const double shear_ratio = params.colon.mesentery_shear_ratio;
+
+  // Each point's own terms: damping, the paper's suspension in its rest plane
+  // and the mesentery tether.
   for (int i = 0; i <= end; ++i) {
-    diag[i] = Eigen::Matrix2d::Identity() * base[i];
-    upper[i] = i < end ? U[i] : Eigen::Matrix2d::Zero();
-    rhs[i].setZero();  // the contacts' part; the explicit part is added in the elimination
+    const ColonPoint& p = pts[i];
+    const Eigen::Matrix3d P = I - p.rest_tangent * p.rest_tangent.transpose();
+    const double K_c = sc->colon_suspension_N_per_m[i];
+    diag[i] = sc->colon_damping_N_s_per_m[i] * I + (dt * K_c) * P;
+    // paper §3.3.2: K_c ||d_ri|| pulls the point home within its plane P_i
+    // (home: its reference, which may have settled since rest).
+    rhs[i] = -(dt * K_c) * (P * (x[i] - s->colon_reference_m[i]));
+    upper[i].setZero();
+    // Mesentery: its reach is measured in the tether's metric, in which a
+    // move along the root counts mesentery_shear_ratio times: rho^2 = r^T G r
+    // with G = I + (s^2 - 1) c c^T. Taut (rho > L), it pulls with
+    // k (rho - L) G r / rho; its stiffness is k [g g^T + (1 - L/rho)(G - g g^T)]
+    // with g = G r / rho (positive semidefinite: G is).
+    const Eigen::Vector3d r = x[i] - p.tether_anchor_m;
+    const double rho = CalcTetherDistance(r, p.tether_root_direction, shear_ratio);
+    double reach_m = p.tether_length_m;
+    if (params.mesentery_reach_gathers && p.tissue.mobile && i > 0 && i < N - 1) {
+      const double now = (x[i + 1] - x[i]).norm() + (x[i] - x[i - 1]).norm();
+      const double natural = sc->colon_pair_gap_m[i] + sc->colon_pair_gap_m[i - 1];
+      const double ratio = natural > 1e-12 ? std::min(1.0, now / natural) : 1.0;
+      reach_m = std::max(p.tissue.mesentery_length_m, p.tether_length_m * ratio);
+    }
+    if (rho > reach_m && rho > 1e-12) {
+      const double k = sc->colon_tether_N_per_m[i];
+      const Eigen::Vector3d& c = p.tether_root_direction;
+      const Eigen::Matrix3d G = I + (shear_ratio * shear_ratio - 1.0) * c * c.transpose();
+      const Eigen::Vector3d g = G * r / rho;
+      const double across = 1.0 - reach_m / rho;
+      rhs[i] -= (dt * k * (rho - reach_m)) * g;
+      diag[i] += (dt * k) * (g * g.transpose() + across * (G - g * g.transpose()));
+    }
+    // The colon hangs on one side of its root: swung through it by more
+    // than mesentery_crossing_m, it meets the body wall behind the root.
+    const double crossed_m = -(r.dot(p.tether_side) + params.colon.mesentery_crossing_m);
+    if (crossed_m > 0.0 && p.tether_side.squaredNorm() > 0.5) {
+      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
+      rhs[i] += (dt * k * crossed_m) * p.tether_side;
+      diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
+    }
+    // The assistant's hand: a pressed mobile point is held within the slack
+    // of its root (isotropic; the same implicit form as the tether).
+    const double pressure = input.abdominal_pressure[static_cast<int>(p.region)];
+    if (pressure > 0.0 && p.tissue.mobile) {
+      const double d = r.norm();
+      const double slack = params.abdominal_pressure_slack_m;
+      if (d > slack) {
+        const double k = pressure * params.abdominal_pressure_stiffness_N_per_m2 * p.length_m;
+        const Eigen::Vector3d g = r / d;
+        rhs[i] -= (dt * k * (d - slack)) * g;
+        diag[i] += (dt * k) * (g * g.transpose() + (1.0 - slack / d) * (I - g * g.transpose()));
+      }
+    }
+    // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
+    for (int axis = 0; axis < 3; ++axis) {
+      const double below_m = params.colon.abdomen_min_m[axis] - x[i][axis];
+      const double above_m = x[i][axis] - params.colon.abdomen_max_m[axis];
+      const double out_m = below_m > 0.0 ? below_m : (above_m > 0.0 ? -above_m : 0.0);
+      if (out_m == 0.0) continue;
+      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
+      rhs[i][axis] += dt * k * out_m;
+      diag[i](axis, axis) += dt * k;
+    }
   }
-  // The explicit part for point i (1 <= i <= last). It is computed inside the
-  // elimination loop, whose chains are latency-bound and leave room for it.
-  auto explicit_rhs = [&](int i) {
-    const Eigen::Vector2d& dp = d[i - 1];
-    const Eigen::Matrix2d& Up = U[i - 1];
-    Eigen::Vector2d r(-S[i] * d[i].x() - (Up(0, 0) * dp.x() + Up(1, 0) * dp.y()),
-                      -S[i] * d[i].y() - (Up(0, 1) * dp.x() + Up(1, 1) * dp.y()));
-    if (i + 1 < N) {  // U[N-1] is zero: the deepest point has no next neighbour
-      const Eigen::Vector2d& dn = d[i + 1];
-      const Eigen::Matrix2d& Un = U[i];
-      r.x() -= Un(0, 0) * dn.x() + Un(0, 1) * dn.y();
-      r.y() -= Un(1, 0) * dn.x() + Un(1, 1) * dn.y();
-    }
-    return r;
-  };
-  // Axial give (docs/model.md): the same suspension anchors the point along
-  // its tangent; neighbours resist a change of their gap (CalcPairAxial).
-  // Implicit like the in-plane part; the anus point is fixed.
-  const bool axial = params.colon_longitudinal_stiffness_N > 0.0;
-  auto& a_diag = sc->axial_diag;
-  auto& a_upper = sc->axial_upper;
-  auto& a_rhs = sc->axial_rhs;
-  if (axial) {
-    const auto& a = s->colon_axial_m;
-    for (int i = 0; i <= end; ++i) {
-      const double h = pts[i].length_m;
-      a_diag[i] = pts[i].tissue.suspension_damping_N_s_per_m2 * h +
-                  dt * sc->colon_suspension_N_per_m[i];
-      a_rhs[i] = -dt * sc->colon_suspension_N_per_m[i] * a[i];
-      a_upper[i] = 0.0;
-    }
-    for (int i = 0; i < end; ++i) {
-      const double gap = sc->axial_pair_gap_m[i];
-      const PairAxial f = CalcPairAxial(params, (a[i + 1] - a[i]) / gap);
-      const double k = f.slope_N / gap;
-      a_rhs[i] += dt * f.force_N;
-      a_rhs[i + 1] -= dt * f.force_N;
-      a_diag[i] += dt * k;
-      a_diag[i + 1] += dt * k;
-      a_upper[i] = -dt * k;
-    }
+  // Neighbour pairs (i, i+1): the axial link and the kink tension.
+  for (int i = 0; i < end; ++i) {
+    const Eigen::Vector3d seg = x[i + 1] - x[i];
+    const double g = seg.norm();
+    // Strain against the gap's rest length (shorter where folds have set);
+    // the folds pack at pleat_limit of the natural gap.
+    const double g0 = s->colon_pair_rest_gap_m[i];
+    const double natural_gap_m = sc->colon_pair_gap_m[i];
+    const Eigen::Vector3d u = g > 1e-12 ? Eigen::Vector3d(seg / g) : pts[i].rest_tangent;
+    const double pleat_limit = sc->colon_pair_pleat_limit[i] * natural_gap_m / g0;
+    const PairAxial a = CalcPairAxial(params, std::min(pleat_limit, 1.0), g / g0 - 1.0);
+    // Tension also resists the pair turning (a taut string); compression does
+    // not push it sideways (dropping that term keeps the matrix definite).
+    Eigen::Matrix3d C = (a.slope_N / g0) * u * u.transpose();
+    if (a.force_N > 0.0 && g > 1e-12) C += (a.force_N / g) * (I - u * u.transpose());
+    // Kink tension: the pair is pulled toward the tube's local direction,
+    // never along it, so the tube stays smooth and still pleats freely. That
+    // direction is the pair's rest direction turned as the mean of its ends'
+    // tangents has turned since rest (tangents of the start of the step), so
+    // the colon at rest feels no force.
+    const Eigen::Vector3d m = CalcKinkDirection(sc->colon_pair_rest_mean_tangent[i],
+                                                s->colon_tangent[i] + s->colon_tangent[i + 1],
+                                                sc->colon_pair_rest_direction[i], u);
+    const Eigen::Matrix3d Pm = I - m * m.transpose();
+    const double k = sc->colon_pair_kink_N_per_m[i];  // T over the natural gap
+    C.noalias() += k * Pm;
+    const Eigen::Vector3d F = a.force_N * u + k * (Pm * seg);  // on point i; -F on i+1
+    diag[i] += dt * C;
+    diag[i + 1] += dt * C;
+    upper[i] = -dt * C;
+    rhs[i] += dt * F;
+    rhs[i + 1] -= dt * F;
   }
+  upper[end].setZero();
   // Contacts: the scope (at its new shape) presses the wall outward along n;
-  // the wall's friction reaction is the opposite of the scope's friction.
+  // the wall's friction reaction is the opposite of the scope's friction, in
+  // every direction (along the scope it drags the colon: pleating).
   const int samples = static_cast<int>(s->samples.size());
   for (int i = s->first_inside_sample; i < samples; ++i) {
     const SampleContact& c = s->contact[i];
@@ -217,142 +275,90 @@ void SolveColon(const ModelParams& params, ModelState* s, Scratch* sc) {
       r.force_N = r.slope_N_per_m * penetration_m;
     }
     const Eigen::Vector3d f_wall = r.force_N * normal - sc->sample_friction_W_N[i];
-    const double w[2] = {1.0 - t, t};
-    Eigen::Vector2d v[2];  // the normal in the two planes, B_j^T n
-    for (int j = 0; j < 2; ++j) {
-      const ColonPoint& q = pts[k + j];
-      rhs[k + j] += dt * w[j] * Eigen::Vector2d(q.plane_u.dot(f_wall), q.plane_v.dot(f_wall));
-      v[j] = Eigen::Vector2d(q.plane_u.dot(normal), q.plane_v.dot(normal));
-    }
     // The wall force falls as the points follow the scope (d f / d r = -slope
     // n n^T), the wall damping D_d (eq. 9) and the friction stick spring act on
     // the relative motion from this side too; all implicit, otherwise a light
-    // colon point jumps by the whole force in one step and chatters. With
-    // K3 = a n n^T + b (I - n n^T): B_j^T K3 B_l = b B_j^T B_l + (a - b) v_j v_l^T.
+    // colon point jumps by the whole force in one step and chatters.
     const double a = dt * r.slope_N_per_m + tissue.wall_damping_N_s_per_m;
     const double b = dt * params.friction_stiffness_N_per_m;
-    diag[k].noalias() += w[0] * w[0] * (a - b) * v[0] * v[0].transpose();
-    diag[k].diagonal().array() += w[0] * w[0] * b;
-    diag[k + 1].noalias() += w[1] * w[1] * (a - b) * v[1] * v[1].transpose();
-    diag[k + 1].diagonal().array() += w[1] * w[1] * b;
-    upper[k].noalias() +=
-        w[0] * w[1] * (b * sc->colon_pair_transfer[k] + (a - b) * v[0] * v[1].transpose());
-    if (axial) {
-      // Along the tangents: friction drags the wall along the scope (the
-      // stick spring b), and the normal has an axial part only at the pole.
-      const Eigen::Vector3d& t0 = pts[k].rest_tangent;
-      const Eigen::Vector3d& t1 = pts[k + 1].rest_tangent;
-      const double tn[2] = {t0.dot(normal), t1.dot(normal)};
-      a_rhs[k] += dt * w[0] * t0.dot(f_wall);
-      a_rhs[k + 1] += dt * w[1] * t1.dot(f_wall);
-      a_diag[k] += w[0] * w[0] * (b + (a - b) * tn[0] * tn[0]);
-      a_diag[k + 1] += w[1] * w[1] * (b + (a - b) * tn[1] * tn[1]);
-      a_upper[k] += w[0] * w[1] * (b * t0.dot(t1) + (a - b) * tn[0] * tn[1]);
+    const Eigen::Matrix3d K3 = b * I + (a - b) * normal * normal.transpose();
+    const double w0 = 1.0 - t, w1 = t;
+    if (k >= 1 && k <= last) {
+      rhs[k] += (dt * w0) * f_wall;
+      diag[k] += (w0 * w0) * K3;
+    }
+    if (k + 1 <= last) {
+      rhs[k + 1] += (dt * w1) * f_wall;
+      diag[k + 1] += (w1 * w1) * K3;
+      if (k >= 1) upper[k] += (w0 * w1) * K3;
     }
   }
-  // Block tridiagonal solve over points 1..last, point 0 (the anus) and the
-  // points past `last` held where they are. Twisted ("burn at both ends")
-  // elimination: the top half from point 1 down, G_i = M_i^-1 U_i and
-  // y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with M_i = D_i - U_(i-1)^T G_(i-1);
-  // the bottom half from `last` up, H_i = N_i^-1 U_(i-1)^T and
-  // w_i = N_i^-1 (r_i - U_i w_(i+1)) with N_i = D_i - U_i H_(i+1). The two
-  // chains are independent, so the CPU overlaps them (each point's 2x2
-  // inverse is a long dependency); they meet at p, p+1.
-  auto& gain = sc->colon_work;  // G_i for i <= p, H_i for i > p
-  const int p = (last + 1) / 2;
-  // Written out in scalars: M and N are symmetric (so are D_i and U^T G),
-  // and Eigen's generic 2x2 products and inverse cost about twice the
-  // instructions of this on the solve's critical path.
-  auto eliminate_top = [&](int i) {
-    const Eigen::Matrix2d& D = diag[i];
-    double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
-    const Eigen::Vector2d r = rhs[i] + explicit_rhs(i);
-    double y0 = r.x(), y1 = r.y();
-    if (i > 1) {
-      const Eigen::Matrix2d& Up = upper[i - 1];
-      const Eigen::Matrix2d& G = gain[i - 1];
-      const Eigen::Vector2d& yp = rhs[i - 1];
-      m00 -= Up(0, 0) * G(0, 0) + Up(1, 0) * G(1, 0);
-      m01 -= Up(0, 0) * G(0, 1) + Up(1, 0) * G(1, 1);
-      m11 -= Up(0, 1) * G(0, 1) + Up(1, 1) * G(1, 1);
-      y0 -= Up(0, 0) * yp.x() + Up(1, 0) * yp.y();
-      y1 -= Up(0, 1) * yp.x() + Up(1, 1) * yp.y();
-    }
-    // M^-1 = adj(M) / det: the products with adj(M) run beside the division.
-    const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
-    const Eigen::Matrix2d& Un = upper[i];
-    Eigen::Matrix2d& G = gain[i];
-    G(0, 0) = (m11 * Un(0, 0) - m01 * Un(1, 0)) * inv_det;
-    G(0, 1) = (m11 * Un(0, 1) - m01 * Un(1, 1)) * inv_det;
-    G(1, 0) = (m00 * Un(1, 0) - m01 * Un(0, 0)) * inv_det;
-    G(1, 1) = (m00 * Un(1, 1) - m01 * Un(0, 1)) * inv_det;
-    rhs[i] = Eigen::Vector2d((m11 * y0 - m01 * y1) * inv_det, (m00 * y1 - m01 * y0) * inv_det);
-  };
-  auto eliminate_bottom = [&](int i) {
-    const Eigen::Matrix2d& D = diag[i];
-    double m00 = D(0, 0), m01 = D(0, 1), m11 = D(1, 1);
-    const Eigen::Vector2d r = rhs[i] + explicit_rhs(i);
-    double z0 = r.x(), z1 = r.y();
-    if (i < last) {
-      const Eigen::Matrix2d& Un = upper[i];
-      const Eigen::Matrix2d& H = gain[i + 1];
-      const Eigen::Vector2d& wn = rhs[i + 1];
-      m00 -= Un(0, 0) * H(0, 0) + Un(0, 1) * H(1, 0);
-      m01 -= Un(0, 0) * H(0, 1) + Un(0, 1) * H(1, 1);
-      m11 -= Un(1, 0) * H(0, 1) + Un(1, 1) * H(1, 1);
-      z0 -= Un(0, 0) * wn.x() + Un(0, 1) * wn.y();
-      z1 -= Un(1, 0) * wn.x() + Un(1, 1) * wn.y();
-    }
-    const double inv_det = 1.0 / (m00 * m11 - m01 * m01);
-    const Eigen::Matrix2d& Up = upper[i - 1];  // H_i = N_i^-1 U_(i-1)^T
-    Eigen::Matrix2d& H = gain[i];
-    H(0, 0) = (m11 * Up(0, 0) - m01 * Up(0, 1)) * inv_det;
-    H(0, 1) = (m11 * Up(1, 0) - m01 * Up(1, 1)) * inv_det;
-    H(1, 0) = (m00 * Up(0, 1) - m01 * Up(0, 0)) * inv_det;
-    H(1, 1) = (m00 * Up(1, 1) - m01 * Up(1, 0)) * inv_det;
-    rhs[i] = Eigen::Vector2d((m11 * z0 - m01 * z1) * inv_det, (m00 * z1 - m01 * z0) * inv_det);
-  };
-  for (int j = 0; j < last - p || j < p; ++j) {
-    if (1 + j <= p) eliminate_top(1 + j);
-    if (last - j > p) eliminate_bottom(last - j);
+  // Ring contacts: the scope piece pulls the ring's centre toward it (its
+  // penetration taken to first order in the piece's move, like the samples').
+  for (int j = 0; j < sc->ring_contact_count; ++j) {
+    const RingContact& rc = sc->ring_contacts[j];
+    const int m = rc.point;
+    if (m < 1 || m > last) continue;
+    const Eigen::Vector3d moved =
+        (1.0 - rc.piece_t) * (s->p_WSample[rc.sample] - sc->sample_delta_m[rc.sample]) +
+        rc.piece_t * (s->p_WSample[rc.sample + 1] - sc->sample_delta_m[rc.sample + 1]);
+    const double penetration_m = rc.penetration_m + rc.normal_W.dot(moved);
+    const double force_N = penetration_m > 0.0
+                               ? CalcWallResponse(pts[m].tissue, params.wall_hardening_ratio,
+                                                  penetration_m).force_N
+                               : rc.slope_N_per_m * penetration_m;
+    const double a = dt * rc.slope_N_per_m + pts[m].tissue.wall_damping_N_s_per_m;
+    rhs[m] += (dt * force_N) * rc.normal_W;
+    diag[m] += a * rc.normal_W * rc.normal_W.transpose();
   }
-  // Meet: x_p = y_p - G_p x_(p+1) and x_(p+1) = w_(p+1) - H_(p+1) x_p.
-  if (last > p) {
-    const Eigen::Matrix2d A = Eigen::Matrix2d::Identity() - gain[p] * gain[p + 1];
-    const Eigen::Vector2d x_p = A.inverse() * (rhs[p] - gain[p] * rhs[p + 1]);
-    rhs[p] = x_p;
-    rhs[p + 1] -= gain[p + 1] * x_p;
-  }
-  // Substitute outward from the meeting point; rhs becomes the increments of d_i.
-  for (int j = 1; p - j >= 1 || p + 1 + j <= last; ++j) {
-    if (p - j >= 1) rhs[p - j].noalias() -= gain[p - j] * rhs[p - j + 1];
-    if (p + 1 + j <= last) rhs[p + 1 + j].noalias() -= gain[p + 1 + j] * rhs[p + j];
-  }
-  const double inv_dt = 1.0 / dt;
-  if (axial) SolveAxial(last, sc);
+  // Block Thomas over points 1..last (point 0 and the points past `last`
+  // held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
+  // M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1).
+  auto& gain = sc->colon_work;
   for (int i = 1; i <= last; ++i) {
-    s->colon_offset_m[i] += rhs[i];
-    s->colon_rate_m_per_s[i] = rhs[i] * inv_dt;
-    const Eigen::Vector2d& di = s->colon_offset_m[i];
-    s->p_WColon[i] = pts[i].rest_position_m + di.x() * pts[i].plane_u + di.y() * pts[i].plane_v;
-    if (axial) {
-      s->colon_axial_m[i] += a_rhs[i];
-      s->colon_axial_rate_m_per_s[i] = a_rhs[i] * inv_dt;
-      s->p_WColon[i] += pts[i].rest_tangent * s->colon_axial_m[i];
+    Eigen::Matrix3d M = diag[i];
+    Eigen::Vector3d y = rhs[i];
+    if (i > 1) {
+      M.noalias() -= upper[i - 1].transpose() * gain[i - 1];
+      y.noalias() -= upper[i - 1].transpose() * rhs[i - 1];
+    }
+    const Eigen::Matrix3d M_inv = M.inverse();
+    gain[i].noalias() = M_inv * (i < last ? upper[i] : Eigen::Matrix3d::Zero().eval());
+    rhs[i].noalias() = M_inv * y;
+  }
+  for (int i = last - 1; i >= 1; --i) rhs[i].noalias() -= gain[i] * rhs[i + 1];
+
+  const double inv_dt = 1.0 / dt;
+  for (int i = 1; i <= last; ++i) {
+    s->colon_displacement_m[i] += rhs[i];
+    s->colon_velocity_m_per_s[i] = rhs[i] * inv_dt;
+    s->p_WColon[i] = pts[i].rest_position_m + s->colon_displacement_m[i];
+    // The suspension's reference settles toward where the point is.
+    const double relax_s = pts[i].tissue.suspension_relaxation_s;
+    if (relax_s > 0.0) {
+      s->colon_reference_m[i] += (dt / (relax_s + dt)) * (s->p_WColon[i] - s->colon_reference_m[i]);
+    }
+  }
+  // Folds set where a gap is held shortened, and release slowly elsewhere.
+  if (params.colon_pleat_set_s > 0.0) {
+    for (int i = 0; i < std::min(last + 1, N - 1); ++i) {
+      const double g = (s->p_WColon[i + 1] - s->p_WColon[i]).norm();
+      double& rest_m = s->colon_pair_rest_gap_m[i];
+      const double natural_m = sc->colon_pair_gap_m[i];
+      if (g < rest_m) {
+        const double floor_m = sc->colon_pair_pleat_limit[i] * natural_m;
+        rest_m += (dt / (params.colon_pleat_set_s + dt)) * (std::max(g, floor_m) - rest_m);
+      } else if (rest_m < natural_m) {
+        rest_m += (dt / (params.colon_pleat_release_s + dt)) * (natural_m - rest_m);
+      }
     }
   }
   rhs[0].setZero();
   for (int i = last + 1; i < N; ++i) {
     rhs[i].setZero();
-    s->colon_rate_m_per_s[i].setZero();
+    s->colon_velocity_m_per_s[i].setZero();
   }
-  if (axial) {  // off, the axial arrays are never written and stay zero
-    a_rhs[0] = 0.0;
-    for (int i = last + 1; i < N; ++i) {
-      a_rhs[i] = 0.0;
-      s->colon_axial_rate_m_per_s[i] = 0.0;
-    }
-  }
+  UpdateColonTangents(0, last + 1, s);
 }
 
 }  // namespace ves::model::internal

@@ -28,21 +28,24 @@ WallResponse CalcWallResponse(const TissueParams& tissue, double hardening_ratio
 
 SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
                           const Eigen::Vector3d& p) {
-  // The lumen is the circles of radius R_i centred on the current r_i in the
-  // fixed planes P_i (paper §3.3.2): measure the sample in the two planes that
-  // bracket it and blend by its axial position between them.
+  // The lumen is the circles of radius R_i centred on the current r_i, in the
+  // planes normal to the tube's current tangents (paper §3.3.2, with the
+  // planes following the moving colon): measure the sample in the two planes
+  // that bracket it and blend by its axial position between them.
   const auto& pts = params.colon.points;
   const int last = static_cast<int>(pts.size()) - 1;
   const ColonPoint& A = pts[k];
   const ColonPoint& B = pts[k + 1];
   const Eigen::Vector3d pa = p - s.p_WColon[k];
   const Eigen::Vector3d pb = p - s.p_WColon[k + 1];
-  const double da = pa.dot(A.rest_tangent);   // >= 0 past plane k
-  const double db = pb.dot(B.rest_tangent);   // < 0 before plane k+1
+  const Eigen::Vector3d& ta = s.colon_tangent[k];
+  const Eigen::Vector3d& tb = s.colon_tangent[k + 1];
+  const double da = pa.dot(ta);   // >= 0 past plane k
+  const double db = pb.dot(tb);   // < 0 before plane k+1
   SegmentHit hit;
   hit.t = da - db > 1e-12 ? std::clamp(da / (da - db), 0.0, 1.0) : 0.5;
-  const Eigen::Vector3d wa = pa - da * A.rest_tangent;
-  const Eigen::Vector3d wb = pb - db * B.rest_tangent;
+  const Eigen::Vector3d wa = pa - da * ta;
+  const Eigen::Vector3d wb = pb - db * tb;
   // The sample's offset from the lumen centre interpolated at t. Its norm, not
   // the blend of the two in-plane distances: when neighbouring points are
   // displaced differently (a stretched sigmoid) the blend of distances counts
@@ -51,7 +54,7 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   const Eigen::Vector3d w = (1.0 - hit.t) * wa + hit.t * wb;
   const double w_norm = w.norm();
   const double rho = w_norm;
-  hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w * (1.0 / w_norm)) : A.plane_u;
+  hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w * (1.0 / w_norm)) : ta.unitOrthogonal();
   hit.radius_m = A.radius_m + hit.t * (B.radius_m - A.radius_m);
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
   hit.penetration_m = rho + scope_radius_m - hit.radius_m;
@@ -60,7 +63,7 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
     const double axial_m = db + scope_radius_m;
     if (axial_m > hit.penetration_m) {
       hit.penetration_m = axial_m;
-      hit.normal = B.rest_tangent;
+      hit.normal = tb;
     }
   }
   return hit;
@@ -68,14 +71,13 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
 
 // Local search: step plane by plane toward the sample, never more than
 // `window` segments, so two loops that touch in space cannot swap a sample.
-void TrackSegment(const ModelState& s, const ColonSpec& colon, int window,
-                  const Eigen::Vector3d& p, SampleContact* c) {
+void TrackSegment(const ModelState& s, int window, const Eigen::Vector3d& p, SampleContact* c) {
   const int segments = static_cast<int>(s.p_WColon.size()) - 1;
   int k = std::clamp(c->segment, 0, segments - 1);
   int direction = 0;
   for (int step = 0; step < window; ++step) {
-    const double past_next = (p - s.p_WColon[k + 1]).dot(colon.points[k + 1].rest_tangent);
-    const double past_this = (p - s.p_WColon[k]).dot(colon.points[k].rest_tangent);
+    const double past_next = (p - s.p_WColon[k + 1]).dot(s.colon_tangent[k + 1]);
+    const double past_this = (p - s.p_WColon[k]).dot(s.colon_tangent[k]);
     if (past_next >= 0.0 && k + 1 < segments && direction >= 0) {
       ++k;
       direction = 1;
@@ -120,8 +122,8 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
     }
     const Eigen::Vector3d& p = s->p_WSample[i];
     const int tracked_before = c.segment;
-    TrackSegment(*s, params.colon, params.contact_search_window, p, &c);
-    if (i > 0 && s->contact[i - 1].inside && params.tracking_arc_ratio > 0.0) {
+    TrackSegment(*s, params.contact_search_window, p, &c);
+    if (i > 0 && s->contact[i - 1].inside && sc->tracking_arc_ratio > 0.0) {
       // Continuity along the scope (ModelParams::tracking_arc_ratio): the
       // proximal neighbour was tracked first, this step.
       const int neighbour = s->contact[i - 1].segment;
@@ -130,7 +132,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
         const double scope_gap_m =
             s->samples[i - 1].arc_from_tip_m - s->samples[i].arc_from_tip_m;
         const int highest = neighbour + 2 + static_cast<int>(std::ceil(
-            params.tracking_arc_ratio * scope_gap_m / params.colon.points[neighbour].length_m));
+            sc->tracking_arc_ratio * scope_gap_m / params.colon.points[neighbour].length_m));
         if (c.segment < lowest || c.segment > highest) {
           c.segment =
               std::clamp(tracked_before, std::max(lowest, 0), std::min(highest, segments - 1));
@@ -201,6 +203,48 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
     out_c.force_on_scope_W_N = F;
     out_c.alpha = alpha;
     out_c.beyond_threshold = response.beyond_threshold;
+  }
+  EvaluateRingContacts(params, s, sc);
+}
+
+void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc) {
+  // Colon points between the segments two neighbouring samples track (the
+  // colon pleated onto the scope there) have no sample of their own: their
+  // rings must still contain the scope piece between the samples, or the
+  // colon could fold away from the scope and the scope cut across the fold.
+  const int samples = static_cast<int>(s->samples.size());
+  const int last_point = static_cast<int>(params.colon.points.size()) - 1;
+  const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
+  sc->ring_contact_count = 0;
+  for (int i = s->first_inside_sample; i + 1 < samples; ++i) {
+    const int from = std::max(s->contact[i].segment + 2, 1);
+    const int to = std::min(s->contact[i + 1].segment - 1, last_point);
+    if (to < from) continue;
+    const Eigen::Vector3d& a = s->p_WSample[i];
+    const Eigen::Vector3d ab = s->p_WSample[i + 1] - a;
+    const double ab2 = std::max(ab.squaredNorm(), 1e-12);
+    for (int m = from; m <= to; ++m) {
+      const ColonPoint& ring = params.colon.points[m];
+      const Eigen::Vector3d& x = s->p_WColon[m];
+      const double t = std::clamp((x - a).dot(ab) / ab2, 0.0, 1.0);
+      const Eigen::Vector3d q = a + t * ab;
+      const Eigen::Vector3d w = q - x;
+      const double d = w.norm();
+      const double penetration_m = d + scope_radius_m - ring.radius_m;
+      if (!(penetration_m > 0.0) || d < 1e-12) continue;
+      const WallResponse r =
+          CalcWallResponse(ring.tissue, params.wall_hardening_ratio, penetration_m);
+      RingContact& rc = sc->ring_contacts[sc->ring_contact_count++];
+      rc.point = m;
+      rc.sample = i;
+      rc.piece_t = t;
+      rc.p_W = q;
+      rc.normal_W = w / d;
+      rc.penetration_m = penetration_m;
+      rc.force_N = r.force_N;
+      rc.slope_N_per_m = r.slope_N_per_m;
+      rc.stiffness_N_per_m = r.slope_N_per_m + ring.tissue.wall_damping_N_s_per_m / params.dt_s;
+    }
   }
 }
 

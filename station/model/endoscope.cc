@@ -47,6 +47,13 @@ void ValidateEndoscope(const EndoscopeParams& s) {
               s.bending_section_length_m < s.working_length_m,
           "bending_section_length_m", s.bending_section_length_m,
           "must be in [0, working_length_m)");
+  Require(std::isfinite(s.passive_section_length_m) && s.passive_section_length_m >= 0.0 &&
+              s.passive_section_length_m + s.bending_section_length_m < s.working_length_m,
+          "passive_section_length_m", s.passive_section_length_m,
+          "must be >= 0 and leave room for the rest of the tube");
+  Require(std::isfinite(s.passive_section_rigidity_N_m2) && s.passive_section_rigidity_N_m2 > 0.0 &&
+              s.passive_section_rigidity_N_m2 <= 100.0,
+          "passive_section_rigidity_N_m2", s.passive_section_rigidity_N_m2, "must be in (0, 100]");
   const double angles[] = {s.angulation_up_rad, s.angulation_down_rad, s.angulation_left_rad,
                            s.angulation_right_rad};
   const char* names[] = {"angulation_up_rad", "angulation_down_rad", "angulation_left_rad",

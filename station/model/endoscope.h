@@ -26,6 +26,11 @@ struct EndoscopeParams {
   double angulation_left_rad{160.0 * kPi / 180.0};
   double angulation_right_rad{160.0 * kPi / 180.0};
   double bending_section_rigidity_N_m2{0.010};  // softer than the insertion tube
+  // A flaccid, passively bending segment just behind the bending section
+  // (0: uniform tube): it lets the shaft follow the tip round a flexure
+  // instead of pushing the flexure away (docs/model.md).
+  double passive_section_length_m{0.15};
+  double passive_section_rigidity_N_m2{0.010};
   bool operator==(const EndoscopeParams&) const = default;
 };
 

@@ -14,17 +14,32 @@ Eigen::Matrix3d CalcEntryRotation(const ModelParams& params);
 
 // Forward kinematics from (inserted_m, roll_rad, bend_rad): link frames, sample
 // positions, tip pose and first_inside_link. Links not yet past the anus are
-// straight on the entry axis; their bend is set to zero.
+// straight on the entry axis (their bend is set to zero); the root link turns
+// about the pivot at the anus.
 void UpdateScopeKinematics(const ModelParams& params, ModelState* state);
 
+// Turns the shaft to roll_rad about its own centreline (docs/model.md, "Roll"):
+// the inserted shape stays, the link frames (and so the knobs' bending plane
+// and the camera) turn with it.
+void SpinScope(const ModelParams& params, double roll_rad, ModelState* state);
+
 // Body that carries the base DOFs in the solve: the link straddling the anus.
+// Its bend_rad is the pivot at the anus (its outside part stays on the entry
+// axis, its inside part turns about the anus).
 int RootLink(const ModelState& state);
+// Length of the root link past the anus.
+double CalcRootInsideLength(const ModelState& state);
 
 // Moves each inserted sample's tracked colon segment by a local search (at most
 // contact_search_window segments each way), then evaluates eqs. (9)-(17):
 // per-sample force on the scope, its linearised stiffness and the contact list.
 void EvaluateContacts(const ModelParams& params, ModelState* state, Scratch* scratch,
                       StepOutput* output);
+
+// Ring contacts (Scratch::ring_contacts): the colon points between two
+// samples' tracked segments held around the scope piece between them.
+// Called by EvaluateContacts.
+void EvaluateRingContacts(const ModelParams& params, ModelState* state, Scratch* scratch);
 
 // Linearly implicit update of eq. (6) for the scope (colon held still), by an
 // O(n) articulated-body recursion. Writes the new coordinates into state and
@@ -35,14 +50,30 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
 // Fills the constant parts of the colon system in scratch (MakeScratch).
 void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
 
-// Linearly implicit update of the colon points (scope held at its new shape):
-// suspension, neighbour coupling and contact stiffness in one block-tridiagonal
-// solve. Writes the colon point displacements into scratch->colon_rhs.
-void SolveColon(const ModelParams& params, ModelState* state, Scratch* scratch);
+// Linearly implicit update of the colon points in 3-D (scope held at its new
+// shape): suspension, mesentery, axial links, kink tension and contact
+// stiffness in one block-tridiagonal solve. Writes the points' increments into
+// scratch->colon_rhs and updates their tangents.
+void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
+                Scratch* scratch);
 
-// Moves a sample's tracked segment toward p by at most `window` segments.
-void TrackSegment(const ModelState& state, const ColonSpec& colon, int window,
-                  const Eigen::Vector3d& p, SampleContact* contact);
+// Recomputes the current tangents of points from..to (central differences).
+void UpdateColonTangents(int from, int to, ModelState* state);
+
+// Axial force of a neighbour pair (+ pulls the pair together) for the strain
+// of its gap, and its slope per unit strain: the wall's tension stiffness
+// (reached over a small onset strain), the soft pleating down to pleat_limit,
+// then the packed folds.
+struct PairAxial {
+  double force_N;
+  double slope_N;
+};
+PairAxial CalcPairAxial(const ModelParams& params, double pleat_limit, double strain);
+
+// Moves a sample's tracked segment toward p by at most `window` segments,
+// plane by plane (the planes normal to the current tangents).
+void TrackSegment(const ModelState& state, int window, const Eigen::Vector3d& p,
+                  SampleContact* contact);
 
 // Normal force of the radial wall for a penetration l (eqs. 9, 10) and its slope.
 struct WallResponse {

@@ -47,6 +47,32 @@ Eigen::Vector2d JointAnglesOfAxis(const Eigen::Vector3d& axis) {
 
 }  // namespace
 
+void SpinScope(const ModelParams& params, double roll_rad, ModelState* s) {
+  if (roll_rad == s->roll_rad) return;
+  // The torsionally stiff shaft turns about its own centreline: every link
+  // keeps its direction (so the whole shape stays) while its frame turns with
+  // the roll. Each joint is re-expressed in its parent's turned frame; the
+  // small twist a universal joint cannot hold is dropped, as on withdrawal.
+  const int n = static_cast<int>(s->link_length_m.size());
+  const int root = RootLink(*s);
+  const Eigen::Matrix3d R_entry = CalcEntryRotation(params);
+  s->roll_rad = roll_rad;
+  Eigen::Matrix3d R = Eigen::AngleAxisd(roll_rad, R_entry.col(2)).toRotationMatrix() * R_entry;
+  for (int k = root; k < n; ++k) {  // the pivot at the anus, then every joint inside
+    const Eigen::Vector3d axis_W = s->X_WLink[k].linear().col(2);
+    s->bend_rad[k] = JointAnglesOfAxis(R.transpose() * axis_W);
+    R = R * JointRotation(s->bend_rad[k]);
+  }
+  UpdateScopeKinematics(params, s);
+}
+
+double CalcRootInsideLength(const ModelState& s) {
+  const int n = static_cast<int>(s.link_length_m.size());
+  double distal_m = 0.0;
+  for (int k = RootLink(s) + 1; k < n; ++k) distal_m += s.link_length_m[k];
+  return std::max(0.0, s.inserted_m - distal_m);
+}
+
 void UpdateScopeKinematics(const ModelParams& params, ModelState* s) {
   const int n = static_cast<int>(s->link_length_m.size());
   const Eigen::Vector3d anus = params.colon.points.front().rest_position_m;
@@ -64,44 +90,54 @@ void UpdateScopeKinematics(const ModelParams& params, ModelState* s) {
   const int previous_root = RootLink(*s);
   s->first_inside_link = first_inside;
   const int root = RootLink(*s);
-  if (root > previous_root && root + 1 < n) {
-    // Withdrawn past a joint: the joints now outside are straightened by the
-    // guide. Their turn goes to the first joint still inside, so the inserted
-    // part keeps its direction (the exiting joint sits at the anus, so its
-    // position is kept too); zeroing it instead swung a looped scope's far
-    // end by centimetres in one step and drove it into the wall.
+  if (root > previous_root) {
+    // Withdrawn past a joint: the guide straightens it. The root link turns
+    // about the pivot at the anus, so the new root's pivot takes the old
+    // pivot's and the exited joints' turn and the inserted part keeps its
+    // shape (the exited joint sat at the anus, where the pivot is).
     Eigen::Matrix3d R_carried = Eigen::Matrix3d::Identity();
-    for (int k = previous_root + 1; k <= root + 1; ++k) R_carried *= JointRotation(s->bend_rad[k]);
-    s->bend_rad[root + 1] = JointAnglesOfAxis(R_carried.col(2));
+    for (int k = previous_root; k <= root; ++k) R_carried *= JointRotation(s->bend_rad[k]);
+    s->bend_rad[root] = JointAnglesOfAxis(R_carried.col(2));
   }
-
-  // Links up to the root lie straight on the entry axis (the anus guides them).
-  double arc_m = 0.0;
-  for (int k = n - 1; k > root; --k) arc_m += s->link_length_m[k];
-  arc_m += s->link_length_m[root];  // arc from the tip to the root's proximal joint
-  Eigen::Vector3d p = anus + (s->inserted_m - arc_m) * e;
-  for (int k = 0; k <= root; ++k) {
+  // (Inserted past a joint: the old pivot's bend stays as that joint's bend,
+  // which is at the anus now; the new root's pivot is straight.)
+  for (int k = 0; k < root; ++k) {
     s->bend_rad[k].setZero();
     s->bend_rate_rad_per_s[k].setZero();
   }
-  for (int k = root; k >= 0; --k) {
+
+  // The root link: its outside part on the entry axis, its inside part from
+  // the pivot at the anus. Its frame's origin is where its proximal joint
+  // would be along the pivoted direction, so inside samples sit right.
+  const double inside_m = CalcRootInsideLength(*s);
+  const double outside_m = s->link_length_m[root] - inside_m;
+  const Eigen::Matrix3d R_root = R_base * JointRotation(s->bend_rad[root]);
+  s->X_WLink[root].linear() = R_root;
+  s->X_WLink[root].translation() = anus - outside_m * R_root.col(2);
+  // Links behind the root lie straight on the entry axis (the hand holds them).
+  Eigen::Vector3d p = anus - outside_m * e;
+  for (int k = root - 1; k >= 0; --k) {
+    p -= s->link_length_m[k] * e;
     s->X_WLink[k].linear() = R_base;
-    s->X_WLink[k].translation() = anus + (s->inserted_m - arc_m) * e;
-    if (k > 0) arc_m += s->link_length_m[k - 1];
+    s->X_WLink[k].translation() = p;
   }
-  p = s->X_WLink[root].translation();
-  Eigen::Matrix3d R = R_base;
+  p = anus + inside_m * R_root.col(2);
+  Eigen::Matrix3d R = R_root;
   for (int k = root + 1; k < n; ++k) {
-    p += s->link_length_m[k - 1] * R.col(2);
     R = R * JointRotation(s->bend_rad[k]);
     s->X_WLink[k].linear() = R;
     s->X_WLink[k].translation() = p;
+    p += s->link_length_m[k] * R.col(2);
   }
   s->X_WTip.linear() = R;
-  s->X_WTip.translation() = p + s->link_length_m[n - 1] * R.col(2);
+  s->X_WTip.translation() = root + 1 < n ? p : Eigen::Vector3d(anus + inside_m * R_root.col(2));
 
   for (size_t i = 0; i < s->samples.size(); ++i) {
     const ScopeSample& sample = s->samples[i];
+    if (sample.arc_from_tip_m >= s->inserted_m) {  // outside: on the entry axis
+      s->p_WSample[i] = anus - (sample.arc_from_tip_m - s->inserted_m) * e;
+      continue;
+    }
     const Eigen::Isometry3d& X = s->X_WLink[sample.link];
     s->p_WSample[i] = X.translation() + sample.offset_m * X.linear().col(2);
   }

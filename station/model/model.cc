@@ -51,16 +51,24 @@ void ValidateParams(const ModelParams& p) {
           p.friction_stiffness_N_per_m, "must be in [1, 1e7]");
   Require(InRange(p.outer_cone_ratio, 1.01, 100.0), "outer_cone_ratio", p.outer_cone_ratio,
           "must be in [1.01, 100]");
-  Require(InRange(p.colon_longitudinal_stiffness_N, 0.0, 1e5), "colon_longitudinal_stiffness_N",
-          p.colon_longitudinal_stiffness_N, "must be in [0, 1e5] N");
-  Require(InRange(p.colon_pleat_stiffness_ratio, 1e-3, 1.0), "colon_pleat_stiffness_ratio",
-          p.colon_pleat_stiffness_ratio, "must be in [0.001, 1]");
-  Require(InRange(p.colon_pleat_limit, 0.05, 0.9), "colon_pleat_limit", p.colon_pleat_limit,
-          "must be in [0.05, 0.9]");
-  Require(InRange(p.colon_pleat_hardening_ratio, 1.0, 1e4), "colon_pleat_hardening_ratio",
-          p.colon_pleat_hardening_ratio, "must be in [1, 1e4]");
-  Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 10.0),
-          "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 10]");
+  Require(InRange(p.colon_tension_stiffness_N, 1.0, 1e5), "colon_tension_stiffness_N",
+          p.colon_tension_stiffness_N, "must be in [1, 1e5] N");
+  Require(InRange(p.colon_toe_stiffness_N, 0.0, p.colon_tension_stiffness_N),
+          "colon_toe_stiffness_N", p.colon_toe_stiffness_N,
+          "must be in [0, colon_tension_stiffness_N]");
+  Require(InRange(p.colon_toe_strain, 0.0, 2.0), "colon_toe_strain", p.colon_toe_strain,
+          "must be in [0, 2]");
+  Require(InRange(p.colon_pleat_stiffness_N, 0.0, p.colon_tension_stiffness_N),
+          "colon_pleat_stiffness_N", p.colon_pleat_stiffness_N,
+          "must be in [0, colon_tension_stiffness_N]");
+  Require(InRange(p.colon_packed_stiffness_N, 1.0, 1e5), "colon_packed_stiffness_N",
+          p.colon_packed_stiffness_N, "must be in [1, 1e5] N");
+  Require(InRange(p.colon_pleat_set_s, 0.0, 1e6), "colon_pleat_set_s", p.colon_pleat_set_s,
+          "must be in [0, 1e6] s (0: never)");
+  Require(InRange(p.colon_pleat_release_s, 0.0, 1e6), "colon_pleat_release_s",
+          p.colon_pleat_release_s, "must be in [0, 1e6] s (0: at once)");
+  Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 25.0),
+          "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 25]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
           p.contact_search_window, "must be in [1, 64]");
 }
@@ -73,10 +81,18 @@ ModelState MakeInitialState(const ModelParams& params) {
   s.link_length_m = CalcLinkLengths_m(scope);
   s.first_bending_link = CalcFirstBendingLink(scope, s.link_length_m);
   s.joint_stiffness_N_m_per_rad.assign(n, 0.0);
+  // Arc from each joint to the start of the bending section, for the passive section.
+  std::vector<double> behind_bending_m(n, 0.0);
+  for (int k = s.first_bending_link - 1; k >= 1; --k) {
+    behind_bending_m[k] = behind_bending_m[k + 1] + s.link_length_m[k];
+  }
   for (int k = 1; k < n; ++k) {
     // A joint stands for the half links on either side: K = EI / length.
-    const double EI = k >= s.first_bending_link ? scope.bending_section_rigidity_N_m2
-                                                : scope.flexural_rigidity_N_m2;
+    double EI = k >= s.first_bending_link ? scope.bending_section_rigidity_N_m2
+                                          : scope.flexural_rigidity_N_m2;
+    if (k < s.first_bending_link && behind_bending_m[k] <= scope.passive_section_length_m) {
+      EI = scope.passive_section_rigidity_N_m2;
+    }
     s.joint_stiffness_N_m_per_rad[k] = EI / (0.5 * (s.link_length_m[k - 1] + s.link_length_m[k]));
   }
   s.bend_rad.assign(n, Eigen::Vector2d::Zero());
@@ -110,12 +126,21 @@ ModelState MakeInitialState(const ModelParams& params) {
   s.first_inside_sample = static_cast<int>(s.samples.size());  // none yet
 
   const int N = static_cast<int>(params.colon.points.size());
-  s.colon_offset_m.assign(N, Eigen::Vector2d::Zero());
-  s.colon_rate_m_per_s.assign(N, Eigen::Vector2d::Zero());
-  s.colon_axial_m.assign(N, 0.0);
-  s.colon_axial_rate_m_per_s.assign(N, 0.0);
+  s.colon_displacement_m.assign(N, Eigen::Vector3d::Zero());
+  s.colon_pair_rest_gap_m.assign(N, 1.0);
+  for (int i = 0; i + 1 < N; ++i) {
+    s.colon_pair_rest_gap_m[i] =
+        (params.colon.points[i + 1].rest_position_m - params.colon.points[i].rest_position_m).norm();
+  }
+  s.colon_reference_m.resize(N);
+  for (int i = 0; i < N; ++i) s.colon_reference_m[i] = params.colon.points[i].rest_position_m;
+  s.colon_velocity_m_per_s.assign(N, Eigen::Vector3d::Zero());
   s.p_WColon.resize(N);
-  for (int i = 0; i < N; ++i) s.p_WColon[i] = params.colon.points[i].rest_position_m;
+  s.colon_tangent.resize(N);
+  for (int i = 0; i < N; ++i) {
+    s.p_WColon[i] = params.colon.points[i].rest_position_m;
+    s.colon_tangent[i] = params.colon.points[i].rest_tangent;
+  }
   s.wall_deformation_m.assign(N, 0.0);
   internal::UpdateScopeKinematics(params, &s);
   return s;
@@ -140,15 +165,12 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.sample_normal_force_N.assign(samples, 0.0);
   sc.sample_normal_slope_N_per_m.assign(samples, 0.0);
   sc.sample_delta_m.assign(samples, Eigen::Vector3d::Zero());
+  sc.ring_contacts.assign(params.colon.points.size(), RingContact{});
   const size_t N = params.colon.points.size();
-  sc.colon_diag.resize(N);
-  sc.colon_upper.resize(N);
-  sc.colon_rhs.resize(N);
-  sc.colon_work.resize(N);
-  sc.axial_diag.assign(N, 0.0);
-  sc.axial_upper.assign(N, 0.0);
-  sc.axial_rhs.assign(N, 0.0);
-  sc.axial_work.assign(N, 0.0);
+  sc.colon_diag.assign(N, Eigen::Matrix3d::Zero());
+  sc.colon_upper.assign(N, Eigen::Matrix3d::Zero());
+  sc.colon_rhs.assign(N, Eigen::Vector3d::Zero());
+  sc.colon_work.assign(N, Eigen::Matrix3d::Zero());
   internal::PrepareColonSystem(params, &sc);
   return sc;
 }
@@ -158,6 +180,7 @@ StepOutput MakeStepOutput(const ModelParams& params) {
   const size_t N = params.colon.points.size();
   out.wall_force_N.assign(N, 0.0);
   out.stretch_m.assign(N, 0.0);
+  out.pleat_ratio.assign(N, 1.0);
   out.contacts.resize(CountSamples(params));
   return out;
 }

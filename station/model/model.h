@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -40,19 +41,38 @@ struct ModelParams {
   // How far ahead of its proximal neighbour's a sample's tracked colon arc may
   // run, per metre of scope between them (+2 segments; at most 2 behind):
   // the colon has no contact with itself, so at a loop's pinched neck two
-  // lumens overlap and the local search alone would walk across. 0: no limit.
+  // lumens overlap and the local search alone would walk across. A pleated
+  // colon packs up to 1/pleat_limit of its arc on a metre of scope, so the
+  // ratio used is at least 1.2/(smallest pleat_limit). 0: no limit.
   double tracking_arc_ratio{1.5};
-  // Axial give of the colon (experimental, off by default: docs/model.md,
-  // "Known limits", says why): each point may also
-  // slide along its rest tangent, anchored by its own suspension (K_c, D_c),
-  // and neighbours resist a change of their gap: stretching with the wall's
-  // longitudinal stiffness EA, shortening (the wall folding, "pleating" onto
-  // the scope) with pleat_stiffness_ratio * EA until the gap has shortened by
-  // pleat_limit, beyond which the folds are packed (pleat_hardening_ratio * EA).
-  double colon_longitudinal_stiffness_N{0.0};  // EA (N per unit strain); 0: no axial give
-  double colon_pleat_stiffness_ratio{0.05};
-  double colon_pleat_limit{0.6};                 // largest shortening strain before packing
-  double colon_pleat_hardening_ratio{50.0};
+  // The colon wall along the tube (docs/model.md, "Axial links"), per unit
+  // strain of a gap (so independent of N). In tension it may be J-shaped
+  // like other soft tissue (a compliant toe up to colon_toe_strain, then the
+  // wall's linear modulus EA); by default it has no toe: with a 10 N toe the
+  // scope stretched the sigmoid and transverse by 20 % and the expert got
+  // less deep (docs/model-shortening-notes.md). Shortened, it folds onto the scope (pleats)
+  // softly down to each region's pleat_limit, then the folds are packed.
+  double colon_toe_stiffness_N{500.0};
+  double colon_toe_strain{0.2};
+  double colon_tension_stiffness_N{500.0};
+  double colon_pleat_stiffness_N{1.0};
+  double colon_packed_stiffness_N{500.0};
+  // Folds set: a gap held shortened takes its length as its rest length with
+  // this time constant (the gathered colon stays on the scope), and returns
+  // to its natural rest length with the release time constant once no longer
+  // shortened. 0: never (the gap's rest length stays the natural one).
+  double colon_pleat_set_s{2.0};
+  double colon_pleat_release_s{60.0};
+  // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
+  // full pressure a pressed region's points are held within the slack of
+  // their mesentery root with this stiffness per metre of colon.
+  double abdominal_pressure_stiffness_N_per_m2{2000.0};
+  double abdominal_pressure_slack_m{0.03};
+  // Experiment (docs/model-shortening-notes.md): a mobile point's tether reach shrinks with the
+  // local gathering of the colon (reach times the pleat ratio of its two
+  // gaps, never below the mesentery length), so gathered colon lies on its
+  // root. false: the reach is fixed.
+  bool mesentery_reach_gathers{false};
   bool operator==(const ModelParams&) const = default;
 };
 
@@ -67,6 +87,10 @@ struct StepInput {
   double knob_up_rad{0.0};     // + up, - down (clamped to the scope's angulation)
   double knob_right_rad{0.0};  // + right, - left
   Eigen::Vector3d tip_force_W_N{Eigen::Vector3d::Zero()};  // external load at the tip
+  // The assistant's hand pressing over a region (index: Region), 0..1: it
+  // flattens that region's mobile colon onto its mesentery root, so a
+  // straightened loop cannot bow out again (docs/model.md).
+  std::array<double, 9> abdominal_pressure{};
 };
 
 // A point along the scope where contact and gravity act (fixed at creation).
@@ -119,17 +143,25 @@ struct ModelState {
   // from this index on, as of the last contact evaluation.
   int first_inside_sample{0};
 
-  // Colon: each point moves only in its plane P_i.
-  std::vector<Eigen::Vector2d> colon_offset_m;  // d_ri in (plane_u, plane_v)
-  std::vector<Eigen::Vector2d> colon_rate_m_per_s;
-  // Axial give: offset of point i along its rest tangent (its plane P_i moves
-  // with it, the plane's normal stays the rest tangent).
-  std::vector<double> colon_axial_m;
-  std::vector<double> colon_axial_rate_m_per_s;
+  // Colon: each point r_i moves in 3-D, d_i = r_i - rest position.
+  std::vector<Eigen::Vector3d> colon_displacement_m;
+  // Where the paper's suspension pulls each point (its rest position, or
+  // where it has settled: TissueParams::suspension_relaxation_s).
+  std::vector<Eigen::Vector3d> colon_reference_m;
+  // Rest length of the gap between points i and i+1: the natural one, or
+  // shorter where folds have set (ModelParams::colon_pleat_set_s).
+  std::vector<double> colon_pair_rest_gap_m;
+  std::vector<Eigen::Vector3d> colon_velocity_m_per_s;
   std::vector<Eigen::Vector3d> p_WColon;     // current r_i
+  // Current unit tangent of the tube at each point (central difference of the
+  // neighbours, as of the end of the last step): the normal of the lumen's
+  // plane at r_i for the contacts and the views.
+  std::vector<Eigen::Vector3d> colon_tangent;
   std::vector<double> wall_deformation_m;    // largest radial l at each point
 
-  double tip_arc_m{0.0};                     // tip position along the rest centerline
+  // Tip position along the colon's material (rest arc of the tracked point
+  // of the wall): where in the colon the tip is, however the colon pleats.
+  double tip_arc_m{0.0};
 };
 
 struct Contact {
@@ -153,14 +185,35 @@ struct StepOutput {
   double tip_arc_m{0.0};
   double inserted_m{0.0};
   std::vector<double> wall_force_N;  // per colon point: normal contact force on the wall
-  std::vector<double> stretch_m;     // per colon point: suspension stretch |d_ri|
+  // Per colon point: mesentery stretch, how far the tether is pulled beyond
+  // its reach (the pain signal, paper §3.3.1).
+  std::vector<double> stretch_m;
+  // Per colon point: current length of the tube it stands for over its rest
+  // length (< 1 pleated onto the scope, > 1 stretched).
+  std::vector<double> pleat_ratio;
   double peak_stretch_m{0.0};
   double peak_stretch_arc_m{0.0};
   double peak_wall_force_N{0.0};
+  double peak_fixed_displacement_m{0.0};  // largest |d_i| of a fixed (retroperitoneal) point
   std::vector<Contact> contacts;     // first contact_count entries are valid
   int contact_count{0};
   double velocity_norm_m_per_s{0.0};  // sqrt(sum |v_sample|^2 + sum |v_colon|^2)
   bool finite{true};                  // false if any NaN/Inf appeared (state not trusted)
+};
+
+// A colon point the scope runs through between two of its samples (the colon
+// pleated onto the scope, or a loop's neck): its ring must contain the scope
+// piece between them. Frictionless; the samples' contacts carry the friction.
+struct RingContact {
+  int point{0};          // colon point
+  int sample{0};         // proximal sample of the scope piece
+  double piece_t{0.0};   // where along the piece, 0 at the sample, 1 at the next one
+  Eigen::Vector3d p_W{Eigen::Vector3d::Zero()};       // closest point of the scope piece
+  Eigen::Vector3d normal_W{Eigen::Vector3d::UnitX()};  // from the ring's centre toward it
+  double penetration_m{0.0};
+  double force_N{0.0};
+  double slope_N_per_m{0.0};
+  double stiffness_N_per_m{0.0};  // slope + D_d / dt
 };
 
 // Work arrays for Step, sized once.
@@ -182,24 +235,24 @@ struct Scratch {
   std::vector<double> sample_normal_force_N;
   std::vector<double> sample_normal_slope_N_per_m;
   std::vector<Eigen::Vector3d> sample_delta_m;
-  std::vector<Eigen::Matrix2d> colon_diag;
-  std::vector<Eigen::Matrix2d> colon_upper;  // block (i, i+1)
-  std::vector<Eigen::Vector2d> colon_rhs;
-  std::vector<Eigen::Matrix2d> colon_work;
-  // Constant parts of the colon system, computed once by MakeScratch from the
-  // rest geometry and dt (a Scratch belongs to the params it was made from).
-  std::vector<double> colon_pair_k_N_per_m;        // [i]: coupling T/gap of points i, i+1
-  std::vector<Eigen::Matrix2d> colon_pair_transfer;  // [i]: B_i^T B_(i+1), plane i+1 -> i
-  std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i
-  std::vector<double> colon_base_diag;             // [i]: D_c h + dt (K_c h + couplings)
-  std::vector<double> colon_stiffness_diag;        // [i]: dt (K_c h + couplings)
-  std::vector<Eigen::Matrix2d> colon_pair_upper;   // [i]: -dt (T/gap) B_i^T B_(i+1)
-  // Axial give: tridiagonal system of the tangential offsets (scalar per point).
-  std::vector<double> axial_diag;
-  std::vector<double> axial_upper;                 // (i, i+1)
-  std::vector<double> axial_rhs;                   // after the solve: the increments
-  std::vector<double> axial_work;
-  std::vector<double> axial_pair_gap_m;            // [i]: rest distance of points i, i+1
+  std::vector<RingContact> ring_contacts;  // first ring_contact_count valid, by sample
+  int ring_contact_count{0};
+  // The colon's block-tridiagonal system (3x3 blocks), points 0..N-1.
+  std::vector<Eigen::Matrix3d> colon_diag;
+  std::vector<Eigen::Matrix3d> colon_upper;  // block (i, i+1)
+  std::vector<Eigen::Vector3d> colon_rhs;    // after the solve: the increments of r_i
+  std::vector<Eigen::Matrix3d> colon_work;
+  // Constant parts, computed once by MakeScratch from the rest geometry (a
+  // Scratch belongs to the params it was made from).
+  std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i (in P_i)
+  std::vector<double> colon_damping_N_s_per_m;     // [i]: D_c h_i
+  std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
+  std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
+  std::vector<double> colon_pair_kink_N_per_m;     // [i]: T / gap
+  std::vector<double> colon_pair_pleat_limit;      // [i]: smaller pleat_limit of i, i+1
+  std::vector<Eigen::Vector3d> colon_pair_rest_direction;     // [i]: unit, i -> i+1 at rest
+  std::vector<Eigen::Vector3d> colon_pair_rest_mean_tangent;  // [i]: mean of i's, i+1's
+  double tracking_arc_ratio{0.0};                  // as used (ModelParams::tracking_arc_ratio)
 };
 
 ModelState MakeInitialState(const ModelParams& params);  // validates params; may throw

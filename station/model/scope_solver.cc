@@ -18,6 +18,9 @@ namespace {
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 constexpr double kMaxJointTurnPerStep_rad = 0.02;
+// The pivot at the anus is as stiff as a joint this far from the clamp when
+// the root's inside part is shorter (it never becomes infinitely stiff).
+constexpr double kPivotMinHalfLength_m = 0.001;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
@@ -103,6 +106,7 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   // Samples are ordered base to tip, so a body's samples are consecutive.
   BodyStiffnessSum body;
   int body_link = -1;
+  int ring = 0;  // ring contacts are ordered by their proximal sample
   for (int i = s->first_inside_sample; i < samples; ++i) {
     const int k = std::max(s->samples[i].link, root);
     if (k != body_link) {
@@ -119,10 +123,26 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
       body.AddSpring(sc->sample_normal_stiffness_N_per_m[i], params.friction_stiffness_N_per_m,
                      sc->sample_normal_W[i], p);
     }
+    // The rings held on the scope piece after this sample push it back
+    // toward their centres (no friction).
+    for (; ring < sc->ring_contact_count && sc->ring_contacts[ring].sample == i; ++ring) {
+      const RingContact& rc = sc->ring_contacts[ring];
+      const Eigen::Vector3d F_ring = -rc.force_N * rc.normal_W;
+      force_sum_N += F_ring;
+      moment_sum_N_m += (rc.p_W - anus).cross(F_ring);
+      body.AddForce(F_ring, rc.p_W);
+      body.AddSpring(rc.stiffness_N_per_m, 0.0, rc.normal_W, rc.p_W);
+    }
   }
   if (body_link >= 0) body.FlushInto(dt, &IA[body_link], &bA[body_link]);
   // Tip to base: articulated stiffness and bias of every 2-DOF bending joint.
   auto& S = sc->motion_subspace;
+  const double D = params.scope.joint_damping_N_m_s_per_rad;
+  // The link straddling the anus turns about a pivot at the anus (its part
+  // outside stays on the entry axis): the pivot and the first joint inside
+  // share the bend of the scope leaving the guide, each over half of the
+  // root's inside length (a cantilever clamped at the anus).
+  const double root_inside_m = CalcRootInsideLength(*s);
   for (int k = n - 1; k > root; --k) {
     const Eigen::Matrix3d& R_parent = s->X_WLink[k - 1].linear();
     const Eigen::Vector3d o = s->X_WLink[k].translation();
@@ -133,13 +153,9 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
     S[k].col(1) << axis2, o.cross(axis2);
     double K = s->joint_stiffness_N_m_per_rad[k];
     if (k == root + 1) {
-      // The guide clamps the scope at the anus: the first joint inside bends
-      // only the part of its proximal half-link that is past the anus.
-      const double half_sum_m = 0.5 * (s->link_length_m[k - 1] + s->link_length_m[k]);
-      const double past_anus_m = std::clamp((o - anus).dot(e), 0.0, 0.5 * s->link_length_m[k - 1]);
-      K *= half_sum_m / (0.5 * s->link_length_m[k] + past_anus_m);
+      K = s->joint_stiffness_N_m_per_rad[k] * 0.5 * (s->link_length_m[k - 1] + s->link_length_m[k]) /
+          (0.5 * (root_inside_m + s->link_length_m[k]));
     }
-    const double D = params.scope.joint_damping_N_m_s_per_rad;
     sc->u_matrix[k].noalias() = IA[k] * S[k];
     Eigen::Matrix2d Dk = S[k].transpose() * sc->u_matrix[k];
     Dk.diagonal().array() += D + dt * K;
@@ -150,36 +166,73 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
     IA[k - 1].noalias() += IA[k] - UDinv * sc->u_matrix[k].transpose();
     bA[k - 1].noalias() += bA[k] - UDinv * sc->u_vector[k];
   }
-  // Base: roll always prescribed; thrust prescribed (kPosition) or driven by
-  // the hand's force against the thrust damping (kForce).
-  Vec6 S_thrust, S_roll;
-  S_thrust << Eigen::Vector3d::Zero(), e;
-  S_roll << e, anus.cross(e);
-  const double d_roll = input.roll_rad - s->roll_rad;
+  // The base: the pivot at the anus (2 DOF, from the world), then the thrust
+  // along the pivoted root (the scope slides through the guide), prescribed
+  // (kPosition) or driven by the hand's force against the thrust damping
+  // (kForce). The roll turned the shaft in place before the contacts
+  // (SpinScope): it moves no body here.
+  const Eigen::Matrix3d& R_base = s->X_WLink[std::max(root - 1, 0)].linear();
+  const Eigen::Matrix3d& R_root = s->X_WLink[root].linear();
+  const Eigen::Vector3d z_root = R_root.col(2);
+  Vec6 S_thrust;
+  S_thrust << Eigen::Vector3d::Zero(), z_root;
+  Eigen::Matrix<double, 6, 2> S_pivot;
+  {
+    const double a = s->bend_rad[root].x();
+    const Eigen::Vector3d axis1 = R_base.col(0);
+    const Eigen::Vector3d axis2 = std::cos(a) * R_base.col(1) + std::sin(a) * R_base.col(2);
+    S_pivot.col(0) << axis1, anus.cross(axis1);
+    S_pivot.col(1) << axis2, anus.cross(axis2);
+  }
+  const double EI_root = root >= s->first_bending_link ? params.scope.bending_section_rigidity_N_m2
+                                                       : params.scope.flexural_rigidity_N_m2;
+  const double K_pivot = EI_root / (0.5 * root_inside_m + kPivotMinHalfLength_m);
   const double max_insert = params.scope.working_length_m;
   // Reaction at the base, quasi-static: every inserted point moves with the
-  // thrust and turns with the roll, so the hand holds e . sum F and the moment
-  // about the entry axis (forces at the start of the step).
-  out->base_force_N = -e.dot(force_sum_N);
+  // thrust, so the hand holds z . sum F (z the scope's direction leaving the
+  // guide); the scope as a whole is in moment balance about the entry axis,
+  // so the hand holds that moment too (forces at the start of the step; Step
+  // adds the friction around the shaft).
+  out->base_force_N = -z_root.dot(force_sum_N);
   out->roll_torque_Nm = -e.dot(moment_sum_N_m);
   // Base to tip: joint increments and body displacements of the linearised
   // step with its force terms (u, bA and the hand's push) scaled by `scale`;
-  // the prescribed roll (and thrust in kPosition) is never scaled. The lambda
+  // the prescribed thrust (kPosition) is never scaled. The lambda
   // returns the largest joint turn.
   auto& delta = sc->body_displacement;
   auto& dq = sc->joint_increment;
   double d_insert = 0.0;
+  Eigen::Vector2d dq_pivot = Eigen::Vector2d::Zero();
+  const Vec6 U_thrust = IA[root] * S_thrust;
+  const double D_thrust = params.thrust_damping_N_s_per_m + S_thrust.dot(U_thrust);
   auto solve_down = [&](double scale) {
+    // Condense the thrust into the pivot's child.
+    Mat6 IA_slide = IA[root];
+    Vec6 b_slide = scale * bA[root];
+    double u_thrust = 0.0;
     if (input.thrust_mode == ThrustMode::kPosition) {
       d_insert = std::clamp(target_insertion_m, 0.0, max_insert) - s->inserted_m;
+      b_slide.noalias() -= U_thrust * d_insert;
     } else {
-      const double D0 = params.thrust_damping_N_s_per_m + S_thrust.dot(IA[root] * S_thrust);
-      const double u0 = scale * (dt * input.push_force_N + S_thrust.dot(bA[root])) -
-                        S_thrust.dot(IA[root] * (S_roll * d_roll));
-      d_insert = std::clamp(s->inserted_m + u0 / D0, 0.0, max_insert) - s->inserted_m;
+      u_thrust = scale * (dt * input.push_force_N + S_thrust.dot(bA[root]));
+      IA_slide.noalias() -= U_thrust * U_thrust.transpose() / D_thrust;
+      b_slide.noalias() -= U_thrust * (u_thrust / D_thrust);
     }
-    delta[root] = S_thrust * d_insert + S_roll * d_roll;
-    double largest_turn = 0.0;
+    // The pivot, from the world.
+    const Eigen::Matrix<double, 6, 2> U_pivot = IA_slide * S_pivot;
+    Eigen::Matrix2d D_pivot = S_pivot.transpose() * U_pivot;
+    D_pivot.diagonal().array() += D + dt * K_pivot;
+    const Eigen::Vector2d u_pivot =
+        scale * (-dt * K_pivot * (s->bend_rad[root] - s->bend_rest_rad[root])) +
+        S_pivot.transpose() * b_slide;
+    dq_pivot = D_pivot.inverse() * u_pivot;
+    const Vec6 delta_slide = S_pivot * dq_pivot;
+    if (input.thrust_mode == ThrustMode::kForce) {
+      d_insert = (u_thrust - U_thrust.dot(delta_slide)) / D_thrust;
+      d_insert = std::clamp(s->inserted_m + d_insert, 0.0, max_insert) - s->inserted_m;
+    }
+    delta[root] = delta_slide + S_thrust * d_insert;
+    double largest_turn = dq_pivot.norm();
     for (int k = root + 1; k < n; ++k) {
       dq[k].noalias() =
           sc->d_inverse[k] * (scale * sc->u_vector[k] - sc->u_matrix[k].transpose() * delta[k - 1]);
@@ -196,16 +249,17 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   if (largest_turn > kMaxJointTurnPerStep_rad) {
     solve_down(kMaxJointTurnPerStep_rad / largest_turn);
   }
-  for (int k = root + 1; k < n; ++k) {
+  auto apply = [&](int k, Eigen::Vector2d turn_rad) {
     // The prescribed base motion alone can still ask for more; cut that joint.
-    const double turn = dq[k].norm();
-    if (turn > kMaxJointTurnPerStep_rad) dq[k] *= kMaxJointTurnPerStep_rad / turn;
-    s->bend_rad[k] += dq[k];
-    s->bend_rate_rad_per_s[k] = dq[k] / dt;
-  }
+    const double turn = turn_rad.norm();
+    if (turn > kMaxJointTurnPerStep_rad) turn_rad *= kMaxJointTurnPerStep_rad / turn;
+    s->bend_rad[k] += turn_rad;
+    s->bend_rate_rad_per_s[k] = turn_rad / dt;
+  };
+  apply(root, dq_pivot);
+  for (int k = root + 1; k < n; ++k) apply(k, dq[k]);
   s->inserted_m += d_insert;
   s->insertion_rate_m_per_s = d_insert / dt;
-  s->roll_rad = input.roll_rad;
 }
 
 }  // namespace ves::model::internal

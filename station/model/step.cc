@@ -28,9 +28,9 @@ void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelS
   }
 }
 
-// stretch_sum_m: the sum of the colon points' stretch norms, which is not
-// finite if any offset is not (the output loop computes the norms anyway).
-bool AllFinite(const ModelState& s, const StepOutput& out, double stretch_sum_m, bool axial) {
+// colon_sum_m: the sum of the colon points' displacement norms, which is not
+// finite if any displacement is not (the output loop computes the norms anyway).
+bool AllFinite(const ModelState& s, const StepOutput& out, double colon_sum_m) {
   if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
       !std::isfinite(out.roll_torque_Nm) || !s.X_WTip.matrix().allFinite()) {
     return false;
@@ -38,13 +38,7 @@ bool AllFinite(const ModelState& s, const StepOutput& out, double stretch_sum_m,
   for (const Eigen::Vector2d& q : s.bend_rad) {
     if (!q.allFinite()) return false;
   }
-  if (!std::isfinite(stretch_sum_m)) return false;
-  if (axial) {
-    for (const double a : s.colon_axial_m) {
-      if (!std::isfinite(a)) return false;
-    }
-  }
-  return true;
+  return std::isfinite(colon_sum_m);
 }
 
 }  // namespace
@@ -52,8 +46,10 @@ bool AllFinite(const ModelState& s, const StepOutput& out, double stretch_sum_m,
 void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc,
           StepOutput* out) {
   const double dt = params.dt_s;
-  const bool axial = params.colon_longitudinal_stiffness_N > 0.0;  // axial give on
   SetKnobRestAngles(params, input, s);
+  // The roll turns the shaft in place; its surface slides round by spin * a.
+  const double spin_rad = input.roll_rad - s->roll_rad;
+  internal::SpinScope(params, input.roll_rad, s);
 
   // 1. Contacts at the current shapes (eqs. 9-17).
   internal::EvaluateContacts(params, s, sc, out);
@@ -66,13 +62,16 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   internal::SolveScope(params, input, input.insertion_m, s, sc, out);
   internal::UpdateScopeKinematics(params, s);
 
-  // 3. Colon: suspension, coupling, contacts, linearly implicit, O(N).
-  internal::SolveColon(params, s, sc);
+  // 3. Colon: suspension, mesentery, axial links, contacts, linearly implicit, O(N).
+  internal::SolveColon(params, input, s, sc);
 
   // 4. Friction memory: the stick spring stretches by the tangential relative
-  //    displacement of scope and wall during the step.
+  //    displacement of scope surface and wall during the step (the surface
+  //    also turned with the spin). The friction round the shaft is a torque
+  //    the hand holds: a (n x F_t) . t about each sample's axis t.
   double speed2 = 0.0;
   const auto& pts = params.colon.points;
+  const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
   for (int i = first_inside; i < samples; ++i) {
     SampleContact& c = s->contact[i];
     const Eigen::Vector3d dp = s->p_WSample[i] - sc->sample_delta_m[i];
@@ -80,17 +79,12 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     speed2 += dp.squaredNorm();
     if (!c.touching) continue;
     const int k = c.segment;
-    Eigen::Vector3d dc =
-        (1.0 - c.segment_t) * (pts[k].plane_u * sc->colon_rhs[k].x() +
-                               pts[k].plane_v * sc->colon_rhs[k].y()) +
-        c.segment_t * (pts[k + 1].plane_u * sc->colon_rhs[k + 1].x() +
-                       pts[k + 1].plane_v * sc->colon_rhs[k + 1].y());
-    if (axial) {  // the wall also slid along its tangents
-      dc += (1.0 - c.segment_t) * sc->axial_rhs[k] * pts[k].rest_tangent +
-            c.segment_t * sc->axial_rhs[k + 1] * pts[k + 1].rest_tangent;
-    }
+    const Eigen::Vector3d dc =
+        (1.0 - c.segment_t) * sc->colon_rhs[k] + c.segment_t * sc->colon_rhs[k + 1];
     const Eigen::Vector3d& n = sc->sample_normal_W[i];
-    Eigen::Vector3d rel = dp - dc;
+    const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
+    out->roll_torque_Nm -= scope_radius_m * n.cross(sc->sample_friction_W_N[i]).dot(axis);
+    Eigen::Vector3d rel = dp + (spin_rad * scope_radius_m) * axis.cross(n) - dc;
     rel -= rel.dot(n) * n;
     if (c.sliding && rel.norm() < kRestickSpeed_m_per_s * dt) {
       // At rest, static friction recovers: the stick spring relaxes toward
@@ -120,28 +114,48 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     s->wall_deformation_m[nearest] =
         std::max(s->wall_deformation_m[nearest], contact.penetration_m);
   }
+  for (int j = 0; j < sc->ring_contact_count; ++j) {
+    const RingContact& rc = sc->ring_contacts[j];
+    out->wall_force_N[rc.point] += rc.force_N;
+    s->wall_deformation_m[rc.point] = std::max(s->wall_deformation_m[rc.point], rc.penetration_m);
+  }
   out->peak_stretch_m = 0.0;
   out->peak_stretch_arc_m = 0.0;
   out->peak_wall_force_N = 0.0;
-  double stretch_sum_m = 0.0;
+  out->peak_fixed_displacement_m = 0.0;
+  double colon_sum_m = 0.0;
   for (int i = 0; i < N; ++i) {
-    const double stretch = s->colon_offset_m[i].norm();
+    const ColonPoint& p = pts[i];
+    const double moved_m = s->colon_displacement_m[i].norm();
+    colon_sum_m += moved_m;
+    speed2 += s->colon_velocity_m_per_s[i].squaredNorm();
+    // Mesentery stretch: how far the tether is pulled beyond its reach.
+    const double stretch =
+        std::max(0.0, CalcTetherDistance(s->p_WColon[i] - p.tether_anchor_m,
+                                         p.tether_root_direction,
+                                         params.colon.mesentery_shear_ratio) -
+                          p.tether_length_m);
     out->stretch_m[i] = stretch;
-    stretch_sum_m += stretch;
-    speed2 += s->colon_rate_m_per_s[i].squaredNorm();
-    if (axial) speed2 += s->colon_axial_rate_m_per_s[i] * s->colon_axial_rate_m_per_s[i];
     if (stretch > out->peak_stretch_m) {
       out->peak_stretch_m = stretch;
-      out->peak_stretch_arc_m = pts[i].arc_m;
+      out->peak_stretch_arc_m = p.arc_m;
+    }
+    if (!p.tissue.mobile) {
+      out->peak_fixed_displacement_m = std::max(out->peak_fixed_displacement_m, moved_m);
     }
     out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
+    // Pleat ratio: the tube's current length over its rest length around r_i.
+    const int a = std::max(i - 1, 0), b = std::min(i + 1, N - 1);
+    const double rest_m = p.length_m;  // half of each neighbouring gap at rest
+    const double now_m = 0.5 * ((s->p_WColon[b] - s->p_WColon[i]).norm() +
+                                (s->p_WColon[i] - s->p_WColon[a]).norm());
+    out->pleat_ratio[i] = now_m / rest_m;
   }
   SampleContact tip = s->contact[samples - 1];
   if (tip.inside) {
-    // Where the tip is now, along the rest centerline (a copy: the contact
+    // Where the tip is now, along the colon's material (a copy: the contact
     // memory itself moves on at the next step's evaluation).
-    internal::TrackSegment(*s, params.colon, params.contact_search_window,
-                           s->p_WSample[samples - 1], &tip);
+    internal::TrackSegment(*s, params.contact_search_window, s->p_WSample[samples - 1], &tip);
     const int k = tip.segment;
     const double t =
         internal::CalcSegmentHit(params, *s, k, s->p_WSample[samples - 1]).t;
@@ -156,7 +170,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->tip_arc_m = s->tip_arc_m;
   out->inserted_m = s->inserted_m;
   out->velocity_norm_m_per_s = std::sqrt(speed2);
-  out->finite = AllFinite(*s, *out, stretch_sum_m, axial);
+  out->finite = AllFinite(*s, *out, colon_sum_m);
 }
 
 }  // namespace ves::model

@@ -16,7 +16,9 @@ void FillSceneFromModel(const model::ModelParams& params, const model::ModelStat
   for (size_t i = 0; i < n; ++i) {
     scene->colon_centers_m[i] =
         i < state.p_WColon.size() ? state.p_WColon[i] : points[i].rest_position_m;
-    scene->colon_tangents[i] = points[i].rest_tangent;  // r_i moves only in P_i
+    // The tube's current direction: the rings follow a pleated or looped colon.
+    scene->colon_tangents[i] =
+        i < state.colon_tangent.size() ? state.colon_tangent[i] : points[i].rest_tangent;
     scene->colon_radius_m[i] = points[i].radius_m;
     scene->colon_arc_m[i] = points[i].arc_m;
   }

@@ -16,7 +16,11 @@ m::Region RegionFromProto(ves::v1::Region region) {
   return static_cast<m::Region>(value);
 }
 
-m::TissueParams TissueFromProto(const ves::v1::TissueParams& t) {
+double Or(double value, double fallback) { return value != 0.0 ? value : fallback; }
+
+// A case's tissue; the mesentery and pleating fields it leaves unset take the
+// defaults of the region's name (docs/model.md).
+m::TissueParams TissueFromProto(const ves::v1::TissueParams& t, m::Region region) {
   m::TissueParams out;
   out.suspension_stiffness_N_per_m2 = t.suspension_stiffness_n_per_m2();
   out.suspension_damping_N_s_per_m2 = t.suspension_damping_n_s_per_m2();
@@ -26,10 +30,16 @@ m::TissueParams TissueFromProto(const ves::v1::TissueParams& t) {
   out.static_friction = t.static_friction();
   out.dynamic_friction = t.dynamic_friction();
   out.neighbor_tension_N = t.neighbor_tension_n();
+  out.mobile = t.mobility() == ves::v1::MOBILITY_DEFAULT ? m::IsMobileByDefault(region)
+                                                          : t.mobility() == ves::v1::MOBILITY_MOBILE;
+  const m::MobilityDefaults defaults = m::DefaultMobility(region, out.mobile);
+  out.mesentery_length_m = Or(t.mesentery_length_m(), defaults.mesentery_length_m);
+  out.mesentery_stiffness_N_per_m2 =
+      Or(t.mesentery_stiffness_n_per_m2(), defaults.mesentery_stiffness_N_per_m2);
+  out.pleat_limit = Or(t.pleat_limit(), defaults.pleat_limit);
+  out.suspension_relaxation_s = defaults.suspension_relaxation_s;
   return out;
 }
-
-double Or(double value, double fallback) { return value != 0.0 ? value : fallback; }
 
 }  // namespace
 
@@ -57,8 +67,9 @@ m::ColonSpec ColonSpecFromCase(const ves::v1::ColonCase& colon_case,
     curve.radius_profile.push_back({r.arc_m(), r.radius_m()});
   }
   for (const auto& span : colon_case.regions()) {
-    curve.regions.push_back({RegionFromProto(span.region()), span.start_arc_m(), span.end_arc_m(),
-                             TissueFromProto(span.tissue())});
+    const m::Region region = RegionFromProto(span.region());
+    curve.regions.push_back(
+        {region, span.start_arc_m(), span.end_arc_m(), TissueFromProto(span.tissue(), region)});
   }
   m::ColonSpec colon = m::ResampleColon(curve, options.segments);
   if (options.stiff_colon) m::MakeSuspensionStiff(&colon);
@@ -83,6 +94,11 @@ m::EndoscopeParams EndoscopeFromSpec(const ves::v1::EndoscopeSpec& spec) {
   p.angulation_right_rad = Or(spec.angulation_right_rad(), p.angulation_right_rad);
   p.bending_section_rigidity_N_m2 =
       Or(spec.bending_section_rigidity_n_m2(), p.bending_section_rigidity_N_m2);
+  p.passive_section_length_m =
+      spec.passive_section_length_m() < 0.0 ? 0.0
+                                             : Or(spec.passive_section_length_m(), p.passive_section_length_m);
+  p.passive_section_rigidity_N_m2 =
+      Or(spec.passive_section_rigidity_n_m2(), p.passive_section_rigidity_N_m2);
   m::ValidateEndoscope(p);
   return p;
 }
@@ -106,6 +122,8 @@ ves::v1::EndoscopeSpec DefaultEndoscopeSpec() {
   spec.set_angulation_left_rad(p.angulation_left_rad);
   spec.set_angulation_right_rad(p.angulation_right_rad);
   spec.set_bending_section_rigidity_n_m2(p.bending_section_rigidity_N_m2);
+  spec.set_passive_section_length_m(p.passive_section_length_m);
+  spec.set_passive_section_rigidity_n_m2(p.passive_section_rigidity_N_m2);
   return spec;
 }
 

@@ -9,10 +9,15 @@ struct MetricThresholds {
   double cecum_arc_m{1.0};
   // Wall force above which a contact counts as excessive (an episode).
   double excessive_wall_force_N{4.0};
-  // Mesentery stretch above which the patient feels pain (paper §3.3.1).
-  double pain_stretch_m{0.03};
-  // Wall force above which the mucosa is damaged; damage is the impulse above it.
-  double damage_wall_force_N{8.0};
+  // Mesentery stretch beyond its slack above which the patient feels pain
+  // (the paper: overextending the colon that is not fixed hurts; 2 cm separates the
+  // scripted operators on the shortening colon, docs/scoring.md).
+  double pain_stretch_m{0.02};
+  // Wall force above which the wall is damaged; damage is the impulse above
+  // it. The lowest perforation load of porcine colon under a colonoscope
+  // head, 14.1 N (straight tip, angled loading; Johnson et al., J Mech Behav
+  // Biomed Mater 2019).
+  double damage_wall_force_N{14.0};
   // Loop index (slack, m) that starts a loop, and the lower value that ends it.
   double loop_enter_m{0.06};
   double loop_exit_m{0.03};

@@ -75,4 +75,26 @@ Eigen::Vector3d ColonPointAtArc(const model::ModelParams& params, const model::M
   return (1.0 - t) * state.p_WColon[k] + t * state.p_WColon[k + 1];
 }
 
+Eigen::Vector3d ColonPointAhead(const model::ModelParams& params, const model::ModelState& state,
+                                double arc_m, double ahead_m) {
+  const auto& pts = params.colon.points;
+  const std::size_t n = pts.size();
+  if (arc_m >= pts.back().arc_m) return state.p_WColon.back();
+  const auto it =
+      std::upper_bound(pts.begin(), pts.end(), std::max(arc_m, pts.front().arc_m),
+                       [](double a, const model::ColonPoint& p) { return a < p.arc_m; });
+  std::size_t k = static_cast<std::size_t>(it - pts.begin()) - 1;
+  const double t = (std::max(arc_m, pts.front().arc_m) - pts[k].arc_m) /
+                   (pts[k + 1].arc_m - pts[k].arc_m);
+  Eigen::Vector3d from = (1.0 - t) * state.p_WColon[k] + t * state.p_WColon[k + 1];
+  double left_m = ahead_m;
+  for (++k; k < n; ++k) {
+    const double step_m = (state.p_WColon[k] - from).norm();
+    if (step_m >= left_m) return from + (left_m / step_m) * (state.p_WColon[k] - from);
+    left_m -= step_m;
+    from = state.p_WColon[k];
+  }
+  return state.p_WColon.back();
+}
+
 }  // namespace ves::training

@@ -43,4 +43,11 @@ class Observer {
 Eigen::Vector3d ColonPointAtArc(const model::ModelParams& params, const model::ModelState& state,
                                 double arc_m);
 
+// The point of the deformed centerline a path length ahead_m beyond the
+// colon's material at arc_m, measured along the centerline as it is now (a
+// pleated colon packs more material into the same view; a stretched one
+// less): where the lumen ahead appears to someone looking from there.
+Eigen::Vector3d ColonPointAhead(const model::ModelParams& params, const model::ModelState& state,
+                                double arc_m, double ahead_m);
+
 }  // namespace ves::training

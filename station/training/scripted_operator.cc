@@ -17,12 +17,23 @@ Perception Perceive(const model::ModelParams& params, const model::ModelState& s
   p.base_force_N = output.base_force_N;
   p.peak_stretch_m = output.peak_stretch_m;
   const Eigen::Vector3d target_W =
-      ColonPointAtArc(params, state, state.tip_arc_m + lumen_lookahead_m);
+      ColonPointAhead(params, state, state.tip_arc_m, lumen_lookahead_m);
   const Eigen::Vector3d d_Tip = state.X_WTip.inverse() * target_W;
   if (d_Tip.norm() > 1e-9) p.lumen_Tip = d_Tip.normalized();
   p.angulation_up_rad = std::min(params.scope.angulation_up_rad, params.scope.angulation_down_rad);
   p.angulation_right_rad =
       std::min(params.scope.angulation_right_rad, params.scope.angulation_left_rad);
+  p.working_length_m = params.scope.working_length_m;
+  const auto& pts = params.colon.points;
+  auto at = std::upper_bound(
+      pts.begin(), pts.end(), state.tip_arc_m,
+      [](double arc_m, const model::ColonPoint& point) { return arc_m < point.arc_m; });
+  if (at != pts.begin()) --at;  // the last point at or before the tip
+  if (!at->tissue.mobile) {
+    auto start = at;
+    while (start != pts.begin() && !(start - 1)->tissue.mobile) --start;
+    p.tip_into_fixed_colon_m = state.tip_arc_m - start->arc_m;
+  }
   return p;
 }
 
@@ -36,79 +47,98 @@ InputSample NoviceOperator::Act(const Perception&) {
 }
 
 InputSample ExpertOperator::Act(const Perception& p) {
-  const double loop_m = loop_index_.Update(p.inserted_m, p.tip_arc_m);
-  // What the hand and the image tell: scope in beyond the path to the tip.
-  const double slack_m = p.inserted_m - p.tip_arc_m;
-  if (pushing_through_) {
-    if (p.peak_stretch_m > kPainStretch_m) pain_s_ += dt_s_;
-    if (slack_m > kPushThroughSlackLimit_m || pain_s_ > kPushThroughPainLimit_s) {
-      pushing_through_ = false;
-    }
+  if (!started_) {
+    started_ = true;
+    last_inserted_m_ = p.inserted_m;
   }
-  const Technique& t = pushing_through_ ? kPushThrough : kGentle;
-
-  if (!withdrawing_) {
-    const bool loop = loop_m > t.loop_start_m || p.base_force_N > t.force_limit_N ||
-                      p.peak_stretch_m > t.complaint_stretch_m;
-    const bool stalled =
-        p.t_s - window_start_s_ >= kStallWindow_s && p.tip_arc_m - window_arc_m_ < kStallAdvance_m;
-    if (p.t_s - window_start_s_ >= kStallWindow_s) {
-      window_start_s_ = p.t_s;
-      window_arc_m_ = p.tip_arc_m;
+  const Settings& k = settings_;
+  // How much scope is in beyond the shortest it has been for this depth: the
+  // loop, as the insertion that did not move the image tells it.
+  const double loop_m = loop_index_.Update(p.inserted_m, p.tip_arc_m);
+  if (!reducing_) {
+    // Only with the tip hooked in fixed colon can a loop be taken out (or
+    // when the scope is nearly all in); and not again before the tip has
+    // gone deeper than at the last reduction.
+    const bool hooked = p.tip_into_fixed_colon_m >= kHookDepth_m;
+    const bool scope_used_up = p.inserted_m > p.working_length_m - kScopeLeft_m;
+    const bool deeper = p.tip_arc_m > last_reduce_tip_m_ + kReduceAgainDepth_m;
+    if (p.tip_arc_m > stall_tip_m_ + kStallAdvance_m) {
+      stall_tip_m_ = p.tip_arc_m;
+      stall_since_s_ = p.t_s;
     }
-    if (!pushing_through_ && stalled && !loop && slack_m < kTorqueSlack_m) {
-      // Nothing to pull out: torque the shaft while pushing on.
-      torque_until_s_ = p.t_s + kTorque_s;
-      roll_direction_ = -roll_direction_;
-    } else if (loop || stalled) {
-      withdrawing_ = true;
-      phase_start_s_ = p.t_s;
-      loop_at_start_m_ = loop_m;
-      roll_direction_ = -roll_direction_;  // alternate the torque between attempts
+    const bool stalled = p.t_s - stall_since_s_ > kStall_s;
+    if ((deeper && hooked && loop_m > k.loop_limit_m) || (scope_used_up && (deeper || stalled))) {
+      reducing_ = true;
+      stall_since_s_ = p.t_s;
+      last_reduce_tip_m_ = p.tip_arc_m;
+      reduce_start_s_ = p.t_s;
+      reduce_start_inserted_m_ = p.inserted_m;
+      reduce_tip_max_m_ = p.tip_arc_m;
     }
-  } else if (const double elapsed_s = p.t_s - phase_start_s_;
-             elapsed_s >= kWithdrawMax_s || slack_m < kStraightSlack_m ||
-             (elapsed_s >= kWithdraw_s && p.base_force_N < 0.5 * t.force_limit_N &&
-              p.peak_stretch_m < 0.5 * t.complaint_stretch_m &&
-              loop_m < std::max(kLoopDone_m, 0.5 * loop_at_start_m_))) {
-    withdrawing_ = false;
-    window_start_s_ = p.t_s;
-    window_arc_m_ = p.tip_arc_m;
+  } else {
+    // The loop is out once the tip comes back with the scope (insertion and
+    // image move one to one again); also stop after a long pull or a while.
+    reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
+    if (p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m ||
+        reduce_start_inserted_m_ - p.inserted_m > kMaxWithdraw_m ||
+        p.t_s - reduce_start_s_ > kMaxReduce_s) {
+      reducing_ = false;
+      settle_until_s_ = p.t_s + k.settle_s;
+    }
   }
 
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
   in.view_mode = ViewMode::kTextured;
   in.fluoroscopy_on = false;
-  if (withdrawing_) {
-    in.push_force_N = slack_m < kRelaxHandSlack_m ? 0.0 : kPullForce_N;
-    roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
-    const double relax = std::max(0.0, 1.0 - kKnobRelax_per_s * dt_s_);
-    knob_up_rad_ *= relax;
-    knob_right_rad_ *= relax;
+  double target_speed_m_per_s = 0.0;
+  if (reducing_) {
+    // Tip hooked (knobs held), withdraw and turn clockwise (+ roll about the
+    // insertion axis, seen from the endoscopist).
+    target_speed_m_per_s = -k.withdraw_speed_m_per_s;
+    roll_rad_ = std::min(kMaxRoll_rad, roll_rad_ + k.roll_rate_rad_per_s * dt_s_);
   } else {
-    // Steer: turn the knobs so the lumen moves to the image centre.
+    // Steer: turn the knobs so the lumen moves to the image centre, never
+    // past kKnobMax_rad (a tip bent further only hooks the wall).
     const double up_error_rad = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
     const double right_error_rad = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
     knob_up_rad_ = std::clamp(knob_up_rad_ + kSteerGain_per_s * up_error_rad * dt_s_,
                               -p.angulation_up_rad, p.angulation_up_rad);
     knob_right_rad_ = std::clamp(knob_right_rad_ + kSteerGain_per_s * right_error_rad * dt_s_,
                                  -p.angulation_right_rad, p.angulation_right_rad);
-    // Push less while the lumen is off the view axis.
-    const double off_axis_rad = std::acos(std::clamp(p.lumen_Tip.z(), -1.0, 1.0));
-    in.push_force_N = t.push_N * std::clamp(1.0 - off_axis_rad / 1.2, 0.2, 1.0);
-    if (p.t_s < torque_until_s_) roll_rad_ += roll_direction_ * kRollRate_rad_per_s * dt_s_;
+    const double bend_rad = std::hypot(knob_up_rad_, knob_right_rad_);
+    if (bend_rad > kKnobMax_rad) {
+      knob_up_rad_ *= kKnobMax_rad / bend_rad;
+      knob_right_rad_ *= kKnobMax_rad / bend_rad;
+    }
+    if (p.t_s < settle_until_s_) {
+      target_speed_m_per_s = 0.0;  // settling: hold still, the shaft kept turned
+    } else {
+      target_speed_m_per_s = k.advance_speed_m_per_s;
+      roll_rad_ *= std::max(0.0, 1.0 - kRollRelax_per_s * dt_s_);
+    }
   }
+  // The hand: its force follows the speed error, within its limits.
+  const double speed_m_per_s = (p.inserted_m - last_inserted_m_) / dt_s_;
+  last_inserted_m_ = p.inserted_m;
+  hand_N_ = std::clamp(hand_N_ + kHandGain_N_s_per_m * (target_speed_m_per_s - speed_m_per_s) * dt_s_,
+                       -k.pull_limit_N, k.push_limit_N);
+  in.push_force_N = hand_N_;
   in.roll_rad = roll_rad_;
   in.knob_up_rad = knob_up_rad_;
   in.knob_right_rad = knob_right_rad_;
   return in;
 }
 
-std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s) {
+std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s,
+                                                       const ExpertOperator::Settings& expert) {
   if (kind == "novice") return std::make_unique<NoviceOperator>();
-  if (kind == "expert") return std::make_unique<ExpertOperator>(dt_s);
+  if (kind == "expert") return std::make_unique<ExpertOperator>(dt_s, expert);
   throw std::invalid_argument("operator must be novice or expert, got '" + std::string(kind) + "'");
+}
+
+std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s) {
+  return MakeScriptedOperator(kind, dt_s, ExpertOperator::Settings{});
 }
 
 }  // namespace ves::training

@@ -26,6 +26,11 @@ struct Perception {
   Eigen::Vector3d lumen_Tip{Eigen::Vector3d::UnitZ()};
   double angulation_up_rad{model::kPi};  // knob limits of the scope in hand
   double angulation_right_rad{model::kPi};
+  double working_length_m{0.0};  // of the scope in hand
+  // How far the tip has gone into the fixed (retroperitoneal) colon it is
+  // in, 0 in colon that hangs on a mesentery (sigmoid, transverse): the
+  // endoscopist knows the anatomy the image shows.
+  double tip_into_fixed_colon_m{0.0};
 };
 
 // How far ahead of the tip the image shows the lumen: the deformed centerline
@@ -51,76 +56,85 @@ class NoviceOperator final : public ScriptedOperator {
   InputSample Act(const Perception& perception) override;
 };
 
-// Steers the tip toward the lumen with the knobs. It starts by pushing
-// through firmly (the mobile sigmoid can only be passed by bowing it), then,
-// for good once the loop has taken 20 cm of scope or the patient has hurt for
-// 10 s, works gently: when a loop builds (the scope goes in but the image does
-// not advance), the hand force rises, the patient complains of stretch, or the
-// tip stops advancing, it pulls back while torquing and relaxing the tip, then
-// advances again. It stops pulling once the scope is shorter than the path to
-// its tip (more would only drag the colon), and torques instead of pulling
-// when it stalls with no slack to take out. Fluoroscopy off, textured view.
-// docs/scoring.md, "Scripted operators".
+// The technique of an experienced endoscopist (docs/scoring.md, "Scripted
+// operators"): it steers the tip toward the lumen with the knobs and advances
+// gently, pushing through mobile colon even as a loop forms there. It
+// recognises the loop as insertion without tip motion (the loop index), and
+// once the tip is hooked round into fixed colon it keeps the tip hooked
+// (knobs held), pulls back and turns the shaft clockwise: the loop comes out
+// and the colon pleats onto the scope while the tip holds or even advances.
+// It stops pulling once the tip starts to come back with the scope (the loop
+// is out), and advances again. When little scope is left it takes the loops
+// out too. Fluoroscopy off, textured view.
 class ExpertOperator final : public ScriptedOperator {
  public:
-  // How hard a technique pushes and what makes it pull back: the hand force,
-  // the stretch (the patient complains) or the loop index passing these.
-  struct Technique {
-    double push_N;
-    double force_limit_N;
-    double complaint_stretch_m;
-    double loop_start_m;
+  // The main settings; each must keep the expert working when moved by 20 %.
+  // The hand moves the scope at a comfortable speed and never uses more
+  // than its force limits (a speed-tracking hand: the force it applies
+  // rises until the scope moves at that speed or the limit is reached).
+  struct Settings {
+    double advance_speed_m_per_s{0.01};   // while advancing
+    double withdraw_speed_m_per_s{0.01};  // while reducing a loop
+    double push_limit_N{8.0};             // most the hand pushes
+    double pull_limit_N{8.0};             // most the hand pulls
+    // Loop index (scope in beyond the shortest it has been for this depth,
+    // LoopIndex) at which it reduces, once the tip is hooked in fixed colon.
+    double loop_limit_m{0.10};
+    double roll_rate_rad_per_s{0.5};      // clockwise turn of the shaft while reducing
+    // After a reduction it holds still this long, the shaft turned, so the
+    // colon settles onto the straightened scope before it pushes on.
+    double settle_s{0.0};
+    bool operator==(const Settings&) const = default;
   };
-  static constexpr Technique kGentle{
-      .push_N = 4.0, .force_limit_N = 6.0, .complaint_stretch_m = 0.025, .loop_start_m = 0.04};
-  static constexpr Technique kPushThrough{
-      .push_N = 9.0, .force_limit_N = 12.0, .complaint_stretch_m = 0.08, .loop_start_m = 0.30};
-  // Pushing through ends for good at this much scope in a loop (inserted
-  // length minus the tip's arc) or this much pain.
-  static constexpr double kPushThroughSlackLimit_m = 0.20;
-  static constexpr double kPushThroughPainLimit_s = 10.0;
-  // The stretch the patient calls pain: the metrics' pain level.
-  static constexpr double kPainStretch_m = MetricThresholds{}.pain_stretch_m;
-
-  static constexpr double kPullForce_N = -1.5;
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
-  static constexpr double kLoopDone_m = 0.01;
-  static constexpr double kRollRate_rad_per_s = 1.0;
-  static constexpr double kStallWindow_s = 1.5;  // no advance over this long is a stall
-  static constexpr double kStallAdvance_m = 0.003;
-  static constexpr double kWithdraw_s = 0.6;       // shortest pull-back
-  static constexpr double kWithdrawMax_s = 2.0;    // longest pull-back
-  static constexpr double kKnobRelax_per_s = 2.0;  // knobs ease toward neutral while pulling
-  // Slack below which a pull-back ends: the scope is already shorter than
-  // the path to its tip.
-  static constexpr double kStraightSlack_m = -0.02;
-  // Gentle: a stall with less slack than this is torqued through, not pulled back.
-  static constexpr double kTorqueSlack_m = 0.03;
-  static constexpr double kTorque_s = 1.5;
-  // During a pull-back with less slack than this the hand relaxes (0 N).
-  static constexpr double kRelaxHandSlack_m = 0.02;
+  static constexpr double kKnobMax_rad = 2.0;      // the hand turns the knobs no further
+  static constexpr double kHandGain_N_s_per_m = 200.0;  // force rate per speed error
+  // The tip is hooked once it is this far into fixed colon (its bending
+  // section is round the corner).
+  static constexpr double kHookDepth_m = 0.08;
+  // After a reduction, the next waits until the tip is this much deeper: a
+  // loop re-formed by pushing on is taut before the tip moves again.
+  static constexpr double kReduceAgainDepth_m = 0.10;
+  // With this little scope left outside, the loops must come out: once the
+  // tip is deeper than at the last reduction, or has stalled this long.
+  static constexpr double kScopeLeft_m = 0.08;
+  static constexpr double kStall_s = 15.0;
+  static constexpr double kStallAdvance_m = 0.005;
+  static constexpr double kTipBack_m = 0.015;      // the tip coming back this far: loop out
+  static constexpr double kMaxWithdraw_m = 0.30;   // longest single pull-back
+  static constexpr double kMaxReduce_s = 40.0;
+  static constexpr double kMaxRoll_rad = 1.5;      // the hand turns the shaft at most this far
+  static constexpr double kRollRelax_per_s = 0.3;  // and lets it untwist while advancing
 
-  explicit ExpertOperator(double dt_s) : dt_s_(dt_s) {}
+  ExpertOperator(double dt_s, const Settings& settings) : dt_s_(dt_s), settings_(settings) {}
+  explicit ExpertOperator(double dt_s) : ExpertOperator(dt_s, Settings{}) {}
   InputSample Act(const Perception& perception) override;
 
  private:
   double dt_s_;
+  Settings settings_;
+  bool reducing_{false};
+  bool started_{false};
   LoopIndex loop_index_;
-  bool pushing_through_{true};
-  double pain_s_{0.0};
-  bool withdrawing_{false};
-  double phase_start_s_{0.0};
-  double loop_at_start_m_{0.0};
-  double window_start_s_{0.0};
-  double window_arc_m_{0.0};
-  double torque_until_s_{-1.0};
-  double roll_direction_{1.0};
+  double last_reduce_tip_m_{-1.0};
+  double stall_tip_m_{0.0};
+  double stall_since_s_{0.0};
+  double settle_until_s_{0.0};
+  // The hand: its force and the scope's last position (for its speed).
+  double hand_N_{0.0};
+  double last_inserted_m_{0.0};
+  // Reducing: when it started and the deepest tip since.
+  double reduce_start_s_{0.0};
+  double reduce_start_inserted_m_{0.0};
+  double reduce_tip_max_m_{0.0};
   double knob_up_rad_{0.0};
   double knob_right_rad_{0.0};
   double roll_rad_{0.0};
 };
 
 // "novice" or "expert"; throws std::invalid_argument otherwise.
+std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s,
+                                                       const ExpertOperator::Settings& expert);
 std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s);
 
 }  // namespace ves::training

@@ -319,7 +319,7 @@ TEST_F(Lessons, ExpertPassesTheFirstLessonNoviceDoesNotAndProgressShowsIt) {
 
 // The cecum lessons: after the first lesson, the expert reaches the cecum of
 // the paper sigmoid within the second and third lessons' limits (at about
-// 11 s, so the runs and their replays are short), with no damage, under 30 s
+// 66 s on the shortening colon), with no damage, under 30 s
 // of pain and, in the third, no X-ray; the server's judge, re-scoring from
 // the replay, passes each, and after the third lesson's two required passes
 // the trainee moves on to the fourth.

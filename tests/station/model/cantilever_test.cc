@@ -22,6 +22,7 @@ TEST(Cantilever, SettlesToSmallDeflectionShape) {
   params.scope.tip_link_length_m = 0.025;
   params.scope.bending_section_length_m = 0.0;
   params.scope.bending_section_rigidity_N_m2 = params.scope.flexural_rigidity_N_m2;
+  params.scope.passive_section_length_m = 0.0;  // a uniform rod
   params.scope.joint_damping_N_m_s_per_rad = 0.002;
   params.colon = MakeStraightTube(1.2, 0.01, 0.15, TissueParams{});  // wide: no contact
   params.gravity_W_m_per_s2 = Eigen::Vector3d(0.0, -9.81, 0.0);

@@ -11,7 +11,8 @@ namespace {
 constexpr double kTolerance_m = 1e-9;
 
 // A straight tube along +z (points 1 cm apart, lumen radius 20 mm); point 10
-// is moved 10 mm sideways in its plane, point 11 stays. A sample halfway
+// is moved 10 mm sideways, point 11 stays, and the lumen's planes keep the
+// state's tangents (those of the last step: here, the rest ones). A sample halfway
 // along the segment between them, on the line joining the two centres, lies
 // on the lumen's axis: its offset from the centre is zero, so l = a - R.
 // Blending the two in-plane distances (10 mm and 0 mm) instead would put it
@@ -22,8 +23,8 @@ TEST(ContactGeometry, ASampleOnATiltedSegmentsAxisIsOnTheAxis) {
   ModelState state = MakeInitialState(params);
   const int k = 10;
   const ColonPoint& point = params.colon.points[k];
-  state.colon_offset_m[k] = Eigen::Vector2d(0.01, 0.0);
-  state.p_WColon[k] = point.rest_position_m + 0.01 * point.plane_u;
+  state.colon_displacement_m[k] = 0.01 * point.plane_u;
+  state.p_WColon[k] = point.rest_position_m + state.colon_displacement_m[k];
   const Eigen::Vector3d on_axis = 0.5 * (state.p_WColon[k] + state.p_WColon[k + 1]);
 
   const internal::SegmentHit hit = internal::CalcSegmentHit(params, state, k, on_axis);

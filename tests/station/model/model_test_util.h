@@ -43,9 +43,14 @@ inline ColonSpec MakeBendTube(double entry_m, double theta_rad, double bend_radi
   return MakeColonFromPoints(points, radius_m, tissue);
 }
 
-// A wall that does not move: very stiff suspension, no threshold effect.
+// A wall that does not move: fixed (no mesentery, no pleating), very stiff
+// suspension, no threshold effect.
 inline TissueParams RigidTissue(double mu_s, double mu_d) {
   TissueParams t;
+  t.mobile = false;
+  t.mesentery_length_m = 0.0;
+  t.mesentery_stiffness_N_per_m2 = 1.0e6;
+  t.pleat_limit = 1.0;
   t.suspension_stiffness_N_per_m2 = 1.0e6;
   t.suspension_damping_N_s_per_m2 = 1.0e3;
   t.wall_stiffness_N_per_m = 5000.0;

@@ -1,0 +1,173 @@
+// expert_sweep: runs the scripted expert (or novice) on a case with model and
+// operator settings overridden from the command line, and prints one line of
+// results, for parameter sweeps (docs/model.md, "Probing an insertion").
+//   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
+// Keys: mobile_kc_scale, relax_s, meso_k, shear, pleat, pleat_k, toe_k,
+// passive_m, passive_ei, mu_scale, abdomen (margin of the cavity box, m), pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
+// pull, loop_limit, roll_rate, settle.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+
+#include "patient_db/case_format.h"
+#include "station/model/model.h"
+#include "station/training/case_model.h"
+#include "station/training/metric_thresholds.h"
+#include "station/training/scripted_operator.h"
+#include "station/training/session_runner.h"
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::fprintf(stderr, "usage: expert_sweep CASE_FILE novice|expert SECONDS [key=value ...]\n");
+    return 2;
+  }
+  std::map<std::string, double> kv;
+  std::string tag;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto eq = a.find('=');
+    if (eq == std::string::npos) continue;
+    kv[a.substr(0, eq)] = std::atof(a.substr(eq + 1).c_str());
+    tag += a + " ";
+  }
+  auto get = [&](const char* k, double fallback) { return kv.count(k) ? kv[k] : fallback; };
+  const auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
+  ves::training::CaseModelOptions options;
+  auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
+                                               options);
+  for (auto& point : params.colon.points) {
+    auto& t = point.tissue;
+    t.static_friction *= get("mu_scale", 1.0);
+    t.dynamic_friction *= get("mu_scale", 1.0);
+    if (!t.mobile) continue;
+    t.suspension_stiffness_N_per_m2 *= get("mobile_kc_scale", 1.0);
+    t.suspension_relaxation_s = get("relax_s", t.suspension_relaxation_s);
+    t.mesentery_stiffness_N_per_m2 = get("meso_k", t.mesentery_stiffness_N_per_m2);
+    t.pleat_limit = get("pleat", t.pleat_limit);
+  }
+  params.colon.mesentery_shear_ratio = get("shear", params.colon.mesentery_shear_ratio);
+  params.colon.mesentery_anchor_by_arc = get("anchor_arc", 0.0) != 0.0;
+  params.mesentery_reach_gathers = get("reach_gathers", 0.0) != 0.0;
+  params.colon.abdomen_margin_m = get("abdomen", params.colon.abdomen_margin_m);
+  ves::model::CalcMesenteryAnchors(&params.colon);
+  params.colon_pleat_stiffness_N = get("pleat_k", params.colon_pleat_stiffness_N);
+  params.colon_toe_stiffness_N = get("toe_k", params.colon_toe_stiffness_N);
+  params.colon_pleat_set_s = get("pleat_set_s", params.colon_pleat_set_s);
+  params.colon_pleat_release_s = get("pleat_release_s", params.colon_pleat_release_s);
+  params.scope.passive_section_length_m = get("passive_m", params.scope.passive_section_length_m);
+  params.scope.passive_section_rigidity_N_m2 =
+      get("passive_ei", params.scope.passive_section_rigidity_N_m2);
+  ves::training::ExpertOperator::Settings expert;
+  expert.advance_speed_m_per_s = get("advance", expert.advance_speed_m_per_s);
+  expert.withdraw_speed_m_per_s = get("withdraw", expert.withdraw_speed_m_per_s);
+  expert.push_limit_N = get("push", expert.push_limit_N);
+  expert.pull_limit_N = get("pull", expert.pull_limit_N);
+  expert.loop_limit_m = get("loop_limit", expert.loop_limit_m);
+  expert.roll_rate_rad_per_s = get("roll_rate", expert.roll_rate_rad_per_s);
+  expert.settle_s = get("settle", expert.settle_s);
+  auto op = ves::training::MakeScriptedOperator(argv[2], params.dt_s, expert);
+  const double seconds = std::atof(argv[3]);
+  // The cecum starts where the case's cecum region starts (else the end).
+  double cecum_m = params.colon.points.back().arc_m;
+  for (const auto& point : params.colon.points) {
+    if (point.region == ves::model::Region::kCecum) {
+      cecum_m = point.arc_m;
+      break;
+    }
+  }
+  // The assistant presses over a mobile region once the tip is
+  // press_past m beyond its end (keys press_sig, press_trans: the pressure).
+  double region_end_m[9] = {0};
+  for (const auto& point : params.colon.points) {
+    region_end_m[static_cast<int>(point.region)] = point.arc_m;
+  }
+  const double press_past_m = get("press_past", 0.10);
+  const double press[9] = {0, 0, get("press_sig", 0.0), get("press_desc", 0.0), 0,
+                           get("press_trans", 0.0), 0, 0, 0};
+  params.abdominal_pressure_stiffness_N_per_m2 =
+      get("press_k", params.abdominal_pressure_stiffness_N_per_m2);
+  params.abdominal_pressure_slack_m = get("press_slack", params.abdominal_pressure_slack_m);
+  auto state = ves::model::MakeInitialState(params);
+  auto scratch = ves::model::MakeScratch(params);
+  auto out = ves::model::MakeStepOutput(params);
+  const double pain_m = ves::training::MetricThresholds{}.pain_stretch_m;
+  double t_cecum = -1.0, inserted_at_cecum = -1.0, max_tip = 0.0, peak_force = 0.0;
+  double peak_roll = 0.0, peak_fixed = 0.0, pain15_s = 0.0, pain20_s = 0.0, pain_s = 0.0;
+  long over10 = 0, steps = 0;
+  double window_sum = 0.0;  // 10 ms mean of |force|
+  double window[10] = {0};
+  int wi = 0;
+  double pull_s = 0.0, reduced_to_m = 0.0;
+  // press_gate > 0: the assistant presses a region (from then on) once its
+  // path is within press_gate times its chord (it has been straightened).
+  const double press_gate = get("press_gate", 0.0);
+  int region_first[9], region_last[9];
+  for (int r = 0; r < 9; ++r) region_first[r] = region_last[r] = -1;
+  for (int i = 0; i < static_cast<int>(params.colon.points.size()); ++i) {
+    const int r = static_cast<int>(params.colon.points[i].region);
+    if (region_first[r] < 0) region_first[r] = i;
+    region_last[r] = i;
+  }
+  bool pressing[9] = {false};
+  double press_from_s[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+  while (state.time_s < seconds) {
+    const auto p = ves::training::Perceive(params, state, out);
+    const auto sample = op->Act(p);
+    auto input = ves::training::ToStepInput(sample);
+    // A reduction (the hand pulling for a while) straightens what the tip
+    // has passed; from then on the assistant holds it.
+    pull_s = sample.push_force_N < -1.0 ? pull_s + params.dt_s : 0.0;
+    if (pull_s > 2.0) reduced_to_m = std::max(reduced_to_m, state.tip_arc_m);
+    for (int r = 0; r < 9; ++r) {
+      if (press_gate > 0.0 && press[r] > 0.0 && !pressing[r] && region_first[r] >= 0 &&
+          state.tip_arc_m > region_end_m[r] + press_past_m) {
+        double path = 0.0;
+        for (int i = region_first[r]; i < region_last[r]; ++i) {
+          path += (state.p_WColon[i + 1] - state.p_WColon[i]).norm();
+        }
+        const double chord = (state.p_WColon[region_last[r]] - state.p_WColon[region_first[r]]).norm();
+        if (path <= press_gate * chord) {
+          pressing[r] = true;
+          press_from_s[r] = state.time_s;
+        }
+      }
+      if (pressing[r]) input.abdominal_pressure[r] = press[r];
+      if (press_gate == 0.0 && press[r] > 0.0 && reduced_to_m > region_end_m[r] + press_past_m) {
+        input.abdominal_pressure[r] = press[r];
+      }
+    }
+    ves::model::Step(params, input, &state, &scratch, &out);
+    if (!out.finite) {
+      std::printf("%s %s %s diverged at %.3f\n", argv[1], argv[2], tag.c_str(), state.time_s);
+      return 1;
+    }
+    const double f = std::abs(out.base_force_N);
+    window_sum += f - window[wi];
+    window[wi] = f;
+    wi = (wi + 1) % 10;
+    peak_force = std::max(peak_force, window_sum / 10.0);
+    if (f > 10.0) ++over10;
+    ++steps;
+    peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
+    peak_fixed = std::max(peak_fixed, out.peak_fixed_displacement_m);
+    max_tip = std::max(max_tip, state.tip_arc_m);
+    if (out.peak_stretch_m > 0.015) pain15_s += params.dt_s;
+    if (out.peak_stretch_m > 0.02) pain20_s += params.dt_s;
+    if (out.peak_stretch_m > pain_m) pain_s += params.dt_s;
+    if (t_cecum < 0.0 && state.tip_arc_m >= cecum_m) {
+      t_cecum = state.time_s;
+      inserted_at_cecum = state.inserted_m;
+      break;
+    }
+  }
+  const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
+  std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
+              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f fixed_mm=%.1f pain15=%.0f pain20=%.0f "
+              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
+              name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
+              100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, 1e3 * peak_fixed,
+              pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
+  return 0;
+}
