@@ -46,6 +46,9 @@ using Clock = std::chrono::steady_clock;
 void SetDeadline(HttpServer::Impl* impl, int fd, std::chrono::seconds from_now) {
   std::lock_guard lock(impl->mutex);
   impl->deadlines[fd] = from_now.count() > 0 ? Clock::now() + from_now : Clock::time_point::max();
+  // A connection that registers after Stop has shut the others down would
+  // wait for a request that never comes, and Stop would wait for it.
+  if (impl->stopping) ::shutdown(fd, SHUT_RDWR);
 }
 
 std::pair<std::string, std::string> SplitHostPort(const std::string& listen) {
