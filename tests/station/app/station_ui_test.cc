@@ -7,7 +7,9 @@
 // xwd is missing (deploy/install-deps.sh installs them). With
 // VES_TEST_SHOTS_DIR set, the screenshots are also written there as PNG.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -145,6 +147,13 @@ class StationUi : public StationFixture {
       if (!OnPath(tool)) GTEST_SKIP() << tool << " not installed: interactive UI not tested";
     }
     StationFixture::SetUp();
+    // One interactive test at a time on this machine: two Xvfb servers
+    // started together under `ctest -j2` once left a test with a display
+    // number its own server did not hold (both screens have the same size,
+    // so the geometry check below cannot tell them apart).
+    xvfb_lock_fd_ = ::open("/tmp/ves-station-ui-xvfb.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    ASSERT_GE(xvfb_lock_fd_, 0) << "cannot open /tmp/ves-station-ui-xvfb.lock";
+    ASSERT_EQ(::flock(xvfb_lock_fd_, LOCK_EX), 0);
     xvfb_ = std::make_unique<ChildProcess>(
         std::vector<std::string>{"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0",
                                  std::to_string(kScreen.width) + "x" +
@@ -171,6 +180,7 @@ class StationUi : public StationFixture {
   void TearDown() override {
     station_.reset();
     xvfb_.reset();
+    if (xvfb_lock_fd_ >= 0) ::close(xvfb_lock_fd_);  // releases the lock
     StationFixture::TearDown();
   }
 
@@ -272,6 +282,7 @@ class StationUi : public StationFixture {
 
   const ui::ScreenLayout layout_ = ui::MakeScreenLayout(kScreen);
   std::unique_ptr<ChildProcess> xvfb_;
+  int xvfb_lock_fd_{-1};
   std::unique_ptr<ChildProcess> station_;
   std::string display_;
   fs::path shots_dir_;
