@@ -3,8 +3,8 @@
 // results, for parameter sweeps (docs/model.md, "Probing an insertion").
 //   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
 // Keys: mobile_kc_scale, relax_s, meso_k, shear, pleat, pleat_k, toe_k,
-// passive_m, passive_ei, mu_scale, abdomen (margin of the cavity box, m), pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
-// pull, loop_limit, roll_rate, settle.
+// links, growth (the scope's link count and grading), passive_m, passive_ei, mu_scale, abdomen (margin of the cavity box, m), pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
+// pull, loop_limit, roll_rate, settle; show_damage=1 prints each damage episode.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -56,6 +56,8 @@ int main(int argc, char** argv) {
   params.colon_toe_stiffness_N = get("toe_k", params.colon_toe_stiffness_N);
   params.colon_pleat_set_s = get("pleat_set_s", params.colon_pleat_set_s);
   params.colon_pleat_release_s = get("pleat_release_s", params.colon_pleat_release_s);
+  params.scope.link_count = static_cast<int>(get("links", params.scope.link_count));
+  params.scope.link_growth_ratio = get("growth", params.scope.link_growth_ratio);
   params.scope.passive_section_length_m = get("passive_m", params.scope.passive_section_length_m);
   params.scope.passive_section_rigidity_N_m2 =
       get("passive_ei", params.scope.passive_section_rigidity_N_m2);
@@ -96,6 +98,11 @@ int main(int argc, char** argv) {
   double t_cecum = -1.0, inserted_at_cecum = -1.0, max_tip = 0.0, peak_force = 0.0;
   double peak_roll = 0.0, peak_fixed = 0.0, pain15_s = 0.0, pain20_s = 0.0, pain_s = 0.0;
   long over10 = 0, steps = 0;
+  // Damage episodes as the session's metrics count them: wall force over the
+  // threshold, episodes closer than the merge gap counted once.
+  const ves::training::MetricThresholds thresholds;
+  int damage_events = 0;
+  double peak_wall_N = 0.0, last_damage_s = -1e9;
   double window_sum = 0.0;  // 10 ms mean of |force|
   double window[10] = {0};
   int wi = 0;
@@ -151,6 +158,24 @@ int main(int argc, char** argv) {
     if (f > 10.0) ++over10;
     ++steps;
     peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
+    peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);
+    if (out.peak_wall_force_N > thresholds.damage_wall_force_N) {
+      if (state.time_s - last_damage_s > thresholds.episode_merge_gap_s) {
+        ++damage_events;
+        if (get("show_damage", 0.0) != 0.0) {
+          int at = 0;
+          for (int i = 0; i < static_cast<int>(out.wall_force_N.size()); ++i) {
+            if (out.wall_force_N[i] > out.wall_force_N[at]) at = i;
+          }
+          std::printf("  damage t=%.2f %.1f N at arc %.3f region %d; tip %.3f inserted %.3f "
+                      "hand %.1f N base %.1f N\n",
+                      state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,
+                      static_cast<int>(params.colon.points[at].region), state.tip_arc_m,
+                      state.inserted_m, sample.push_force_N, out.base_force_N);
+        }
+      }
+      last_damage_s = state.time_s;
+    }
     peak_fixed = std::max(peak_fixed, out.peak_fixed_displacement_m);
     max_tip = std::max(max_tip, state.tip_arc_m);
     if (out.peak_stretch_m > 0.015) pain15_s += params.dt_s;
@@ -164,10 +189,10 @@ int main(int argc, char** argv) {
   }
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
-              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f fixed_mm=%.1f pain15=%.0f pain20=%.0f "
+              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_wall=%.1f damage=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
               "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
-              100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, 1e3 * peak_fixed,
+              100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_wall_N, damage_events, 1e3 * peak_fixed,
               pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
   return 0;
 }

@@ -19,6 +19,11 @@
 //                                  mesentery stiffness or pleat limit
 //   PROBE_DUMP_EVERY=S             draw both shapes to /tmp/probe_T.png every S s
 //   PROBE_DT_MS=DT                 another time step
+//   PROBE_LINKS=N, PROBE_GROWTH=R  the scope's link count and length grading
+//   PROBE_WALL=F                   print when and where the wall force rises over F N
+//   PROBE_FORCES=S                 every S s: what holds the scope along its axis
+//                                  (friction, wall normals, rings; the largest)
+//   PROBE_JOINTS=1                 at the end: the inserted links' lengths and bends
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -116,6 +121,7 @@ int main(int argc, char** argv) {
   ves::model::CalcMesenteryAnchors(&params.colon);
   params.scope.flexural_rigidity_N_m2 *= EnvOr("PROBE_EI", 1.0);
   params.scope.link_count = static_cast<int>(EnvOr("PROBE_LINKS", params.scope.link_count));
+  params.scope.link_growth_ratio = EnvOr("PROBE_GROWTH", params.scope.link_growth_ratio);
   params.scope.bending_section_rigidity_N_m2 =
       EnvOr("PROBE_BEND_EI", params.scope.bending_section_rigidity_N_m2);
   params.scope.passive_section_length_m =
@@ -147,7 +153,7 @@ int main(int argc, char** argv) {
   const double withdraw_m = EnvOr("PROBE_WITHDRAW_M", 0.25);
   const double roll_rate = EnvOr("PROBE_ROLL", 0.0);
   const double dump_every_s = EnvOr("PROBE_DUMP_EVERY", 0.0);
-  double next_dump_s = 0.0;
+  double next_dump_s = 0.0, next_forces_s = 0.0;
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = 8.0;
@@ -181,6 +187,11 @@ int main(int argc, char** argv) {
   double stretch_over_s[4] = {0, 0, 0, 0};  // time with the stretch over 1, 2, 3, 4 cm
   int spikes_printed = 0;
   const bool spike_detail = std::getenv("PROBE_SPIKE_DETAIL") != nullptr;
+  bool wall_was_over = false;
+  double base_jump_sum_N = 0.0, last_base_N = 0.0, base_window_sum_N = 0.0;
+  double base_window_N[10] = {0};
+  int base_window_at = 0;
+  long over_10N_mean_steps = 0;
   ves::model::ModelState previous = state, before_previous = state;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
@@ -307,10 +318,34 @@ int main(int argc, char** argv) {
     max_tip_arc_m = std::max(max_tip_arc_m, state.tip_arc_m);
     max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
     max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
+    // PROBE_WALL=F: where and when the wall force first rises over F N.
+    if (const double wall_over = EnvOr("PROBE_WALL", 0.0); wall_over > 0.0) {
+      const bool over = out.peak_wall_force_N > wall_over;
+      if (over && !wall_was_over) {
+        int at = 0;
+        for (int i = 0; i < static_cast<int>(out.wall_force_N.size()); ++i) {
+          if (out.wall_force_N[i] > out.wall_force_N[at]) at = i;
+        }
+        std::printf("  wall t=%.3f %.1f N at arc %.3f (region %d), tip %.3f, inserted %.3f, "
+                    "hand %.1f N, push in %.1f N, knobs %.2f/%.2f\n",
+                    state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,
+                    static_cast<int>(params.colon.points[at].region), state.tip_arc_m,
+                    state.inserted_m, out.base_force_N, in.push_force_N, in.knob_up_rad,
+                    in.knob_right_rad);
+      }
+      wall_was_over = over;
+    }
     max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
     max_roll_Nm = std::max(max_roll_Nm, std::abs(out.roll_torque_Nm));
     max_fixed_m = std::max(max_fixed_m, out.peak_fixed_displacement_m);
     if (std::abs(out.base_force_N) > 10.0) ++over_10N_steps;
+    // Chatter of the base force: step-to-step change, and the 10 ms mean.
+    base_jump_sum_N += std::abs(out.base_force_N - last_base_N);
+    last_base_N = out.base_force_N;
+    base_window_sum_N += out.base_force_N - base_window_N[base_window_at];
+    base_window_N[base_window_at] = out.base_force_N;
+    base_window_at = (base_window_at + 1) % 10;
+    if (std::abs(base_window_sum_N / 10.0) > 10.0) ++over_10N_mean_steps;
     for (int t = 0; t < 4; ++t) {
       if (out.peak_stretch_m > 0.01 * (t + 1)) stretch_over_s[t] += params.dt_s;
     }
@@ -351,8 +386,96 @@ int main(int argc, char** argv) {
           std::printf("    sample %d from_tip %.3f arc %.3f N %.1f pen %.4f |F| %.1f alpha %.2f\n",
                       c.sample, c.scope_arc_from_tip_m, c.colon_arc_m, c.normal_force_N,
                       c.penetration_m, c.force_on_scope_W_N.norm(), c.alpha);
+          // The lumen geometry it was measured in: the bracketing planes.
+          const int k = c.segment;
+          const Eigen::Vector3d pa = state.p_WSample[c.sample] - state.p_WColon[k];
+          const Eigen::Vector3d pb = state.p_WSample[c.sample] - state.p_WColon[k + 1];
+          const Eigen::Vector3d& ta = state.colon_tangent[k];
+          const Eigen::Vector3d& tb = state.colon_tangent[k + 1];
+          const int last_s = static_cast<int>(state.p_WSample.size()) - 1;
+          const Eigen::Vector3d scope_t = (state.p_WSample[std::min(c.sample + 1, last_s)] -
+                                           state.p_WSample[std::max(c.sample - 1, 0)]).normalized();
+          std::printf("      seg %d da %.4f db %.4f |wa| %.4f |wb| %.4f ta.tb %.2f ta.scope %.2f "
+                      "seg len %.4f (rest %.4f)\n",
+                      k, pa.dot(ta), pb.dot(tb), (pa - pa.dot(ta) * ta).norm(),
+                      (pb - pb.dot(tb) * tb).norm(), ta.dot(tb), ta.dot(scope_t),
+                      (state.p_WColon[k + 1] - state.p_WColon[k]).norm(),
+                      params.colon.points[k + 1].arc_m - params.colon.points[k].arc_m);
         }
       }
+    }
+    // PROBE_FORCES=S: every S s, what holds the scope along its own axis:
+    // friction and the axial part of the wall normals, and the largest ones.
+    if (const double every = EnvOr("PROBE_FORCES", 0.0);
+        every > 0.0 && state.time_s + 1e-9 >= next_forces_s) {
+      next_forces_s += every;
+      double friction_N = 0.0, wedge_N = 0.0, normal_sum_N = 0.0;
+      struct Part { double along_N; double arc_m; int region; double f_n; };
+      std::vector<Part> parts;
+      const int last = static_cast<int>(state.p_WSample.size()) - 1;
+      for (int c = 0; c < out.contact_count; ++c) {
+        const auto& k = out.contacts[c];
+        const int i = k.sample;
+        const Eigen::Vector3d t =
+            (state.p_WSample[std::min(i + 1, last)] - state.p_WSample[std::max(i - 1, 0)])
+                .normalized();  // toward the tip
+        const Eigen::Vector3d normal_part = k.force_on_scope_W_N.dot(k.normal_W) * k.normal_W;
+        const double fr = (k.force_on_scope_W_N - normal_part).dot(t);
+        const double we = normal_part.dot(t);
+        friction_N += fr;
+        wedge_N += we;
+        normal_sum_N += k.normal_force_N;
+        parts.push_back({fr + we, k.colon_arc_m,
+                         static_cast<int>(params.colon.points[k.segment].region), k.normal_force_N});
+      }
+      double ring_N = 0.0;
+      for (int j = 0; j < scratch.ring_contact_count; ++j) {
+        const auto& rc = scratch.ring_contacts[j];
+        const int i = rc.sample;
+        const Eigen::Vector3d t =
+            (state.p_WSample[std::min(i + 1, last)] - state.p_WSample[std::max(i - 1, 0)])
+                .normalized();
+        const double along = (-rc.force_N * rc.normal_W).dot(t);
+        ring_N += along;
+        parts.push_back({along, params.colon.points[rc.point].arc_m,
+                         100 + static_cast<int>(params.colon.points[rc.point].region), rc.force_N});
+      }
+      std::printf("  rings %d along %.2f N;", scratch.ring_contact_count, ring_N);
+      {  // the same forces along the entry direction (what the base holds)
+        const int f0 = std::min(state.first_inside_sample, last - 1);
+        const Eigen::Vector3d e = (state.p_WSample[f0 + 1] - state.p_WSample[f0]).normalized();
+        double contacts_e = 0.0, rings_e = 0.0, gravity_e = 0.0;
+        std::vector<std::pair<double, int>> by_sample;
+        for (int c = 0; c < out.contact_count; ++c) {
+          contacts_e += out.contacts[c].force_on_scope_W_N.dot(e);
+          by_sample.push_back({out.contacts[c].force_on_scope_W_N.dot(e), out.contacts[c].sample});
+        }
+        for (int j = 0; j < scratch.ring_contact_count; ++j) {
+          rings_e += (-scratch.ring_contacts[j].force_N * scratch.ring_contacts[j].normal_W).dot(e);
+        }
+        for (int i = state.first_inside_sample; i <= last; ++i) {
+          gravity_e += state.samples[i].mass_kg * params.gravity_W_m_per_s2.dot(e);
+        }
+        std::sort(by_sample.begin(), by_sample.end(),
+                  [](const auto& a, const auto& b) { return std::abs(a.first) > std::abs(b.first); });
+        std::printf(" entry: contacts %.2f rings %.2f gravity %.2f (last sample %d; top", contacts_e,
+                    rings_e, gravity_e, last);
+        for (size_t j = 0; j < std::min<size_t>(4, by_sample.size()); ++j) {
+          std::printf(" s%d %.2f", by_sample[j].second, by_sample[j].first);
+        }
+        std::printf(");");
+      }
+      std::sort(parts.begin(), parts.end(),
+                [](const Part& a, const Part& b) { return std::abs(a.along_N) > std::abs(b.along_N); });
+      std::printf("  forces t=%.1f hand %.1f base %.1f: %d contacts, sum f_n %.1f N, along the "
+                  "scope (+ toward tip): friction %.2f N, wall normals %.2f N; largest:",
+                  state.time_s, in.push_force_N, out.base_force_N, out.contact_count, normal_sum_N,
+                  friction_N, wedge_N);
+      for (size_t j = 0; j < std::min<size_t>(5, parts.size()); ++j) {
+        std::printf(" [%.2f N at %.3f r%d f_n %.1f]", parts[j].along_N, parts[j].arc_m,
+                    parts[j].region, parts[j].f_n);
+      }
+      std::printf("\n");
     }
     if (dump_every_s > 0.0 && state.time_s >= next_dump_s) {
       DumpShape(params, state, out,
@@ -453,11 +576,25 @@ int main(int argc, char** argv) {
       }
     }
   }
+  if (std::getenv("PROBE_JOINTS")) {  // the inserted joints: length, bend, stiffness, sample
+    const int root = state.first_inside_link > 0 ? state.first_inside_link - 1 : 0;
+    for (int k = root; k < std::min<int>(root + 40, state.link_length_m.size()); ++k) {
+      int first_sample = -1;
+      for (size_t i = 0; i < state.samples.size(); ++i) {
+        if (state.samples[i].link == k) { first_sample = static_cast<int>(i); break; }
+      }
+      std::printf("  link %d len %.4f bend %.3f rad K %.4f first sample %d\n", k,
+                  state.link_length_m[k], state.bend_rad[k].norm(),
+                  state.joint_stiffness_N_m_per_rad[k], first_sample);
+    }
+  }
   std::printf("summary: max tip arc %.3f m, inserted %.3f m, stretch peak %.3f m, wall peak %.1f "
               "N, base peak %.1f N (over 10 N %.1f %% of steps), roll peak %.2f N m, fixed moved "
               "%.1f mm\n",
               max_tip_arc_m, state.inserted_m, max_stretch_m, max_wall_N, max_base_N,
               100.0 * over_10N_steps / std::max(1L, steps), max_roll_Nm, 1e3 * max_fixed_m);
+  std::printf("base force: mean step-to-step change %.2f N, 10 ms mean over 10 N %.1f %% of steps\n",
+              base_jump_sum_N / std::max(1L, steps), 100.0 * over_10N_mean_steps / std::max(1L, steps));
   std::printf("stretch over 1/2/3/4 cm: %.1f / %.1f / %.1f / %.1f s\n", stretch_over_s[0],
               stretch_over_s[1], stretch_over_s[2], stretch_over_s[3]);
   return 0;
