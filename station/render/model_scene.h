@@ -6,11 +6,13 @@
 namespace ves::render {
 
 // What turns a segment into "damaged" on the damage display: the larger of
-// wall force / damage_wall_force_N and suspension stretch / damage_stretch_m
-// (the defaults match training's MetricThresholds damage and pain levels).
+// wall force / damage_wall_force_N and mesentery stretch / damage_stretch_m.
+// The defaults are training's MetricThresholds damage and pain levels, so the
+// display marks what the session scores (ModelScene.DamageScaleIsTheScoringsDamageAndPainLevels
+// checks that they stay equal).
 struct DamageScale {
-  double damage_wall_force_N{8.0};
-  double damage_stretch_m{0.03};
+  double damage_wall_force_N{14.0};
+  double damage_stretch_m{0.02};
 };
 
 // Fills `scene` (reusing its storage) from a model state: colon ring i at

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "station/render/endoscope_view.h"
+#include "station/training/metric_thresholds.h"
 #include "tests/station/render/image_checks.h"
 
 namespace ves::render {
@@ -53,13 +54,23 @@ TEST(ModelScene, DamageLevelIsTheLargerOfForceAndStretchOverThreshold) {
   model::StepOutput output = run.output;
   output.wall_force_N.assign(output.wall_force_N.size(), 0.0);
   output.stretch_m.assign(output.stretch_m.size(), 0.0);
-  output.wall_force_N[5] = 4.0;   // 4 / 8 N = 0.5
-  output.stretch_m[5] = 0.045;    // 0.045 / 0.03 m = 1.5 → 1.5
-  output.wall_force_N[6] = 12.0;  // 1.5 by force alone
+  output.wall_force_N[5] = 7.0;   // 7 / 14 N = 0.5
+  output.stretch_m[5] = 0.03;     // 0.03 / 0.02 m = 1.5 → 1.5
+  output.wall_force_N[6] = 21.0;  // 1.5 by force alone
   const SceneGeometry scene = SceneFromModel(run.params, run.state, &output);
   EXPECT_NEAR(scene.damage_level[5], 1.5, 1e-12);
   EXPECT_NEAR(scene.damage_level[6], 1.5, 1e-12);
   EXPECT_EQ(scene.damage_level[7], 0.0);
+}
+
+// The damage display's defaults are the session's damage and pain levels
+// (they drifted apart once: the display kept 8 N and 3 cm after scoring
+// moved to 14 N and 2 cm).
+TEST(ModelScene, DamageScaleIsTheScoringsDamageAndPainLevels) {
+  const training::MetricThresholds scoring;
+  const DamageScale display;
+  EXPECT_EQ(display.damage_wall_force_N, scoring.damage_wall_force_N);
+  EXPECT_EQ(display.damage_stretch_m, scoring.pain_stretch_m);
 }
 
 TEST(ModelScene, ModelTipViewLooksDownTheLumenAndTheUpKnobMovesIt) {
