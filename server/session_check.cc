@@ -217,16 +217,8 @@ std::string CheckStationHealth(const ves::v1::SessionRecord& r) {
     return at + ".device = '" + patient_db::PrintableExcerpt(h.device(), 40) + "': must be 1.." +
            std::to_string(kMaxDeviceNameBytes) + " of letters, digits and : . _ - (sim, can:IFACE)";
   }
-  const std::pair<const char*, uint64_t> counts[] = {
-      {"loop_cycles", h.loop_cycles()},
-      {"loop_overruns", h.loop_overruns()},
-      {"safe_state_entries", h.safe_state_entries()},
-      {"force_pauses", h.force_pauses()},
-      {"can_bus_errors", h.can_bus_errors()},
-      {"can_lost_frames", h.can_lost_frames()},
-      {"can_send_failures", h.can_send_failures()},
-      {"can_malformed_frames", h.can_malformed_frames()}};
-  for (const auto& [name, n] : counts) {
+  for (const auto& [name, get] : kStationHealthCounts) {
+    const uint64_t n = (h.*get)();
     if (n > kMaxHealthCount) {
       return at + "." + name + " = " + std::to_string(n) + ": more than " +
              std::to_string(kMaxHealthCount);

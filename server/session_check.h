@@ -32,6 +32,22 @@ inline constexpr uint64_t kMaxHealthCount = 1'000'000'000;  // ~11.6 days of 1 k
 inline constexpr double kMaxLoopTime_us = 1e7;              // a 10 s stall
 inline constexpr double kMaxLoopBudget_us = 1e5;            // a 10 Hz loop
 
+// The counters of StationHealth, by name: checked here, shown by the web API
+// (server/web_api.cc), one list so a new counter cannot be missed in either.
+struct StationHealthCount {
+  const char* name;
+  uint64_t (ves::v1::StationHealth::*get)() const;
+};
+inline constexpr StationHealthCount kStationHealthCounts[] = {
+    {"loop_cycles", &ves::v1::StationHealth::loop_cycles},
+    {"loop_overruns", &ves::v1::StationHealth::loop_overruns},
+    {"safe_state_entries", &ves::v1::StationHealth::safe_state_entries},
+    {"force_pauses", &ves::v1::StationHealth::force_pauses},
+    {"can_bus_errors", &ves::v1::StationHealth::can_bus_errors},
+    {"can_lost_frames", &ves::v1::StationHealth::can_lost_frames},
+    {"can_send_failures", &ves::v1::StationHealth::can_send_failures},
+    {"can_malformed_frames", &ves::v1::StationHealth::can_malformed_frames}};
+
 // The version charset: letters, digits and . + - _ ~ (e.g. "0.1.0",
 // "0.2.0-rc1+g1a2b3c"), 1..kMaxSoftwareVersionBytes.
 bool IsSoftwareVersion(const std::string& text);

@@ -11,6 +11,7 @@
 #include "patient_db/limits.h"
 #include "server/live_hub.h"
 #include "server/pipeline.h"
+#include "server/session_check.h"
 #include "server/web_assets.h"
 #include "ves/v1/lesson.pb.h"
 
@@ -583,9 +584,18 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       v1::SessionRecord summary = resp.record();
       summary.clear_input_log();  // bulky and of no use to a reader
       summary.clear_replay_setup();
-      return JsonReply(200, {{"record", ProtoJson(summary)},
-                             {"stored_unix_ms", resp.stored_unix_ms()},
-                             {"input_samples", resp.record().input_log().sample_count()}});
+      // The station's health during this session, shaped as on the
+      // stations page (numbers, not the proto's uint64 strings).
+      const bool has_health = resp.record().has_station_health();
+      return JsonReply(
+          200, {{"record", ProtoJson(summary)},
+                {"stored_unix_ms", resp.stored_unix_ms()},
+                {"input_samples", resp.record().input_log().sample_count()},
+                {"station_health",
+                 has_health ? StationHealthJson(resp.record().station_health()) : json(nullptr)},
+                {"station_health_flags", has_health
+                                             ? json(StationHealthFlags(resp.record().station_health()))
+                                             : json::array()}});
     }
     static const CallSpec spec{"session.replay",
                                {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
@@ -709,22 +719,11 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                   {"health", nullptr},
                   {"flags", json::array()}};
       if (st.has_health()) {
-        const v1::StationHealth& h = st.health();
-        const bool timed = h.loop_cycles() > 0;  // headless runs have no loop timing
-        row["health"] = {{"device", h.device()},
-                         {"session_uuid", st.health_session_uuid()},
-                         {"session_end_unix_ms", st.health_session_end_unix_ms()},
-                         {"loop_cycles", h.loop_cycles()},
-                         {"loop_cycle_p99_us", timed ? json(h.loop_cycle_p99_us()) : json(nullptr)},
-                         {"loop_budget_us", h.loop_budget_us()},
-                         {"loop_overruns", h.loop_overruns()},
-                         {"safe_state_entries", h.safe_state_entries()},
-                         {"force_pauses", h.force_pauses()},
-                         {"can_bus_errors", h.can_bus_errors()},
-                         {"can_lost_frames", h.can_lost_frames()},
-                         {"can_send_failures", h.can_send_failures()},
-                         {"can_malformed_frames", h.can_malformed_frames()}};
-        row["flags"] = StationHealthFlags(h);
+        json health = StationHealthJson(st.health());
+        health["session_uuid"] = st.health_session_uuid();
+        health["session_end_unix_ms"] = st.health_session_end_unix_ms();
+        row["health"] = std::move(health);
+        row["flags"] = StationHealthFlags(st.health());
       }
       stations.push_back(std::move(row));
     }
@@ -751,6 +750,15 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
   }
   return Error(404, "NOT_FOUND",
                "no API route '" + patient_db::PrintableExcerpt(raw_path, 80) + "' (docs/web.md)");
+}
+
+nlohmann::json StationHealthJson(const v1::StationHealth& h) {
+  const bool timed = h.loop_cycles() > 0;  // headless runs have no loop timing
+  json health = {{"device", h.device()},
+                 {"loop_cycle_p99_us", timed ? json(h.loop_cycle_p99_us()) : json(nullptr)},
+                 {"loop_budget_us", h.loop_budget_us()}};
+  for (const auto& [name, get] : kStationHealthCounts) health[name] = (h.*get)();
+  return health;
 }
 
 std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -58,6 +59,11 @@ struct WebOptions {
 // "overruns", "safe_state" (any safe-state entry or force pause) and
 // "can_errors" (any CAN error, lost, unsent or malformed frame). Pure.
 std::vector<std::string> StationHealthFlags(const v1::StationHealth& health);
+
+// A station's health as the API shows it (docs/web.md): the device, the
+// loop's p99 (null when not timed: simulated time) and budget, and every
+// counter of kStationHealthCounts as a number. Pure.
+nlohmann::json StationHealthJson(const v1::StationHealth& health);
 
 class WebApi {
  public:

@@ -290,6 +290,22 @@ async function sessionPage() {
                    ['Loop', Number(m.loop_s || 0).toFixed(1) + ' s'],
                    ['Deepest tip', (Number(m.max_tip_arc_m || 0) * 1000).toFixed(0) + ' mm']];
   for (const [k, v] of summary) { $('summary').appendChild(el('dt', k)); $('summary').appendChild(el('dd', v)); }
+  // The station's health during this session, flagged as on the stations page.
+  const health = s.station_health;
+  const healthNames = ['Device', 'Loop p99 / budget', 'Loop overruns', 'Safe state', 'CAN errors'];
+  const healthValues = health ? healthTexts(health) : ['not reported', '—', '—', '—', '—'];
+  const healthRows = [['Software', r.software_version || '—']];
+  healthNames.forEach((name, i) => healthRows.push([name, healthValues[i]]));
+  const healthDds = [];
+  for (const [k, v] of healthRows) {
+    $('health').appendChild(el('dt', k));
+    healthDds.push($('health').appendChild(el('dd', v)));
+  }
+  for (const [flag, [index, title]] of Object.entries(healthFlagWhy)) {
+    if (!s.station_health_flags.includes(flag)) continue;
+    healthDds[1 + index].classList.add('flagged');
+    healthDds[1 + index].setAttribute('title', title);
+  }
   const replay = await api('sessions/' + encodeURIComponent(uuid) + '/replay');
   const b = {x0: Infinity, x1: -Infinity, y0: Infinity, y1: -Infinity};
   for (const f of replay.frames) {
@@ -358,6 +374,26 @@ async function auditPage() {
   await more();
 }
 
+// A station's health (the API's shape, docs/web.md) as the texts of its
+// device, loop, overruns, safe-state and CAN figures.
+function healthTexts(h) {
+  const loop = h.loop_cycle_p99_us === null
+      ? 'not timed (simulated time) / ' + h.loop_budget_us.toFixed(0) + ' µs'
+      : h.loop_cycle_p99_us.toFixed(0) + ' / ' + h.loop_budget_us.toFixed(0) + ' µs';
+  const canTotal = h.can_bus_errors + h.can_lost_frames + h.can_send_failures +
+                   h.can_malformed_frames;
+  return [h.device, loop,
+          h.loop_cycles > 0 ? h.loop_overruns + ' of ' + h.loop_cycles : '—',
+          (h.safe_state_entries + h.force_pauses) + ' (' + h.safe_state_entries +
+              ' re-armed, ' + h.force_pauses + ' paused)',
+          canTotal + ' (bus ' + h.can_bus_errors + ', lost ' + h.can_lost_frames +
+              ', unsent ' + h.can_send_failures + ', malformed ' + h.can_malformed_frames + ')'];
+}
+// The server's health flags: which of healthTexts' figures each marks, and why.
+const healthFlagWhy = {loop_p99: [1, 'loop p99 over its budget'], overruns: [2, 'the loop overran'],
+                       safe_state: [3, 'the device went to its safe state'],
+                       can_errors: [4, 'CAN errors']};
+
 // Stations: one row each, health figures as text; a flagged cell gets the
 // class "flagged" and a title saying why (the server decides the flags).
 async function stationsPage() {
@@ -371,32 +407,13 @@ async function stationsPage() {
     for (const s of page.stations) {
       const h = s.health;
       const flags = new Set(s.flags);
-      let cells;
-      if (!h) {
-        cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—',
-                 'not reported', '—', '—', '—', '—'];
-      } else {
-        const loop = h.loop_cycle_p99_us === null
-            ? 'not timed (simulated time) / ' + h.loop_budget_us.toFixed(0) + ' µs'
-            : h.loop_cycle_p99_us.toFixed(0) + ' / ' + h.loop_budget_us.toFixed(0) + ' µs';
-        const canTotal = h.can_bus_errors + h.can_lost_frames + h.can_send_failures +
-                         h.can_malformed_frames;
-        cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—', h.device,
-                 loop,
-                 h.loop_cycles > 0 ? h.loop_overruns + ' of ' + h.loop_cycles : '—',
-                 (h.safe_state_entries + h.force_pauses) + ' (' + h.safe_state_entries +
-                     ' re-armed, ' + h.force_pauses + ' paused)',
-                 canTotal + ' (bus ' + h.can_bus_errors + ', lost ' + h.can_lost_frames +
-                     ', unsent ' + h.can_send_failures + ', malformed ' +
-                     h.can_malformed_frames + ')'];
-      }
+      const cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—']
+          .concat(h ? healthTexts(h) : ['not reported', '—', '—', '—', '—']);
       const tr = row(cells);
       tr.dataset.station = s.station_id;
-      const why = {loop_p99: [4, 'loop p99 over its budget'], overruns: [5, 'the loop overran'],
-                   safe_state: [6, 'the device went to its safe state'],
-                   can_errors: [7, 'CAN errors']};
-      for (const [flag, [column, title]] of Object.entries(why)) {
+      for (const [flag, [index, title]] of Object.entries(healthFlagWhy)) {
         if (!flags.has(flag)) continue;
+        const column = 3 + index;
         tr.children[column].classList.add('flagged');
         tr.children[column].setAttribute('title', title);
       }

@@ -3,7 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <google/protobuf/descriptor.h>
+
+#include <iterator>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "station/training/input_log.h"
@@ -182,6 +186,28 @@ ves::v1::SessionRecord WithHealth() {
   h->set_safe_state_entries(1);
   h->set_can_bus_errors(2);
   return r;
+}
+
+// Every counter StationHealth has is in the one list that the check and the
+// web API go through, under its own name, and each one is bounded.
+TEST(CheckSessionRecord, EveryStationHealthCounterIsListedAndBounded) {
+  const google::protobuf::Descriptor* d = ves::v1::StationHealth::descriptor();
+  int counters = 0;
+  for (int i = 0; i < d->field_count(); ++i) {
+    const google::protobuf::FieldDescriptor* f = d->field(i);
+    if (f->cpp_type() != google::protobuf::FieldDescriptor::CPPTYPE_UINT64) continue;
+    ++counters;
+    bool listed = false;
+    for (const auto& count : kStationHealthCounts) listed = listed || f->name() == count.name;
+    EXPECT_TRUE(listed) << f->name() << " is not in kStationHealthCounts";
+    auto r = WithHealth();
+    r.mutable_station_health()->GetReflection()->SetUInt64(r.mutable_station_health(), f,
+                                                           kMaxHealthCount + 1);
+    EXPECT_NE(Check(r).find("record.station_health." + std::string(f->name()) + " = "),
+              std::string::npos)
+        << Check(r);
+  }
+  EXPECT_EQ(counters, static_cast<int>(std::size(kStationHealthCounts)));
 }
 
 TEST(CheckSessionRecord, StationHealthIsBoundedNamingTheField) {

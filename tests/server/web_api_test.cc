@@ -15,6 +15,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "server/http_server.h"
+#include "server/session_check.h"
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
@@ -331,7 +332,25 @@ TEST_F(WebApiTest, StationsShowTheirReportedHealthToTheirOwnInstitution) {
   EXPECT_EQ(stations[0]["software_version"], "0.1.0");
   EXPECT_EQ(stations[0]["health"]["loop_cycle_p99_us"], 1500.0);
   EXPECT_EQ(stations[0]["health"]["safe_state_entries"], 1);
+  EXPECT_EQ(stations[0]["health"]["loop_cycles"], 600'000);
+  for (const auto& count : ves::server::kStationHealthCounts) {  // every counter, unset ones 0
+    EXPECT_TRUE(stations[0]["health"].contains(count.name)) << count.name;
+  }
   EXPECT_EQ(stations[0]["flags"], json::array({"loop_p99", "safe_state"}));
+  // The session's page shows the health it was uploaded with, in the same
+  // shape (numbers, not the proto's uint64 strings) and with the same flags.
+  const HttpResult session = Get("/api/v1/sessions/" + record.uuid(), supervisor_);
+  ASSERT_EQ(session.status, 200) << session.body;
+  const json health = json::parse(session.body)["station_health"];
+  EXPECT_EQ(health["loop_cycles"], 600'000) << health.dump();
+  EXPECT_EQ(health["loop_cycle_p99_us"], 1500.0);
+  EXPECT_EQ(health["device"], "can:can0");
+  EXPECT_EQ(json::parse(session.body)["station_health_flags"],
+            json::array({"loop_p99", "safe_state"}));
+  const HttpResult plain = Get("/api/v1/sessions/" + south.uuid(), south_supervisor_);
+  ASSERT_EQ(plain.status, 200) << plain.body;
+  EXPECT_TRUE(json::parse(plain.body)["station_health"].is_null()) << plain.body;
+  EXPECT_EQ(json::parse(plain.body)["station_health_flags"], json::array());
   // SetUp's upload carried no health: seen, not reported.
   EXPECT_EQ(stations[1]["station_id"], "station-1");
   EXPECT_TRUE(stations[1]["health"].is_null());

@@ -221,8 +221,9 @@ def main():
         # Stations: the headless station above reported its health with its
         # upload; the seeded uploads (web_seed) carried none.
         version = subprocess.check_output([args.station, '--version'], text=True).split()[-1]
-        subprocess.check_output([args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'],
-                                 't2', 'novice', '1', 'ward-3', 'faulty'], text=True)
+        faulty_session = json.loads(subprocess.check_output(
+            [args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'],
+             't2', 'novice', '1', 'ward-3', 'faulty'], text=True))
         driver.get(base + '/stations.html')
         ready('stations')
         rows = {r.get_attribute('data-station'): [td.text for td in r.find_elements(By.TAG_NAME, 'td')]
@@ -254,6 +255,22 @@ def main():
                    for td in ward.find_elements(By.TAG_NAME, 'td')]
         assert flagged == [False] * 4 + [True] * 4, flagged
         shot('08-stations')
+
+        # The same health on that session's page, flagged the same way; a
+        # session whose station reported none says so.
+        driver.get(base + '/session.html?uuid=' + faulty_session['uuid'])
+        ready('session')
+        dds = driver.find_elements(By.CSS_SELECTOR, '#health dd')
+        assert [d.text for d in dds] == [version, 'can:can0', '1500 / 1000 \u00b5s', '12 of 2000',
+                                         '1 (1 re-armed, 0 paused)',
+                                         '2 (bus 2, lost 0, unsent 0, malformed 0)'], \
+            [d.text for d in dds]
+        assert [d.get_attribute('class') == 'flagged' for d in dds] == [False] * 2 + [True] * 4
+        shot('08b-session-health')
+        driver.get(base + '/session.html?uuid=' + sessions[0]['uuid'])
+        ready('session')
+        dds = [d.text for d in driver.find_elements(By.CSS_SELECTOR, '#health dd')]
+        assert dds[1:] == ['not reported', '\u2014', '\u2014', '\u2014', '\u2014'], dds
 
         # Group progress.
         driver.get(base + '/progress.html?group=g1')
