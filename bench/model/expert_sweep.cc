@@ -1,16 +1,18 @@
 // expert_sweep: runs the scripted expert (or novice) on a case with model and
 // operator settings overridden from the command line, and prints one line of
-// results, for parameter sweeps (docs/model.md, "Probing an insertion").
+// results, for parameter sweeps (docs/model-shortening-notes.md).
 //   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
-// Keys: mobile_kc_scale, relax_s, meso_k, shear, pleat, pleat_k, toe_k,
-// links, growth (the scope's link count and grading), passive_m, passive_ei, mu_scale, abdomen (margin of the cavity box, m), pleat_set_s, pleat_release_s, and the expert's advance, withdraw, push,
-// pull, loop_limit, roll_rate, settle; show_damage=1 prints each damage episode.
+// Keys: the model's (bench/model/model_overrides.h: mu, soft_k, meso_k,
+// links, ...); the expert's advance, withdraw, push, pull, loop_limit,
+// roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
+// press_past, press_gate; show_damage=1 prints each damage episode.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <string>
 
+#include "bench/model/model_overrides.h"
 #include "patient_db/case_format.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
@@ -37,30 +39,7 @@ int main(int argc, char** argv) {
   ves::training::CaseModelOptions options;
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);
-  for (auto& point : params.colon.points) {
-    auto& t = point.tissue;
-    t.static_friction *= get("mu_scale", 1.0);
-    t.dynamic_friction *= get("mu_scale", 1.0);
-    if (!t.mobile) continue;
-    t.suspension_stiffness_N_per_m2 *= get("mobile_kc_scale", 1.0);
-    t.suspension_relaxation_s = get("relax_s", t.suspension_relaxation_s);
-    t.mesentery_stiffness_N_per_m2 = get("meso_k", t.mesentery_stiffness_N_per_m2);
-    t.pleat_limit = get("pleat", t.pleat_limit);
-  }
-  params.colon.mesentery_shear_ratio = get("shear", params.colon.mesentery_shear_ratio);
-  params.colon.mesentery_anchor_by_arc = get("anchor_arc", 0.0) != 0.0;
-  params.mesentery_reach_gathers = get("reach_gathers", 0.0) != 0.0;
-  params.colon.abdomen_margin_m = get("abdomen", params.colon.abdomen_margin_m);
-  ves::model::CalcMesenteryAnchors(&params.colon);
-  params.colon_pleat_stiffness_N = get("pleat_k", params.colon_pleat_stiffness_N);
-  params.colon_toe_stiffness_N = get("toe_k", params.colon_toe_stiffness_N);
-  params.colon_pleat_set_s = get("pleat_set_s", params.colon_pleat_set_s);
-  params.colon_pleat_release_s = get("pleat_release_s", params.colon_pleat_release_s);
-  params.scope.link_count = static_cast<int>(get("links", params.scope.link_count));
-  params.scope.link_growth_ratio = get("growth", params.scope.link_growth_ratio);
-  params.scope.passive_section_length_m = get("passive_m", params.scope.passive_section_length_m);
-  params.scope.passive_section_rigidity_N_m2 =
-      get("passive_ei", params.scope.passive_section_rigidity_N_m2);
+  ves::bench::ApplyModelOverrides(get, &params);
   ves::training::ExpertOperator::Settings expert;
   expert.advance_speed_m_per_s = get("advance", expert.advance_speed_m_per_s);
   expert.withdraw_speed_m_per_s = get("withdraw", expert.withdraw_speed_m_per_s);
@@ -88,9 +67,6 @@ int main(int argc, char** argv) {
   const double press_past_m = get("press_past", 0.10);
   const double press[9] = {0, 0, get("press_sig", 0.0), get("press_desc", 0.0), 0,
                            get("press_trans", 0.0), 0, 0, 0};
-  params.abdominal_pressure_stiffness_N_per_m2 =
-      get("press_k", params.abdominal_pressure_stiffness_N_per_m2);
-  params.abdominal_pressure_slack_m = get("press_slack", params.abdominal_pressure_slack_m);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);

@@ -13,13 +13,11 @@
 //   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
 //   PROBE_REINSERT=1               ... then insert again; PROBE_WITHDRAW_EVERY=E
 //                                  repeats the withdrawal every E metres
-//   PROBE_MU=F, PROBE_SOFT_K=K, PROBE_EI=F, PROBE_MESENTERY_K=K, PROBE_PLEAT=L
-//                                  scale friction, set the mobile suspension,
-//                                  scale the tube's EI, set the mobile
-//                                  mesentery stiffness or pleat limit
+//   PROBE_<KEY>=V                  a model setting, KEY one of the keys of
+//                                  bench/model/model_overrides.h in capitals
+//                                  (PROBE_MU=0.5 halves friction, PROBE_SOFT_K,
+//                                  PROBE_EI, PROBE_MESO_K, PROBE_PLEAT, PROBE_LINKS ...)
 //   PROBE_DUMP_EVERY=S             draw both shapes to /tmp/probe_T.png every S s
-//   PROBE_DT_MS=DT                 another time step
-//   PROBE_LINKS=N, PROBE_GROWTH=R  the scope's link count and length grading
 //   PROBE_WALL=F                   print when and where the wall force rises over F N
 //   PROBE_FORCES=S                 every S s: what holds the scope along its axis
 //                                  (friction, wall normals, rings; the largest)
@@ -34,6 +32,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench/model/model_overrides.h"
 #include "patient_db/case_format.h"
 #include "station/model/model.h"
 #include "station/training/case_model.h"
@@ -102,38 +101,7 @@ int main(int argc, char** argv) {
   options.stiff_colon = std::getenv("PROBE_STIFF_COLON") != nullptr;
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);
-  for (auto& point : params.colon.points) {
-    auto& t = point.tissue;
-    t.static_friction *= EnvOr("PROBE_MU", 1.0);
-    t.dynamic_friction *= EnvOr("PROBE_MU", 1.0);
-    if (!t.mobile) continue;
-    t.suspension_stiffness_N_per_m2 = EnvOr("PROBE_SOFT_K", t.suspension_stiffness_N_per_m2);
-    t.mesentery_stiffness_N_per_m2 = EnvOr("PROBE_MESENTERY_K", t.mesentery_stiffness_N_per_m2);
-    t.pleat_limit = EnvOr("PROBE_PLEAT", t.pleat_limit);
-    t.suspension_relaxation_s = EnvOr("PROBE_RELAX_S", t.suspension_relaxation_s);
-    t.neighbor_tension_N = EnvOr("PROBE_TENSION", t.neighbor_tension_N);
-    t.mesentery_length_m = EnvOr("PROBE_MESO_M", t.mesentery_length_m);
-  }
-  params.colon.mesentery_shear_ratio = EnvOr("PROBE_SHEAR", params.colon.mesentery_shear_ratio);
-  params.colon.abdomen_margin_m = EnvOr("PROBE_ABDOMEN", params.colon.abdomen_margin_m);
-  params.colon.mesentery_anchor_by_arc = EnvOr("PROBE_ANCHOR_ARC", 0.0) != 0.0;
-  params.mesentery_reach_gathers = EnvOr("PROBE_REACH_GATHERS", 0.0) != 0.0;
-  ves::model::CalcMesenteryAnchors(&params.colon);
-  params.scope.flexural_rigidity_N_m2 *= EnvOr("PROBE_EI", 1.0);
-  params.scope.link_count = static_cast<int>(EnvOr("PROBE_LINKS", params.scope.link_count));
-  params.scope.link_growth_ratio = EnvOr("PROBE_GROWTH", params.scope.link_growth_ratio);
-  params.scope.bending_section_rigidity_N_m2 =
-      EnvOr("PROBE_BEND_EI", params.scope.bending_section_rigidity_N_m2);
-  params.scope.passive_section_length_m =
-      EnvOr("PROBE_PASSIVE_M", params.scope.passive_section_length_m);
-  params.scope.passive_section_rigidity_N_m2 =
-      EnvOr("PROBE_PASSIVE_EI", params.scope.passive_section_rigidity_N_m2);
-  params.dt_s = EnvOr("PROBE_DT_MS", params.dt_s * 1e3) * 1e-3;
-  params.colon_pleat_stiffness_N = EnvOr("PROBE_PLEAT_K", params.colon_pleat_stiffness_N);
-  params.colon_toe_stiffness_N = EnvOr("PROBE_TOE_K", params.colon_toe_stiffness_N);
-  params.colon_toe_strain = EnvOr("PROBE_TOE_STRAIN", params.colon_toe_strain);
-  params.colon_pleat_set_s = EnvOr("PROBE_PLEAT_SET_S", params.colon_pleat_set_s);
-  params.colon_pleat_release_s = EnvOr("PROBE_PLEAT_RELEASE_S", params.colon_pleat_release_s);
+  ves::bench::ApplyModelOverrides(ves::bench::ProbeEnv, &params);
   auto state = ves::model::MakeInitialState(params);
   auto scratch = ves::model::MakeScratch(params);
   auto out = ves::model::MakeStepOutput(params);

@@ -1,0 +1,72 @@
+#pragma once
+
+#include <cctype>
+#include <cstdlib>
+#include <functional>
+#include <string>
+
+#include "station/model/model.h"
+
+// The model settings the probing tools override, by key, in one place so
+// that expert_sweep (key=value arguments) and insertion_probe (PROBE_KEY
+// environment variables) cannot drift apart (docs/model-shortening-notes.md).
+// `get(key, fallback)` returns the override or the fallback.
+//   every point: mu (friction x)
+//   mobile points: soft_k (suspension, N/m^2), mobile_kc_scale (suspension x),
+//     relax_s, meso_k, meso_m, pleat (limit), tension
+//   colon: shear, anchor_arc (0/1), reach_gathers (0/1), abdomen (m)
+//   scope: ei (insertion tube EI x), bend_ei, links, growth, passive_m, passive_ei
+//   step: dt_ms, pleat_k, toe_k, toe_strain, pleat_set_s, pleat_release_s,
+//     press_k, press_slack
+namespace ves::bench {
+
+using OverrideGetter = std::function<double(const char* key, double fallback)>;
+
+inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* params) {
+  for (auto& point : params->colon.points) {
+    auto& t = point.tissue;
+    t.static_friction *= get("mu", 1.0);
+    t.dynamic_friction *= get("mu", 1.0);
+    if (!t.mobile) continue;
+    t.suspension_stiffness_N_per_m2 =
+        get("soft_k", t.suspension_stiffness_N_per_m2) * get("mobile_kc_scale", 1.0);
+    t.suspension_relaxation_s = get("relax_s", t.suspension_relaxation_s);
+    t.mesentery_stiffness_N_per_m2 = get("meso_k", t.mesentery_stiffness_N_per_m2);
+    t.mesentery_length_m = get("meso_m", t.mesentery_length_m);
+    t.pleat_limit = get("pleat", t.pleat_limit);
+    t.neighbor_tension_N = get("tension", t.neighbor_tension_N);
+  }
+  auto& colon = params->colon;
+  colon.mesentery_shear_ratio = get("shear", colon.mesentery_shear_ratio);
+  colon.mesentery_anchor_by_arc = get("anchor_arc", colon.mesentery_anchor_by_arc ? 1.0 : 0.0) != 0.0;
+  colon.abdomen_margin_m = get("abdomen", colon.abdomen_margin_m);
+  params->mesentery_reach_gathers =
+      get("reach_gathers", params->mesentery_reach_gathers ? 1.0 : 0.0) != 0.0;
+  model::CalcMesenteryAnchors(&colon);
+  auto& scope = params->scope;
+  scope.flexural_rigidity_N_m2 *= get("ei", 1.0);
+  scope.bending_section_rigidity_N_m2 = get("bend_ei", scope.bending_section_rigidity_N_m2);
+  scope.link_count = static_cast<int>(get("links", scope.link_count));
+  scope.link_growth_ratio = get("growth", scope.link_growth_ratio);
+  scope.passive_section_length_m = get("passive_m", scope.passive_section_length_m);
+  scope.passive_section_rigidity_N_m2 = get("passive_ei", scope.passive_section_rigidity_N_m2);
+  if (const double dt_ms = get("dt_ms", 0.0); dt_ms > 0.0) params->dt_s = dt_ms * 1e-3;
+  params->colon_pleat_stiffness_N = get("pleat_k", params->colon_pleat_stiffness_N);
+  params->colon_toe_stiffness_N = get("toe_k", params->colon_toe_stiffness_N);
+  params->colon_toe_strain = get("toe_strain", params->colon_toe_strain);
+  params->colon_pleat_set_s = get("pleat_set_s", params->colon_pleat_set_s);
+  params->colon_pleat_release_s = get("pleat_release_s", params->colon_pleat_release_s);
+  params->abdominal_pressure_stiffness_N_per_m2 =
+      get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
+  params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
+}
+
+// insertion_probe's getter: key "meso_k" is the variable PROBE_MESO_K.
+inline double ProbeEnv(const char* key, double fallback) {
+  std::string name = "PROBE_";
+  for (const char* c = key; *c != '\0'; ++c) name += static_cast<char>(std::toupper(*c));
+  const char* value = std::getenv(name.c_str());
+  return value != nullptr ? std::atof(value) : fallback;
+}
+
+}  // namespace ves::bench
