@@ -128,6 +128,29 @@ v1::LiveFrame FirstFrame(const std::string& uuid, const std::string& trainee) {
   return f;
 }
 
+// A station streaming through a LiveStreamer while the test watches: frames
+// 1, 2, ... offered every 2 ms from their own thread until Stop (at most
+// 2000 of them).
+class BackgroundOfferer {
+ public:
+  explicit BackgroundOfferer(sync::LiveStreamer* streamer)
+      : thread_([this, streamer] {
+          for (int k = 1; k <= 2000 && !stop_; ++k) {
+            streamer->Offer(FrameAt(k));
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+          }
+        }) {}
+  ~BackgroundOfferer() { Stop(); }
+  void Stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 class WebLiveTest : public ::testing::Test {
  protected:
   static ServerOptions WithHttp() {
@@ -148,6 +171,13 @@ class WebLiveTest : public ::testing::Test {
     uuid_ = NewUuid(rng);
   }
   int port() { return server_.server().http_port(); }
+  // Where the north station streams to, as ves-station run configures it.
+  sync::ServerEndpoint StationEndpoint() const {
+    sync::ServerEndpoint endpoint;
+    endpoint.address = server_.address();
+    endpoint.token = station_;
+    return endpoint;
+  }
   json LiveList(const std::string& token) {
     const HttpResult r =
         HttpCall(port(), "GET", "/api/v1/live", {{"Authorization", "Bearer " + token}});
@@ -379,29 +409,19 @@ TEST_F(WebLiveTest, MalformedFramesAreRefusedNamingTheField) {
 }
 
 TEST_F(WebLiveTest, StationStreamerReachesAViewer) {
-  sync::ServerEndpoint endpoint;
-  endpoint.address = server_.address();
-  endpoint.token = station_;
-  sync::LiveStreamer streamer(endpoint, FirstFrame(uuid_, "t1"));
+  sync::LiveStreamer streamer(StationEndpoint(), FirstFrame(uuid_, "t1"));
   ASSERT_TRUE(WaitListed(uuid_));
   Viewer viewer;
   ASSERT_EQ(viewer.Connect(port(), uuid_, supervisor_), 101) << viewer.body();
-  // Offer frames until the viewer has seen the tip at two depths (bounded).
-  std::atomic<bool> seen{false};
-  std::thread offerer([&] {
-    for (int k = 1; k <= 2000 && !seen; ++k) {
-      streamer.Offer(FrameAt(k));
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-  });
+  // Offer frames until the viewer has seen the tip at three depths.
+  BackgroundOfferer offerer(&streamer);
   std::set<double> depths;
   while (depths.size() < 3) {
     const json f = viewer.Read();
     if (f.is_null()) break;
     depths.insert(f["tip_arc_m"].get<double>());
   }
-  seen = true;
-  offerer.join();
+  offerer.Stop();
   EXPECT_GE(depths.size(), 3u);
   const sync::LiveStreamStats stats = streamer.Close();
   EXPECT_GT(stats.sent, 0u);
@@ -412,28 +432,18 @@ TEST_F(WebLiveTest, StationStreamerReachesAViewer) {
 // Interactive runs end a session's stream without waiting (RequestClose);
 // the stream's own thread finishes it and the viewer sees it end.
 TEST_F(WebLiveTest, AStreamEndedInTheBackgroundEndsForTheViewer) {
-  sync::ServerEndpoint endpoint;
-  endpoint.address = server_.address();
-  endpoint.token = station_;
-  sync::LiveStreamer streamer(endpoint, FirstFrame(uuid_, "t1"));
+  sync::LiveStreamer streamer(StationEndpoint(), FirstFrame(uuid_, "t1"));
   ASSERT_TRUE(WaitListed(uuid_));
   Viewer viewer;
   ASSERT_EQ(viewer.Connect(port(), uuid_, supervisor_), 101) << viewer.body();
-  std::atomic<bool> seen{false};
-  std::thread offerer([&] {
-    for (int k = 1; k <= 2000 && !seen; ++k) {
-      streamer.Offer(FrameAt(k));
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-  });
+  BackgroundOfferer offerer(&streamer);
   // Wait for an offered frame (tip deeper than the opening frame's 0 m),
   // not the opening frame a new viewer may be shown first.
   json f;
   do {
     f = viewer.Read();
   } while (!f.is_null() && f.value("tip_arc_m", 0.0) <= 0.0);
-  seen = true;
-  offerer.join();
+  offerer.Stop();
   ASSERT_FALSE(f.is_null());
   streamer.RequestClose();
   streamer.Offer(FrameAt(5000));  // after the request: dropped, not sent
