@@ -141,6 +141,31 @@ class Lessons : public ::testing::Test {
     return {};
   }
 
+  // The shipped curriculum with a 3 s first lesson (cheap to replay) created,
+  // and an expert's session of that lesson put straight into the store, as a
+  // server that stopped before judging it leaves it: stored, no verdict.
+  ves::v1::SessionRecord StoreUnjudgedLessonSession(ves::v1::CreateCurriculumResponse* created) {
+    ves::v1::Curriculum c = ShippedCurriculum();
+    c.mutable_lessons(0)->set_time_limit_s(3);
+    EXPECT_TRUE(Create(supervisor_, c, created).ok());
+    const ves::v1::SessionRecord r =
+        ScriptedLessonSession(created->curriculum().lessons(0), "t1", "expert", 3);
+    patient_db::SessionRow row;
+    row.uuid = r.uuid();
+    row.trainee_id = "t1";
+    row.institution = "north";
+    row.case_id = r.case_id();
+    row.start_unix_ms = r.start_unix_ms();
+    row.end_unix_ms = r.end_unix_ms();
+    row.body = r.SerializeAsString();
+    row.body_sha256_hex = Sha256HexOf(row.body);
+    row.lesson_id = r.lesson_id();
+    patient_db::WriteBatch batch;
+    batch.sessions.push_back(row);
+    EXPECT_TRUE(server_.store().CommitBatch(batch).ok());
+    return r;
+  }
+
   TestServer server_;
   std::string admin_, supervisor_, station_;
 };
@@ -376,24 +401,8 @@ TEST_F(Lessons, AForgedRecordIsJudgedByItsReplay) {
 // verdict) is judged when a judge starts on the store.
 TEST_F(Lessons, AStoredSessionWithoutAVerdictIsJudgedOnStart) {
   ves::v1::CreateCurriculumResponse created;
-  ves::v1::Curriculum c = ShippedCurriculum();
-  c.mutable_lessons(0)->set_time_limit_s(3);  // a short lesson keeps this test cheap
-  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
-  const ves::v1::SessionRecord r =
-      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
-  patient_db::SessionRow row;
-  row.uuid = r.uuid();
-  row.trainee_id = "t1";
-  row.institution = "north";
-  row.case_id = r.case_id();
-  row.start_unix_ms = r.start_unix_ms();
-  row.end_unix_ms = r.end_unix_ms();
-  row.body = r.SerializeAsString();
-  row.body_sha256_hex = Sha256HexOf(row.body);
-  row.lesson_id = r.lesson_id();
-  patient_db::WriteBatch batch;
-  batch.sessions.push_back(row);
-  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  const ves::v1::SessionRecord r = StoreUnjudgedLessonSession(&created);
+  ASSERT_FALSE(HasFailure());
   EXPECT_EQ(server_.store().ListUnjudgedLessonSessions("", 10).value.size(), 1u);
 
   LessonJudge judge(&server_.store());
@@ -413,22 +422,8 @@ TEST_F(Lessons, AStoredSessionWithoutAVerdictIsJudgedOnStart) {
 // session gets a final rejected verdict without a replay, and stays judged.
 TEST_F(Lessons, ASessionWhoseReplayNeverFinishedIsRejectedNotReplayedAgain) {
   ves::v1::CreateCurriculumResponse created;
-  ves::v1::Curriculum c = ShippedCurriculum();
-  c.mutable_lessons(0)->set_time_limit_s(3);
-  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
-  const ves::v1::SessionRecord r =
-      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
-  patient_db::SessionRow row;
-  row.uuid = r.uuid();
-  row.trainee_id = "t1";
-  row.institution = "north";
-  row.case_id = r.case_id();
-  row.body = r.SerializeAsString();
-  row.body_sha256_hex = Sha256HexOf(row.body);
-  row.lesson_id = r.lesson_id();
-  patient_db::WriteBatch batch;
-  batch.sessions.push_back(row);
-  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  const ves::v1::SessionRecord r = StoreUnjudgedLessonSession(&created);
+  ASSERT_FALSE(HasFailure());
   // Two starts that never finished: the server died twice during this replay.
   for (int i = 1; i <= kMaxJudgeStarts; ++i) {
     EXPECT_EQ(server_.store().AddJudgeStarts(r.uuid(), 1).value, i);
@@ -455,22 +450,8 @@ TEST_F(Lessons, ASessionWhoseReplayNeverFinishedIsRejectedNotReplayedAgain) {
 // that never finished.
 TEST_F(Lessons, AReplayCancelledByAStopIsNotCountedAsUnfinished) {
   ves::v1::CreateCurriculumResponse created;
-  ves::v1::Curriculum c = ShippedCurriculum();
-  c.mutable_lessons(0)->set_time_limit_s(3);
-  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
-  const ves::v1::SessionRecord r =
-      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
-  patient_db::SessionRow row;
-  row.uuid = r.uuid();
-  row.trainee_id = "t1";
-  row.institution = "north";
-  row.case_id = r.case_id();
-  row.body = r.SerializeAsString();
-  row.body_sha256_hex = Sha256HexOf(row.body);
-  row.lesson_id = r.lesson_id();
-  patient_db::WriteBatch batch;
-  batch.sessions.push_back(row);
-  ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
+  const ves::v1::SessionRecord r = StoreUnjudgedLessonSession(&created);
+  ASSERT_FALSE(HasFailure());
   LessonJudge judge(&server_.store());
   judge.Stop();  // cancels any replay: JudgeStored now stops at its first step
   EXPECT_FALSE(judge.JudgeStored(r.uuid()).ok());
