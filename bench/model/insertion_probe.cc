@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
           if (out.wall_force_N[i] > out.wall_force_N[at]) at = i;
         }
         std::printf("  wall t=%.3f %.1f N at arc %.3f (region %d), tip %.3f, inserted %.3f, "
-                    "hand %.1f N, push in %.1f N, knobs %.2f/%.2f\n",
+                    "base %.1f N, push in %.1f N, knobs %.2f/%.2f\n",
                     state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,
                     static_cast<int>(params.colon.points[at].region), state.tip_arc_m,
                     state.inserted_m, out.base_force_N, in.push_force_N, in.knob_up_rad,
