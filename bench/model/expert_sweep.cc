@@ -6,6 +6,7 @@
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
 // press_past, press_gate; show_damage=1 prints each damage episode.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -40,15 +41,8 @@ int main(int argc, char** argv) {
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);
   ves::bench::ApplyModelOverrides(get, &params);
-  ves::training::ExpertOperator::Settings expert;
-  expert.advance_speed_m_per_s = get("advance", expert.advance_speed_m_per_s);
-  expert.withdraw_speed_m_per_s = get("withdraw", expert.withdraw_speed_m_per_s);
-  expert.push_limit_N = get("push", expert.push_limit_N);
-  expert.pull_limit_N = get("pull", expert.pull_limit_N);
-  expert.loop_limit_m = get("loop_limit", expert.loop_limit_m);
-  expert.roll_rate_rad_per_s = get("roll_rate", expert.roll_rate_rad_per_s);
-  expert.settle_s = get("settle", expert.settle_s);
-  auto op = ves::training::MakeScriptedOperator(argv[2], params.dt_s, expert);
+  auto op = ves::training::MakeScriptedOperator(argv[2], params.dt_s,
+                                                ves::bench::ExpertSettingsWithOverrides(get));
   const double seconds = std::atof(argv[3]);
   // The cecum starts where the case's cecum region starts (else the end).
   double cecum_m = params.colon.points.back().arc_m;
@@ -139,10 +133,8 @@ int main(int argc, char** argv) {
       if (state.time_s - last_damage_s > thresholds.episode_merge_gap_s) {
         ++damage_events;
         if (get("show_damage", 0.0) != 0.0) {
-          int at = 0;
-          for (int i = 0; i < static_cast<int>(out.wall_force_N.size()); ++i) {
-            if (out.wall_force_N[i] > out.wall_force_N[at]) at = i;
-          }
+          const auto& wall = out.wall_force_N;
+          const auto at = std::max_element(wall.begin(), wall.end()) - wall.begin();
           std::printf("  damage t=%.2f %.1f N at arc %.3f region %d; tip %.3f inserted %.3f "
                       "hand %.1f N base %.1f N\n",
                       state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,

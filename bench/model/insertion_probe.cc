@@ -7,7 +7,7 @@
 // the "a loop forms" driver of the model tests. PROBE_* variables:
 //   PROBE_OPERATOR=novice|expert   a scripted operator drives instead
 //   PROBE_ADVANCE, PROBE_WITHDRAW, PROBE_PUSH, PROBE_PULL, PROBE_LOOP_LIMIT,
-//   PROBE_ROLL_RATE  the expert's settings (ExpertOperator::Settings)
+//   PROBE_ROLL_RATE, PROBE_SETTLE  the expert's settings (ExpertOperator::Settings)
 //   PROBE_WITHDRAW_AT=M            position rule: at M metres inserted, withdraw
 //   PROBE_WITHDRAW_M=W             ... by W metres (default 0.25)
 //   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
@@ -108,14 +108,8 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<ves::training::ScriptedOperator> scripted;
   if (const char* kind = std::getenv("PROBE_OPERATOR")) {
-    ves::training::ExpertOperator::Settings expert;
-    expert.advance_speed_m_per_s = EnvOr("PROBE_ADVANCE", expert.advance_speed_m_per_s);
-    expert.withdraw_speed_m_per_s = EnvOr("PROBE_WITHDRAW", expert.withdraw_speed_m_per_s);
-    expert.push_limit_N = EnvOr("PROBE_PUSH", expert.push_limit_N);
-    expert.pull_limit_N = EnvOr("PROBE_PULL", expert.pull_limit_N);
-    expert.loop_limit_m = EnvOr("PROBE_LOOP_LIMIT", expert.loop_limit_m);
-    expert.roll_rate_rad_per_s = EnvOr("PROBE_ROLL_RATE", expert.roll_rate_rad_per_s);
-    scripted = ves::training::MakeScriptedOperator(kind, params.dt_s, expert);
+    scripted = ves::training::MakeScriptedOperator(
+        kind, params.dt_s, ves::bench::ExpertSettingsWithOverrides(ves::bench::ProbeEnv));
   }
   const double withdraw_at_m = EnvOr("PROBE_WITHDRAW_AT", 1e9);
   const double withdraw_m = EnvOr("PROBE_WITHDRAW_M", 0.25);
@@ -290,10 +284,8 @@ int main(int argc, char** argv) {
     if (const double wall_over = EnvOr("PROBE_WALL", 0.0); wall_over > 0.0) {
       const bool over = out.peak_wall_force_N > wall_over;
       if (over && !wall_was_over) {
-        int at = 0;
-        for (int i = 0; i < static_cast<int>(out.wall_force_N.size()); ++i) {
-          if (out.wall_force_N[i] > out.wall_force_N[at]) at = i;
-        }
+        const auto& wall = out.wall_force_N;
+        const auto at = std::max_element(wall.begin(), wall.end()) - wall.begin();
         std::printf("  wall t=%.3f %.1f N at arc %.3f (region %d), tip %.3f, inserted %.3f, "
                     "base %.1f N, push in %.1f N, knobs %.2f/%.2f\n",
                     state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,

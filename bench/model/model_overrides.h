@@ -6,8 +6,9 @@
 #include <string>
 
 #include "station/model/model.h"
+#include "station/training/scripted_operator.h"
 
-// The model settings the probing tools override, by key, in one place so
+// The model (and scripted expert) settings the probing tools override, by key, in one place so
 // that expert_sweep (key=value arguments) and insertion_probe (PROBE_KEY
 // environment variables) cannot drift apart (docs/model-shortening-notes.md).
 // `get(key, fallback)` returns the override or the fallback.
@@ -59,6 +60,20 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   params->abdominal_pressure_stiffness_N_per_m2 =
       get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
   params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
+}
+
+// The scripted expert's settings by key: advance, withdraw, push, pull,
+// loop_limit, roll_rate, settle (ExpertOperator::Settings).
+inline training::ExpertOperator::Settings ExpertSettingsWithOverrides(const OverrideGetter& get) {
+  training::ExpertOperator::Settings expert;
+  expert.advance_speed_m_per_s = get("advance", expert.advance_speed_m_per_s);
+  expert.withdraw_speed_m_per_s = get("withdraw", expert.withdraw_speed_m_per_s);
+  expert.push_limit_N = get("push", expert.push_limit_N);
+  expert.pull_limit_N = get("pull", expert.pull_limit_N);
+  expert.loop_limit_m = get("loop_limit", expert.loop_limit_m);
+  expert.roll_rate_rad_per_s = get("roll_rate", expert.roll_rate_rad_per_s);
+  expert.settle_s = get("settle", expert.settle_s);
+  return expert;
 }
 
 // insertion_probe's getter: key "meso_k" is the variable PROBE_MESO_K.
