@@ -151,6 +151,16 @@ class BackgroundOfferer {
   std::thread thread_;
 };
 
+// Polls Reap (never blocking, as the interactive station does) until the
+// stream's own thread has ended it, for at most 10 s.
+bool ReapWithin10s(sync::LiveStreamer* streamer, sync::LiveStreamStats* stats) {
+  for (int i = 0; i < 1000; ++i) {
+    if (streamer->Reap(stats)) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 class WebLiveTest : public ::testing::Test {
  protected:
   static ServerOptions WithHttp() {
@@ -453,11 +463,7 @@ TEST_F(WebLiveTest, AStreamEndedInTheBackgroundEndsForTheViewer) {
   } while (!last.is_null() && !last.value("ended", false));
   EXPECT_EQ(last.value("ended", false), true) << last.dump();
   sync::LiveStreamStats stats;
-  bool reaped = false;
-  for (int i = 0; i < 1000 && !(reaped = streamer.Reap(&stats)); ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_TRUE(reaped) << "the stream's thread did not end";
+  ASSERT_TRUE(ReapWithin10s(&streamer, &stats)) << "the stream's thread did not end";
   EXPECT_GT(stats.sent, 0u);
   EXPECT_GE(stats.dropped, 1u);
   EXPECT_EQ(stats.last_error, "");
@@ -465,8 +471,8 @@ TEST_F(WebLiveTest, AStreamEndedInTheBackgroundEndsForTheViewer) {
   EXPECT_TRUE(LiveList(supervisor_).empty());
 }
 
-TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
-  // A port nothing listens on: the stream cannot start; offers only drop.
+// A loopback port nothing listens on: a stream to it cannot start.
+sync::ServerEndpoint ClosedPortEndpoint() {
   asio::io_context io;
   tcp::acceptor probe(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
   const int closed_port = probe.local_endpoint().port();
@@ -474,7 +480,12 @@ TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
   sync::ServerEndpoint endpoint;
   endpoint.address = "127.0.0.1:" + std::to_string(closed_port);
   endpoint.token = "0123456789abcdef";
-  sync::LiveStreamer streamer(endpoint, FirstFrame("u", "t1"));
+  return endpoint;
+}
+
+TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
+  // A port nothing listens on: the stream cannot start; offers only drop.
+  sync::LiveStreamer streamer(ClosedPortEndpoint(), FirstFrame("u", "t1"));
   for (int k = 0; k < 100; ++k) streamer.Offer(FrameAt(k));
   const sync::LiveStreamStats stats = streamer.Close(0);
   EXPECT_EQ(stats.sent, 0u);
@@ -482,22 +493,11 @@ TEST(LiveStreamerOffline, NeverBlocksAndCountsWhatItDrops) {
 }
 
 TEST(LiveStreamerOffline, RequestCloseLeavesTheEndToItsThread) {
-  asio::io_context io;
-  tcp::acceptor probe(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
-  const int closed_port = probe.local_endpoint().port();
-  probe.close();
-  sync::ServerEndpoint endpoint;
-  endpoint.address = "127.0.0.1:" + std::to_string(closed_port);
-  endpoint.token = "0123456789abcdef";
-  sync::LiveStreamer streamer(endpoint, FirstFrame("u", "t1"));
+  sync::LiveStreamer streamer(ClosedPortEndpoint(), FirstFrame("u", "t1"));
   for (int k = 0; k < 50; ++k) streamer.Offer(FrameAt(k));
   streamer.RequestClose();
   sync::LiveStreamStats stats;
-  bool reaped = false;
-  for (int i = 0; i < 1000 && !(reaped = streamer.Reap(&stats)); ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_TRUE(reaped) << "the stream's thread did not end";
+  ASSERT_TRUE(ReapWithin10s(&streamer, &stats)) << "the stream's thread did not end";
   EXPECT_EQ(stats.sent, 0u);
   EXPECT_EQ(stats.dropped, 50u);
   // Reaped: Close has nothing left to wait for.
