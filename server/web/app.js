@@ -293,7 +293,7 @@ async function sessionPage() {
   // The station's health during this session, flagged as on the stations page.
   const health = s.station_health;
   const healthNames = ['Device', 'Loop p99 / budget', 'Loop overruns', 'Safe state', 'CAN errors'];
-  const healthValues = health ? healthTexts(health) : ['not reported', '—', '—', '—', '—'];
+  const healthValues = healthTexts(health);
   const healthRows = [['Software', r.software_version || '—']];
   healthNames.forEach((name, i) => healthRows.push([name, healthValues[i]]));
   const healthDds = [];
@@ -375,8 +375,9 @@ async function auditPage() {
 }
 
 // A station's health (the API's shape, docs/web.md) as the texts of its
-// device, loop, overruns, safe-state and CAN figures.
+// device, loop, overruns, safe-state and CAN figures; null: not reported.
 function healthTexts(h) {
+  if (!h) return ['not reported', '—', '—', '—', '—'];
   const loop = h.loop_cycle_p99_us === null
       ? 'not timed (simulated time) / ' + h.loop_budget_us.toFixed(0) + ' µs'
       : h.loop_cycle_p99_us.toFixed(0) + ' / ' + h.loop_budget_us.toFixed(0) + ' µs';
@@ -408,7 +409,7 @@ async function stationsPage() {
       const h = s.health;
       const flags = new Set(s.flags);
       const cells = [s.station_id, when(s.last_seen_unix_ms), s.software_version || '—']
-          .concat(h ? healthTexts(h) : ['not reported', '—', '—', '—', '—']);
+          .concat(healthTexts(h));
       const tr = row(cells);
       tr.dataset.station = s.station_id;
       for (const [flag, [index, title]] of Object.entries(healthFlagWhy)) {
