@@ -158,7 +158,10 @@ class StationUi : public StationFixture {
         std::vector<std::string>{"/usr/bin/Xvfb", "-displayfd", "1", "-screen", "0",
                                  std::to_string(kScreen.width) + "x" +
                                      std::to_string(kScreen.height) + "x24",
-                                 "-nolisten", "tcp"},
+                                 // No server reset when xdotool, the first
+                                 // client, disconnects: a station connecting
+                                 // then could not reach the display (CI, once).
+                                 "-noreset", "-nolisten", "tcp"},
         dir_ / "xvfb");
     for (int i = 0; i < 250 && display_.empty(); ++i) {
       std::string number = ReadFile(dir_ / "xvfb.out");
@@ -179,6 +182,9 @@ class StationUi : public StationFixture {
   }
   void TearDown() override {
     station_.reset();
+    // SIGTERM lets Xvfb remove its lock file and socket before the next
+    // test's server looks for a free display number.
+    if (xvfb_) xvfb_->Stop(seconds(10));
     xvfb_.reset();
     if (xvfb_lock_fd_ >= 0) ::close(xvfb_lock_fd_);  // releases the lock
     StationFixture::TearDown();
@@ -195,6 +201,11 @@ class StationUi : public StationFixture {
   }
 
   void StartStation(std::vector<std::string> args) {
+    // The display still answers (else the failure names Xvfb, not the station).
+    const ProcessResult alive = X({"xdotool", "getdisplaygeometry"});
+    ASSERT_EQ(alive.exit_code, 0) << "display " << display_ << " stopped answering before the station started; Xvfb "
+                                  << (xvfb_->Running() ? "is still running" : "has exited") << ": "
+                                  << ReadFile(dir_ / "xvfb.err") << alive.err;
     args.insert(args.begin(), kStationBin);
     station_ = std::make_unique<ChildProcess>(args, dir_ / "interactive",
                                               std::vector<std::string>{"DISPLAY=" + display_});
@@ -204,6 +215,11 @@ class StationUi : public StationFixture {
     args[0] = "/usr/bin/" + args[0];
     return RunProgram(args, dir_ / ("x-" + std::to_string(++log_counter_)),
                       {"DISPLAY=" + display_}, seconds(30));
+  }
+  // The station's errors and the X server's state, for a window that never came.
+  std::string WhyNoWindow() {
+    return ReadFile(dir_ / "interactive.err") + "\nXvfb on " + display_ +
+           (xvfb_->Running() ? " is running" : " has exited") + "; its log:\n" + ReadFile(dir_ / "xvfb.err");
   }
   std::string WindowId() {
     for (int i = 0; i < 150; ++i) {
@@ -301,7 +317,7 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
                 data.string(), "--seconds", "90"});
   const std::string window = WindowId();
-  ASSERT_FALSE(window.empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(window.empty()) << WhyNoWindow();
   const cv::Mat start = WaitForScreen();
   ASSERT_FALSE(start.empty());
 
@@ -467,7 +483,7 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   CacheCase(data, (fs::path(VES_SOURCE_DIR) / "patient_db/cases/paper-sigmoid.textproto").string());
   StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
                 data.string(), "--seconds", "120"});
-  ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
 
   // The panel's ">" next to the case: the case name changes, nothing else.
   const cv::Mat before = WaitForScreen();
@@ -484,7 +500,7 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   ASSERT_TRUE(WaitForOutput(dir_ / "interactive.out", "switched to case paper-sigmoid"))
       << ReadFile(dir_ / "interactive.out") << ReadFile(dir_ / "interactive.err");
   std::this_thread::sleep_for(kSettle);
-  ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   Keys({"q"});
   const ProcessResult quit = station_->Wait(seconds(60));
   EXPECT_NE(quit.out.find("switched to case paper-sigmoid"), std::string::npos)
@@ -526,7 +542,7 @@ TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) 
   const fs::path data = dir_ / "station";
   StartStation({"run", "--trainee", "trainee-ui", "--lesson", "next", "--server", address_,
                 "--token", station_token_, "--data-dir", data.string(), "--seconds", "120"});
-  ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
 
   // f: X-ray on (in a free run this changes the X-ray area, test above); 1:
   // wire-frame view. Neither the X-ray area nor the view-mode buttons change.
@@ -563,7 +579,7 @@ TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
   const fs::path data = dir_ / "station";
   StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--server", address_,
                 "--token", station_token_, "--data-dir", data.string(), "--seconds", "45"});
-  ASSERT_FALSE(WindowId().empty()) << ReadFile(dir_ / "interactive.err");
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   ASSERT_FALSE(WaitForScreen().empty());
   // The uuids of the sessions the server lists as live now.
   std::string last_list;  // the last answer, for failure messages
