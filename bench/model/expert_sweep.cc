@@ -5,7 +5,8 @@
 // Keys: the model's (bench/model/model_overrides.h: mu, soft_k, meso_k,
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
-// press_past, press_gate; show_damage=1 prints each damage episode.
+// press_past, press_gate; show_damage=1 prints each damage episode,
+// show_over10=1 the base force over 10 N, trace_from=T 12 steps from T.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,30 @@
 #include "station/training/metric_thresholds.h"
 #include "station/training/scripted_operator.h"
 #include "station/training/session_runner.h"
+
+namespace {
+
+// One step of trace_from=T: the largest wall force and where, and every
+// sample tracked within 4 segments of it (a sample changing segment from step
+// to step shows up here).
+void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::ModelState& state,
+                    const ves::model::StepOutput& out, double hand_N) {
+  const auto& wall = out.wall_force_N;
+  const int at = static_cast<int>(std::max_element(wall.begin(), wall.end()) - wall.begin());
+  std::printf("  trace t=%.3f base %.2f N hand %.2f N thrust %+.1f um; wall %.2f N at point %d (arc %.3f)\n",
+              state.time_s, out.base_force_N, hand_N, 1e6 * state.insertion_rate_m_per_s * params.dt_s,
+              out.peak_wall_force_N, at, params.colon.points[at].arc_m);
+  std::printf("     sample:segment(t, touching)");
+  for (int i = state.first_inside_sample; i < static_cast<int>(state.contact.size()); ++i) {
+    const auto& c = state.contact[i];
+    if (std::abs(c.segment - at) <= 4) {
+      std::printf(" %d:%d(%.2f,%s)", i, c.segment, c.segment_t, c.touching ? "T" : "-");
+    }
+  }
+  std::printf("\n");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 4) {
@@ -87,6 +112,12 @@ int main(int argc, char** argv) {
     if (region_first[r] < 0) region_first[r] = i;
     region_last[r] = i;
   }
+  // trace_from=T: 12 steps from T, each with the point of the largest wall
+  // force and the samples tracked near it; show_over10=1: a line every 0.5 s
+  // while the base force is over 10 N.
+  const double trace_from_s = get("trace_from", 1e9);
+  const bool show_over10 = get("show_over10", 0.0) != 0.0;
+  double last_over10_shown_s = -1.0;
   bool pressing[9] = {false};
   double press_from_s[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
   while (state.time_s < seconds) {
@@ -120,12 +151,23 @@ int main(int argc, char** argv) {
       std::printf("%s %s %s diverged at %.3f\n", argv[1], argv[2], tag.c_str(), state.time_s);
       return 1;
     }
+    if (state.time_s >= trace_from_s && state.time_s < trace_from_s + 0.012) {
+      PrintStepTrace(params, state, out, sample.push_force_N);
+    }
     const double f = std::abs(out.base_force_N);
     window_sum += f - window[wi];
     window[wi] = f;
     wi = (wi + 1) % 10;
     peak_force = std::max(peak_force, window_sum / 10.0);
-    if (f > 10.0) ++over10;
+    if (f > 10.0) {
+      ++over10;
+      if (show_over10 && state.time_s - last_over10_shown_s > 0.5) {
+        last_over10_shown_s = state.time_s;
+        std::printf("  over10 t=%.3f base %.1f N hand %.1f N rate %.3f m/s inserted %.3f tip %.3f wall %.1f\n",
+                    state.time_s, out.base_force_N, sample.push_force_N, state.insertion_rate_m_per_s,
+                    state.inserted_m, state.tip_arc_m, out.peak_wall_force_N);
+      }
+    }
     ++steps;
     peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
     peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);

@@ -39,5 +39,45 @@ TEST(ContactGeometry, ASampleOnATiltedSegmentsAxisIsOnTheAxis) {
   EXPECT_NEAR(off.normal.dot(point.plane_v), 1.0, kTolerance_m);
 }
 
+// Tracking (docs/model.md, "Contact"): a sample changes segment only once it
+// is kTrackingHysteresis_m past the plane between them, so a sample sitting on
+// a plane that the colon carries back and forth keeps its segment (and the
+// colon points that take its load), while a sample that moves on is followed.
+TEST(ContactGeometry, ASampleChangesSegmentOnlyOnceClearlyPastThePlane) {
+  ModelParams params;
+  params.colon = testing::MakeStraightTube(0.5, 0.01, 0.02, TissueParams{});
+  const ModelState state = MakeInitialState(params);
+  const int window = params.contact_search_window;
+  const ColonPoint& plane = params.colon.points[11];
+  const Eigen::Vector3d side = 0.005 * plane.plane_u;  // 5 mm off the axis
+  const auto at = [&](double past_plane_m) {
+    return Eigen::Vector3d(plane.rest_position_m + side + past_plane_m * state.colon_tangent[11]);
+  };
+  const double h = internal::kTrackingHysteresis_m;
+  SampleContact c;
+  c.segment = 10;
+  for (int i = 0; i < 10; ++i) {  // on the plane, back and forth
+    internal::TrackSegment(state, window, at(i % 2 == 0 ? 0.5 * h : -0.5 * h), &c);
+    EXPECT_EQ(c.segment, 10) << "step " << i;
+  }
+  // Within the margin the sample is measured in the plane it is past: on a
+  // straight tube the hit from either segment is the same.
+  const internal::SegmentHit kept = internal::CalcSegmentHit(params, state, 10, at(0.5 * h));
+  const internal::SegmentHit next = internal::CalcSegmentHit(params, state, 11, at(0.5 * h));
+  EXPECT_EQ(kept.t, 1.0);
+  EXPECT_NEAR(kept.penetration_m, next.penetration_m, kTolerance_m);
+  EXPECT_NEAR(kept.normal.dot(next.normal), 1.0, kTolerance_m);
+
+  internal::TrackSegment(state, window, at(2.0 * h), &c);
+  EXPECT_EQ(c.segment, 11);
+  internal::TrackSegment(state, window, at(-0.5 * h), &c);
+  EXPECT_EQ(c.segment, 11);
+  internal::TrackSegment(state, window, at(-2.0 * h), &c);
+  EXPECT_EQ(c.segment, 10);
+  // A sample that moved on three segments is followed in one call.
+  internal::TrackSegment(state, window, at(0.03 + 0.5 * 0.01), &c);
+  EXPECT_EQ(c.segment, 14);
+}
+
 }  // namespace
 }  // namespace ves::model

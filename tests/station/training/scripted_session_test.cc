@@ -56,22 +56,28 @@ TEST_P(SkillSeparation, ExpertLoopsNoMoreAndUsesNoXrayEarly) {
   EXPECT_EQ(replayed, p.expert);
 }
 
-// Issue #17's acceptance criterion where the model meets it: within 400 s
-// the expert reaches the cecum and the novice (push only) does not. On redundant-sigmoid the
-// expert does not reach the cecum yet (docs/scoring.md, "Known gaps").
+// Issue #17's acceptance criterion where the model meets it: within 600 s
+// (the issue's limit) the expert reaches the cecum and the novice (push only)
+// does not. On redundant-sigmoid the expert does not reach the cecum yet
+// (docs/scoring.md, "Known gaps").
 class CecumReached : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(CecumReached, ExpertReachesTheCecumAndTheNoviceDoesNot) {
-  const Pair p = RunBoth(GetParam(), 400.0);
+  const Pair p = RunBoth(GetParam(), 600.0);
   ASSERT_EQ(p.expert.outcome, Outcome::kCecumReached) << SummaryLine(p.expert);
   EXPECT_NE(p.novice.outcome, Outcome::kCecumReached) << SummaryLine(p.novice);
   // Within the cecum lessons' pain limit (30 s), with less time in a loop
   // and a higher score. (On mobile-descending the novice, stuck in a loop in
-  // the transverse, hurts less than 1 s. The expert still passes
-  // the 14 N damage level 2-5 times: docs/scoring.md.)
+  // the transverse, hurts less than 1 s.)
   EXPECT_LT(p.expert.metrics.pain_s, 30.0);
   EXPECT_LT(p.expert.metrics.loop_s, p.novice.metrics.loop_s);
   EXPECT_GT(p.expert.score, p.novice.score);
+  // On standard-adult without passing the 14 N damage level. On
+  // mobile-descending it still passes it once or twice where the colon kinks
+  // at the rectosigmoid (docs/model.md, "Known limits").
+  if (std::string(GetParam()) == "standard-adult") {
+    EXPECT_EQ(p.expert.metrics.damage_events, 0u) << SummaryLine(p.expert);
+  }
   const RunResult replayed = ReplayRecord(DecodeSessionFile(EncodeSessionFile(p.expert_record)));
   EXPECT_EQ(replayed, p.expert);
 }
