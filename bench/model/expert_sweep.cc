@@ -7,6 +7,8 @@
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
 // press_past, press_gate; show_damage=1 prints each damage episode,
 // show_over10=1 the base force over 10 N, trace_from=T 12 steps from T.
+// The line gives the roll torque's peak, its 10 ms mean's peak (the force
+// metric's resolution) and roll_over1, the share of steps over 1 N·m.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +36,15 @@ void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::Mod
   std::printf("  trace t=%.3f base %.2f N hand %.2f N thrust %+.1f um; wall %.2f N at point %d (arc %.3f)\n",
               state.time_s, out.base_force_N, hand_N, 1e6 * state.insertion_rate_m_per_s * params.dt_s,
               out.peak_wall_force_N, at, params.colon.points[at].arc_m);
+  std::printf("     point: angle between its tangent and the next one's, now/at rest (deg), moved (mm):");
+  for (int m = std::max(at - 3, 0); m <= std::min<int>(at + 2, state.colon_tangent.size() - 2); ++m) {
+    const auto& pts = params.colon.points;
+    const double now = std::acos(std::clamp(state.colon_tangent[m].dot(state.colon_tangent[m + 1]), -1.0, 1.0));
+    const double rest = std::acos(std::clamp(pts[m].rest_tangent.dot(pts[m + 1].rest_tangent), -1.0, 1.0));
+    std::printf(" %d:%.0f/%.0f,%.1f", m, now * 57.2958, rest * 57.2958,
+                1e3 * (state.p_WColon[m] - pts[m].rest_position_m).norm());
+  }
+  std::printf("\n");
   std::printf("     sample:segment(t, touching)");
   for (int i = state.first_inside_sample; i < static_cast<int>(state.contact.size()); ++i) {
     const auto& c = state.contact[i];
@@ -100,6 +111,10 @@ int main(int argc, char** argv) {
   double peak_wall_N = 0.0, last_damage_s = -1e9;
   double window_sum = 0.0;  // 10 ms mean of |force|
   double window[10] = {0};
+  // The roll torque likewise: its peak, its 10 ms mean's peak, steps over 1 N·m.
+  double roll_window_sum = 0.0, roll_window[10] = {0}, peak_roll_10ms = 0.0;
+  int wi_roll = 0;
+  long roll_over1 = 0;
   int wi = 0;
   double pull_s = 0.0, reduced_to_m = 0.0;
   // press_gate > 0: the assistant presses a region (from then on) once its
@@ -170,6 +185,11 @@ int main(int argc, char** argv) {
     }
     ++steps;
     peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
+    roll_window_sum += std::abs(out.roll_torque_Nm) - roll_window[wi_roll];
+    roll_window[wi_roll] = std::abs(out.roll_torque_Nm);
+    wi_roll = (wi_roll + 1) % 10;
+    if (std::abs(out.roll_torque_Nm) > 1.0) ++roll_over1;
+    peak_roll_10ms = std::max(peak_roll_10ms, roll_window_sum / 10.0);
     peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);
     if (out.peak_wall_force_N > thresholds.damage_wall_force_N) {
       if (state.time_s - last_damage_s > thresholds.episode_merge_gap_s) {
@@ -199,10 +219,11 @@ int main(int argc, char** argv) {
   }
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
-              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_wall=%.1f damage=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
+              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_roll_10ms=%.2f roll_over1=%.2f%% peak_wall=%.1f damage=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
               "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
-              100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_wall_N, damage_events, 1e3 * peak_fixed,
+              100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_roll_10ms,
+              100.0 * roll_over1 / std::max(1L, steps), peak_wall_N, damage_events, 1e3 * peak_fixed,
               pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
   return 0;
 }
