@@ -5,6 +5,24 @@
 #include "station/model/internal.h"
 
 namespace ves::model::internal {
+namespace {
+
+// Normal of the lumen's plane at point i for the contacts: the tube's
+// direction over two points each way (the chords i-1..i+1 and i-2..i+2), from
+// the current positions. With one point each way, where the pulled sigmoid
+// folded against the fixed rectum, neighbouring planes stood 80-90 degrees
+// apart and crossed inside the lumen; a scope sample there changed segment in
+// a 5-step cycle and a colon point held it as a ring with 14-16 N on two steps
+// of five (mobile-descending, 2026-12-02; docs/model.md, "Contact").
+Eigen::Vector3d LumenNormal(const ModelState& s, int i) {
+  const int N = static_cast<int>(s.p_WColon.size());
+  const Eigen::Vector3d chord = s.p_WColon[std::min(i + 1, N - 1)] - s.p_WColon[std::max(i - 1, 0)] +
+                                s.p_WColon[std::min(i + 2, N - 1)] - s.p_WColon[std::max(i - 2, 0)];
+  const double length = chord.norm();
+  return length > 1e-12 ? Eigen::Vector3d(chord / length) : s.colon_tangent[i];
+}
+
+}  // namespace
 
 WallResponse CalcWallResponse(const TissueParams& tissue, double hardening_ratio, double l_m) {
   WallResponse r;
@@ -38,8 +56,8 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   const ColonPoint& B = pts[k + 1];
   const Eigen::Vector3d pa = p - s.p_WColon[k];
   const Eigen::Vector3d pb = p - s.p_WColon[k + 1];
-  const Eigen::Vector3d& ta = s.colon_tangent[k];
-  const Eigen::Vector3d& tb = s.colon_tangent[k + 1];
+  const Eigen::Vector3d ta = LumenNormal(s, k);
+  const Eigen::Vector3d tb = LumenNormal(s, k + 1);
   const double da = pa.dot(ta);   // >= 0 past plane k
   const double db = pb.dot(tb);   // < 0 before plane k+1
   SegmentHit hit;
@@ -82,8 +100,8 @@ void TrackSegment(const ModelState& s, int window, const Eigen::Vector3d& p, Sam
   int k = std::clamp(c->segment, 0, segments - 1);
   int direction = 0;
   for (int step = 0; step < window; ++step) {
-    const double past_next = (p - s.p_WColon[k + 1]).dot(s.colon_tangent[k + 1]);
-    const double past_this = (p - s.p_WColon[k]).dot(s.colon_tangent[k]);
+    const double past_next = (p - s.p_WColon[k + 1]).dot(LumenNormal(s, k + 1));
+    const double past_this = (p - s.p_WColon[k]).dot(LumenNormal(s, k));
     if (past_next >= kTrackingHysteresis_m && k + 1 < segments && direction >= 0) {
       ++k;
       direction = 1;

@@ -71,7 +71,7 @@ struct PairAxial {
 PairAxial CalcPairAxial(const ModelParams& params, double pleat_limit, double strain);
 
 // Moves a sample's tracked segment toward p by at most `window` segments,
-// plane by plane (the planes normal to the current tangents); it crosses a
+// plane by plane (the lumen planes of CalcSegmentHit); it crosses a
 // plane only once p is kTrackingHysteresis_m past it (contact.cc says why).
 constexpr double kTrackingHysteresis_m = 0.001;
 void TrackSegment(const ModelState& state, int window, const Eigen::Vector3d& p,
