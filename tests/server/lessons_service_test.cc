@@ -125,8 +125,8 @@ class Lessons : public ::testing::Test {
     return r.trainees_size() == 1 ? r.trainees(0) : ves::v1::TraineeProgress{};
   }
 
-  // Polls GetLessonVerdict until the judge has recorded one (up to 60 s).
-  // Polls every 100 ms for up to `polls` (the judge replays the session first).
+  // Polls GetLessonVerdict every 100 ms until the judge has recorded one, at
+  // most `polls` times (60 s by default; the judge replays the session first).
   ves::v1::LessonVerdict WaitForVerdict(const std::string& uuid, int polls = 600) {
     for (int i = 0; i < polls; ++i) {
       grpc::ClientContext ctx;
@@ -377,9 +377,9 @@ TEST_F(Lessons, ExpertPassesTheCecumLessonsOfThePaperSigmoidAndProgressMovesOn) 
 // standard-adult and of mobile-descending within the lessons' 480 s (at
 // about 229 s and 275 s), with no damage and under 30 s of pain, and the
 // server's judge, replaying each session (minutes of simulated time, so the
-// verdict may take a while), passes both; after them the trainee's next
-// lesson is the redundant sigmoid. (The novice reaches neither cecum in
-// 600 s: CecumReached.ExpertReachesTheCecumAndTheNoviceDoesNot.)
+// verdict may take a while), passes both, and progress shows them completed.
+// (The novice reaches neither cecum in 600 s:
+// CecumReached.ExpertReachesTheCecumAndTheNoviceDoesNot.)
 TEST_F(Lessons, ExpertPassesTheFullColonLessons) {
   ves::v1::CreateCurriculumResponse created;
   ASSERT_TRUE(Create(supervisor_, ShippedCurriculum(), &created).ok());
