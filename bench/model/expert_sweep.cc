@@ -31,8 +31,7 @@ namespace {
 // to step shows up here).
 void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::ModelState& state,
                     const ves::model::StepOutput& out, double hand_N) {
-  const auto& wall = out.wall_force_N;
-  const int at = static_cast<int>(std::max_element(wall.begin(), wall.end()) - wall.begin());
+  const int at = ves::bench::LargestWallForcePoint(out);
   std::printf("  trace t=%.3f base %.2f N hand %.2f N thrust %+.1f um; wall %.2f N at point %d (arc %.3f)\n",
               state.time_s, out.base_force_N, hand_N, 1e6 * state.insertion_rate_m_per_s * params.dt_s,
               out.peak_wall_force_N, at, params.colon.points[at].arc_m);
@@ -109,13 +108,11 @@ int main(int argc, char** argv) {
   const ves::training::MetricThresholds thresholds;
   int damage_events = 0;
   double peak_wall_N = 0.0, last_damage_s = -1e9;
-  double window_sum = 0.0;  // 10 ms mean of |force|
-  double window[10] = {0};
+  ves::bench::TenStepMean force_10ms;  // of |force|
   // The roll torque likewise: its peak, its 10 ms mean's peak, steps over 1 N·m.
-  double roll_window_sum = 0.0, roll_window[10] = {0}, peak_roll_10ms = 0.0;
-  int wi_roll = 0;
+  ves::bench::TenStepMean roll_10ms;
+  double peak_roll_10ms = 0.0;
   long roll_over1 = 0;
-  int wi = 0;
   double pull_s = 0.0, reduced_to_m = 0.0;
   // press_gate > 0: the assistant presses a region (from then on) once its
   // path is within press_gate times its chord (it has been straightened).
@@ -170,10 +167,7 @@ int main(int argc, char** argv) {
       PrintStepTrace(params, state, out, sample.push_force_N);
     }
     const double f = std::abs(out.base_force_N);
-    window_sum += f - window[wi];
-    window[wi] = f;
-    wi = (wi + 1) % 10;
-    peak_force = std::max(peak_force, window_sum / 10.0);
+    peak_force = std::max(peak_force, force_10ms.Add(f));
     if (f > 10.0) {
       ++over10;
       if (show_over10 && state.time_s - last_over10_shown_s > 0.5) {
@@ -185,18 +179,14 @@ int main(int argc, char** argv) {
     }
     ++steps;
     peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
-    roll_window_sum += std::abs(out.roll_torque_Nm) - roll_window[wi_roll];
-    roll_window[wi_roll] = std::abs(out.roll_torque_Nm);
-    wi_roll = (wi_roll + 1) % 10;
     if (std::abs(out.roll_torque_Nm) > 1.0) ++roll_over1;
-    peak_roll_10ms = std::max(peak_roll_10ms, roll_window_sum / 10.0);
+    peak_roll_10ms = std::max(peak_roll_10ms, roll_10ms.Add(std::abs(out.roll_torque_Nm)));
     peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);
     if (out.peak_wall_force_N > thresholds.damage_wall_force_N) {
       if (state.time_s - last_damage_s > thresholds.episode_merge_gap_s) {
         ++damage_events;
         if (get("show_damage", 0.0) != 0.0) {
-          const auto& wall = out.wall_force_N;
-          const auto at = std::max_element(wall.begin(), wall.end()) - wall.begin();
+          const int at = ves::bench::LargestWallForcePoint(out);
           std::printf("  damage t=%.2f %.1f N at arc %.3f region %d; tip %.3f inserted %.3f "
                       "hand %.1f N base %.1f N\n",
                       state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,

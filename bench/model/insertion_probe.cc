@@ -150,9 +150,8 @@ int main(int argc, char** argv) {
   int spikes_printed = 0;
   const bool spike_detail = std::getenv("PROBE_SPIKE_DETAIL") != nullptr;
   bool wall_was_over = false;
-  double base_jump_sum_N = 0.0, last_base_N = 0.0, base_window_sum_N = 0.0;
-  double base_window_N[10] = {0};
-  int base_window_at = 0;
+  double base_jump_sum_N = 0.0, last_base_N = 0.0;
+  ves::bench::TenStepMean base_10ms_N;
   long over_10N_mean_steps = 0;
   ves::model::ModelState previous = state, before_previous = state;
   while (state.time_s < seconds) {
@@ -284,8 +283,7 @@ int main(int argc, char** argv) {
     if (const double wall_over = EnvOr("PROBE_WALL", 0.0); wall_over > 0.0) {
       const bool over = out.peak_wall_force_N > wall_over;
       if (over && !wall_was_over) {
-        const auto& wall = out.wall_force_N;
-        const auto at = std::max_element(wall.begin(), wall.end()) - wall.begin();
+        const int at = ves::bench::LargestWallForcePoint(out);
         std::printf("  wall t=%.3f %.1f N at arc %.3f (region %d), tip %.3f, inserted %.3f, "
                     "base %.1f N, push in %.1f N, knobs %.2f/%.2f\n",
                     state.time_s, out.peak_wall_force_N, params.colon.points[at].arc_m,
@@ -302,10 +300,7 @@ int main(int argc, char** argv) {
     // Chatter of the base force: step-to-step change, and the 10 ms mean.
     base_jump_sum_N += std::abs(out.base_force_N - last_base_N);
     last_base_N = out.base_force_N;
-    base_window_sum_N += out.base_force_N - base_window_N[base_window_at];
-    base_window_N[base_window_at] = out.base_force_N;
-    base_window_at = (base_window_at + 1) % 10;
-    if (std::abs(base_window_sum_N / 10.0) > 10.0) ++over_10N_mean_steps;
+    if (std::abs(base_10ms_N.Add(out.base_force_N)) > 10.0) ++over_10N_mean_steps;
     for (int t = 0; t < 4; ++t) {
       if (out.peak_stretch_m > 0.01 * (t + 1)) stretch_over_s[t] += params.dt_s;
     }

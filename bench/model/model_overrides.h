@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <functional>
@@ -82,6 +83,29 @@ inline double ProbeEnv(const char* key, double fallback) {
   for (const char* c = key; *c != '\0'; ++c) name += static_cast<char>(std::toupper(*c));
   const char* value = std::getenv(name.c_str());
   return value != nullptr ? std::atof(value) : fallback;
+}
+
+// The mean of the last 10 values added (zeros before that): a 10 ms mean at
+// the 1 ms step, the resolution the session metrics give a hand's force.
+class TenStepMean {
+ public:
+  double Add(double value) {
+    sum_ += value - last_[next_];
+    last_[next_] = value;
+    next_ = (next_ + 1) % 10;
+    return sum_ / 10.0;
+  }
+
+ private:
+  double sum_{0.0};
+  double last_[10]{};
+  int next_{0};
+};
+
+// The colon point that carries the largest wall force this step.
+inline int LargestWallForcePoint(const model::StepOutput& out) {
+  const auto& wall = out.wall_force_N;
+  return static_cast<int>(std::max_element(wall.begin(), wall.end()) - wall.begin());
 }
 
 }  // namespace ves::bench
