@@ -6,6 +6,7 @@
 #   bench/model/expert_robustness.sh [BUILD_DIR] [SECONDS] [key=value ...]
 # Further key=value pairs (expert_sweep's keys) go to every run.
 # VES_JOBS runs that many at once (default 1). About 15-40 s of CPU per run.
+# VES_CASES names the shipped cases (default: standard-adult mobile-descending).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-$root/build}"
@@ -17,7 +18,7 @@ sweep="${EXPERT_SWEEP:-$build/bench/model/expert_sweep}"
 # The expert's defaults (ExpertOperator::Settings); settle_s is 0, so it has no ±20 %.
 declare -A base=([advance]=0.01 [withdraw]=0.01 [push]=8 [pull]=8 [loop_limit]=0.10 [roll_rate]=0.5)
 runs=()
-for c in standard-adult mobile-descending; do
+for c in ${VES_CASES:-standard-adult mobile-descending}; do
   runs+=("$root/patient_db/cases/$c.textproto defaults=1 $seconds")
   for k in advance withdraw push pull loop_limit roll_rate; do
     for f in 0.8 1.2; do

@@ -54,6 +54,11 @@ void BM_Step(benchmark::State& bench, int links, int segments) {
   }
   bench.counters["contacts"] = out.contact_count;
   bench.counters["samples"] = static_cast<double>(state.samples.size());
+  // Colon points away from rest (the solver skips the rest of them).
+  int displaced = 0;
+  for (const auto& d : state.colon_displacement_m) displaced += d.cwiseAbs().maxCoeff() > 1e-7;
+  bench.counters["displaced"] = displaced;
+  bench.counters["points"] = static_cast<double>(params.colon.points.size());
 }
 
 // Paper §3.6: 5 movable joints (4 bending + the base) and 150 segments.

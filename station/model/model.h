@@ -61,8 +61,10 @@ struct ModelParams {
   // this time constant (the gathered colon stays on the scope), and returns
   // to its natural rest length with the release time constant once no longer
   // shortened. 0: never (the gap's rest length stays the natural one).
-  double colon_pleat_set_s{2.0};
-  double colon_pleat_release_s{60.0};
+  // Set fast and released over about a procedure's length, a reduced colon
+  // stays gathered while the scope re-advances (docs/model.md).
+  double colon_pleat_set_s{0.5};
+  double colon_pleat_release_s{600.0};
   // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
   // full pressure a pressed region's points are held within the slack of
   // their mesentery root with this stiffness per metre of colon.

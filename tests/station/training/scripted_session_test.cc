@@ -58,8 +58,7 @@ TEST_P(SkillSeparation, ExpertLoopsNoMoreAndUsesNoXrayEarly) {
 
 // Issue #17's acceptance criterion where the model meets it: within 600 s
 // (the issue's limit) the expert reaches the cecum and the novice (push only)
-// does not. On redundant-sigmoid the expert does not reach the cecum yet
-// (docs/scoring.md, "Known gaps").
+// does not. redundant-sigmoid has its own test below.
 class CecumReached : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(CecumReached, ExpertReachesTheCecumAndTheNoviceDoesNot) {
@@ -75,6 +74,24 @@ TEST_P(CecumReached, ExpertReachesTheCecumAndTheNoviceDoesNot) {
   // Without passing the 14 N damage level (docs/scoring.md), and within
   // 10 N at the hand (10 ms means) for the whole run.
   EXPECT_EQ(p.expert.metrics.damage_events, 0u) << SummaryLine(p.expert);
+  EXPECT_LE(p.expert.metrics.peak_insertion_force_N, 10.0) << SummaryLine(p.expert);
+  const RunResult replayed = ReplayRecord(DecodeSessionFile(EncodeSessionFile(p.expert_record)));
+  EXPECT_EQ(replayed, p.expert);
+}
+
+// The redundant sigmoid (1.833 m to the cecum) is longer than the scope
+// (1.68 m): the expert gets there only because the sigmoid it reduces stays
+// gathered. Not asserted, because the model does not meet them yet
+// (docs/scoring.md, "Known gaps"): no damage (the withdrawals press the
+// rectosigmoid corner with 14-16 N), the 30 s pain limit, and so a score
+// above the novice's (the expert's is 0: 10 points off per damage event).
+TEST(CecumReachedOnTheRedundantSigmoid, ExpertReachesTheCecumAndTheNoviceDoesNot) {
+  const Pair p = RunBoth("redundant-sigmoid", 600.0);
+  ASSERT_EQ(p.expert.outcome, Outcome::kCecumReached) << SummaryLine(p.expert);
+  EXPECT_NE(p.novice.outcome, Outcome::kCecumReached) << SummaryLine(p.novice);
+  // The colon shortened onto the scope: the tip is deeper along the colon
+  // than the scope is long.
+  EXPECT_GT(p.expert.metrics.max_tip_arc_m, DefaultEndoscopeSpec().working_length_m());
   EXPECT_LE(p.expert.metrics.peak_insertion_force_N, 10.0) << SummaryLine(p.expert);
   const RunResult replayed = ReplayRecord(DecodeSessionFile(EncodeSessionFile(p.expert_record)));
   EXPECT_EQ(replayed, p.expert);
