@@ -1,8 +1,8 @@
 // Live notices between replicas (server/live_notice.h): what one replica
 // NOTIFYs the others is parsed as untrusted input, so every malformed or
 // oversize payload is refused naming what was wrong; remote sessions in the
-// hub (listed, watched, ended, expired; never over a local one). No
-// database: docs/web.md.
+// hub (listed, watched, ended, expired; never over a local one); the relay
+// ignores its own replica's notices. No database: docs/web.md.
 #include "server/live_notice.h"
 
 #include <gtest/gtest.h>
@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "server/live_hub.h"
+#include "server/live_pg_relay.h"
 
 namespace ves::server {
 namespace {
@@ -318,6 +319,23 @@ TEST(LiveHubRemote, RemoteSessionsAreBounded) {
   EXPECT_FALSE(hub.ApplyRemote(n));
   std::string why;
   EXPECT_TRUE(hub.Begin(Info(), &why)) << "local streams have their own bound: " << why;
+}
+
+// A relay that is never started (no database): its listener's handling of
+// payloads.
+TEST(LivePgRelay, IgnoresItsOwnNoticesAndCountsRefusals) {
+  LiveHub hub;
+  LivePgRelay relay(LivePgRelayOptions{}, &hub);
+  relay.OnNotification(Encode(Notice(LiveNoticeKind::kBegin, relay.replica_id())));
+  EXPECT_TRUE(hub.List("").empty()) << "its own notice";
+  relay.OnNotification(Encode(Notice(LiveNoticeKind::kBegin, "0123456789abcdef")));
+  EXPECT_EQ(hub.List("").size(), 1u);
+  relay.OnNotification("{\"v\":1,\"kind\":\"frame\"}");
+  relay.OnNotification("\x01\x02 garbage");
+  const LivePgRelay::Stats s = relay.stats();
+  EXPECT_EQ(s.received, 1u);
+  EXPECT_EQ(s.refused, 2u);
+  EXPECT_EQ(relay.replica_id().size(), 16u);
 }
 
 }  // namespace
