@@ -422,5 +422,61 @@ TEST_F(LiveReplicas, RelaysReconnectAfterTheDatabaseDropsTheirConnections) {
   EXPECT_NE(log_a.find("publishing to PostgreSQL again"), std::string::npos) << log_a;
 }
 
+// Many stations on one replica at once (VES_LIVE_STATIONS, default 20, for
+// VES_LIVE_SECONDS, default 3): the other replica lists every one, a viewer
+// there keeps up (latency printed), and the publisher drops nothing.
+TEST_F(LiveReplicas, ManyStationsOnOneReplicaAllReachTheOtherWithoutDrops) {
+  const char* n_env = std::getenv("VES_LIVE_STATIONS");
+  const char* s_env = std::getenv("VES_LIVE_SECONDS");
+  const int stations = n_env != nullptr ? std::atoi(n_env) : 20;
+  const int seconds = s_env != nullptr ? std::atoi(s_env) : 3;
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  ASSERT_TRUE(WaitRelayConnections("listen", 2));
+  std::mt19937_64 rng(29);
+  std::vector<std::string> uuids;
+  std::vector<std::unique_ptr<StreamingStation>> streams;
+  for (int i = 0; i < stations; ++i) {
+    uuids.push_back(NewUuid(rng));
+    streams.push_back(std::make_unique<StreamingStation>(Client(a), uuids.back()));
+  }
+  const auto listed_on_b = [&] {
+    const auto [status, live] = Live(b, north_);
+    return status == 200 ? static_cast<int>(live.size()) : -1;
+  };
+  for (int i = 0; i < 500 && listed_on_b() < stations; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(listed_on_b(), stations);
+  uuid_ = uuids[0];
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(b.http_port, uuid_, north_), 101);
+  std::vector<int64_t> latency_ms;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  viewer.Read();  // the frame it had before this viewer came
+  while (std::chrono::steady_clock::now() < until) {
+    const json f = viewer.Read();
+    ASSERT_FALSE(f.is_null() || f.value("ended", false));
+    latency_ms.push_back(NowUnixMs() - f["sent_unix_ms"].get<int64_t>());
+  }
+  for (auto& st : streams) EXPECT_TRUE(st->Finish().ok());
+  for (int i = 0; i < 150 && listed_on_b() != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(listed_on_b(), 0) << "ends missed";
+  Stop(&a, SIGTERM);  // logs the relay's counters
+  const std::string log = ReadLog(a);
+  EXPECT_NE(log.find("dropped 0 (queue full) 0 (too big) 0 (connection lost)"), std::string::npos)
+      << log;
+  std::sort(latency_ms.begin(), latency_ms.end());
+  ASSERT_GE(latency_ms.size(), 10u * seconds / 2) << "the viewer got too few frames";
+  std::cout << stations << " stations: viewer on B got " << latency_ms.size() << " frames in "
+            << seconds << " s, latency p50 " << latency_ms[latency_ms.size() / 2] << " ms, p99 "
+            << latency_ms[latency_ms.size() * 99 / 100] << " ms, max " << latency_ms.back()
+            << " ms\n"
+            << log.substr(log.find("live relay: stopped")) << "\n";
+}
+
 }  // namespace
 }  // namespace ves::server::testing
