@@ -33,16 +33,18 @@ int NextBackoffMs(int previous_ms, int max_ms) {
 }
 
 // A database host that vanishes without closing the socket would leave the
-// listener waiting forever (LISTEN sends nothing): TCP keepalives and a
-// user timeout make such a connection fail within ~30 s, and reconnect.
+// listener waiting forever (LISTEN sends nothing) and a connect, or the
+// shutdown waiting on it, hanging for minutes: TCP keepalives, a user
+// timeout and a connect timeout make such a connection fail within ~30 s.
 std::string WithDeadPeerTimeouts(const std::string& url) {
   if (url.find("keepalives") != std::string::npos ||
-      url.find("tcp_user_timeout") != std::string::npos) {
+      url.find("tcp_user_timeout") != std::string::npos ||
+      url.find("connect_timeout") != std::string::npos) {
     return url;  // the operator chose
   }
   return url + (url.find('?') == std::string::npos ? "?" : "&") +
-         "keepalives=1&keepalives_idle=10&keepalives_interval=5&keepalives_count=3&"
-         "tcp_user_timeout=30000";
+         "connect_timeout=5&keepalives=1&keepalives_idle=10&keepalives_interval=5&"
+         "keepalives_count=3&tcp_user_timeout=30000";
 }
 
 class Receiver final : public pqxx::notification_receiver {
@@ -100,7 +102,8 @@ void LivePgRelay::Stop(std::chrono::milliseconds drain) {
     stopping_ = true;
     drain_until_ = std::chrono::steady_clock::now() + drain;
   }
-  cv_.notify_all();
+  queue_cv_.notify_all();
+  stop_cv_.notify_all();
   if (publisher_.joinable()) publisher_.join();
   if (listener_.joinable()) listener_.join();
   if (!started_) return;
@@ -172,7 +175,7 @@ void LivePgRelay::Enqueue(Outgoing o) {
     }
     queue_.push_back(std::move(o));
   }
-  cv_.notify_one();
+  queue_cv_.notify_one();
 }
 
 void LivePgRelay::RunPublisher() {
@@ -184,7 +187,7 @@ void LivePgRelay::RunPublisher() {
     Outgoing o;
     {
       std::unique_lock lock(mutex_);
-      cv_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+      queue_cv_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
       if (queue_.empty() || (stopping_ && std::chrono::steady_clock::now() >= drain_until_)) {
         return;
       }
@@ -231,7 +234,7 @@ void LivePgRelay::RunPublisher() {
         ++stats_.dropped_failed;
       }
       std::unique_lock lock(mutex_);
-      cv_.wait_for(lock, std::chrono::milliseconds(backoff_ms), [&] { return stopping_; });
+      queue_cv_.wait_for(lock, std::chrono::milliseconds(backoff_ms), [&] { return stopping_; });
     }
   }
 }
@@ -244,11 +247,13 @@ void LivePgRelay::RunListener() {
       std::lock_guard lock(mutex_);
       if (stopping_) return;
     }
+    bool was_listening = false;
     try {
       pqxx::connection conn(url_);
       const std::string channel = Prepare(conn, "listen");
       Receiver receiver(conn, channel, this);  // LISTEN
       conn.get_notifs();
+      was_listening = true;
       {
         std::lock_guard lock(mutex_);
         listening_ = true;
@@ -279,7 +284,7 @@ void LivePgRelay::RunListener() {
       spdlog::warn(
           "live relay: LISTEN connection to PostgreSQL {} ({}); other replicas' live sessions "
           "are not seen, reconnecting in {} ms",
-          connected_once ? "lost" : "failed", e.what(), backoff_ms);
+          was_listening ? "lost" : "failed", e.what(), backoff_ms);
       if (!Backoff(backoff_ms)) return;
     }
   }
@@ -290,7 +295,7 @@ bool LivePgRelay::Backoff(int ms) {
   while (std::chrono::steady_clock::now() < until) {
     {
       std::unique_lock lock(mutex_);
-      if (cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return stopping_; })) {
+      if (stop_cv_.wait_for(lock, std::chrono::milliseconds(200), [&] { return stopping_; })) {
         return false;
       }
     }

@@ -109,7 +109,8 @@ class LivePgRelay final : public LiveRelay {
   const std::string replica_id_;
 
   mutable std::mutex mutex_;
-  std::condition_variable cv_;
+  std::condition_variable queue_cv_;              // the publisher waits here (queue, stop)
+  std::condition_variable stop_cv_;               // the listener's backoff waits here (stop)
   std::deque<Outgoing> queue_;                    // guarded by mutex_
   std::map<std::string, int64_t> last_frame_ms_;  // by session uuid; guarded by mutex_
   bool stopping_ = false;                         // guarded by mutex_

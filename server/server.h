@@ -60,8 +60,6 @@ class VesServer {
   void Shutdown(std::chrono::milliseconds grace);
   uint64_t commit_batches() const { return writer_->batches(); }
   LessonJudge& judge() { return *judge_; }
-  LiveHub& live() { return *live_; }
-  LivePgRelay* live_relay() { return relay_.get(); }  // null without live_relay_url
 
  private:
   ServerOptions options_;

@@ -3,7 +3,9 @@
 // streams to replica A; on replica B a supervisor of the same institution
 // lists the session and watches its frames with the tip moving, another
 // institution's supervisor is refused (403) as on A, and B reports the end
-// when the stream ends; a SIGKILLed replica's session expires on the other.
+// when the stream ends; a SIGKILLed replica's session expires on the other;
+// the relays reconnect when the database drops their connections; many
+// stations on one replica reach the other without drops.
 // Skipped unless VES_TEST_POSTGRES_URL is set (deploy/with-postgres.sh).
 #include <fcntl.h>
 #include <gtest/gtest.h>
