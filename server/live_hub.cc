@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "patient_db/limits.h"
+#include "server/live_notice.h"
 
 namespace ves::server {
 namespace {
@@ -15,6 +16,12 @@ namespace {
 int64_t NowMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+int64_t SteadyMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
 
@@ -146,42 +153,70 @@ uint64_t LiveViewer::overwritten() const {
 }
 
 bool LiveHub::Begin(const LiveSessionInfo& info, std::string* why) {
-  std::lock_guard lock(mutex_);
-  if (live_.count(info.session_uuid) != 0) {
-    *why = "session " + info.session_uuid + " is already streaming";
-    return false;
+  LiveSessionInfo begun;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = live_.find(info.session_uuid);
+    if (it != live_.end() && it->second.info.origin_replica.empty()) {
+      *why = "session " + info.session_uuid + " is already streaming";
+      return false;
+    }
+    if (local_ >= kMaxLiveSessions) {
+      *why = std::to_string(kMaxLiveSessions) + " live sessions stream already";
+      return false;
+    }
+    Live& l = live_[info.session_uuid];  // a remote entry keeps its viewers
+    l.info = info;
+    l.info.origin_replica.clear();
+    l.info.started_unix_ms = NowMs();
+    ++local_;
+    begun = l.info;
   }
-  if (live_.size() >= static_cast<size_t>(kMaxLiveSessions)) {
-    *why = std::to_string(kMaxLiveSessions) + " live sessions stream already";
-    return false;
-  }
-  Live& l = live_[info.session_uuid];
-  l.info = info;
-  l.info.started_unix_ms = NowMs();
+  if (relay_ != nullptr) relay_->Began(begun);
   return true;
 }
 
 void LiveHub::Publish(const std::string& session_uuid, const v1::LiveFrame& frame) {
+  LiveSessionInfo info;
+  if (Deliver(session_uuid, frame, /*remote=*/false, &info) && relay_ != nullptr) {
+    relay_->Framed(info, frame);
+  }
+}
+
+bool LiveHub::Deliver(const std::string& session_uuid, const v1::LiveFrame& frame, bool remote,
+                      LiveSessionInfo* info) {
   const int64_t now = NowMs();
   auto json = std::make_shared<const std::string>(LiveFrameJson(frame, now));
   std::vector<std::shared_ptr<LiveViewer>> viewers;
   {
     std::lock_guard lock(mutex_);
     auto it = live_.find(session_uuid);
-    if (it == live_.end()) return;
+    if (it == live_.end() || it->second.info.origin_replica.empty() == remote) return false;
     Live& l = it->second;
     l.latest = json;
     l.info.last_frame_unix_ms = now;
     l.info.t_s = frame.t_s();
     l.info.station_dropped = frame.dropped_frames();
-    ++l.info.frames;
+    if (!remote) ++l.info.frames;  // a remote session counts the frames its replica had
     viewers = l.viewers;
+    *info = l.info;
   }
   for (const auto& v : viewers) {
     {
       std::lock_guard lock(v->mutex_);
       if (v->slot_) ++v->overwritten_;
       v->slot_ = json;  // the newest replaces what a slow viewer has not taken
+    }
+    v->cv_.notify_one();
+  }
+  return true;
+}
+
+void LiveHub::EndViewers(const std::vector<std::shared_ptr<LiveViewer>>& viewers) {
+  for (const auto& v : viewers) {
+    {
+      std::lock_guard lock(v->mutex_);
+      v->ended_ = true;
     }
     v->cv_.notify_one();
   }
@@ -192,17 +227,78 @@ void LiveHub::End(const std::string& session_uuid) {
   {
     std::lock_guard lock(mutex_);
     auto it = live_.find(session_uuid);
-    if (it == live_.end()) return;
+    if (it == live_.end() || !it->second.info.origin_replica.empty()) return;
     viewers = std::move(it->second.viewers);
     live_.erase(it);
+    --local_;
   }
-  for (const auto& v : viewers) {
+  EndViewers(viewers);
+  if (relay_ != nullptr) relay_->Ended(session_uuid);
+}
+
+bool LiveHub::ApplyRemote(const LiveNotice& n) {
+  const std::string& uuid = n.info.session_uuid;
+  if (n.kind == LiveNoticeKind::kEnd) {
+    std::vector<std::shared_ptr<LiveViewer>> viewers;
     {
-      std::lock_guard lock(v->mutex_);
-      v->ended_ = true;
+      std::lock_guard lock(mutex_);
+      auto it = live_.find(uuid);
+      if (it == live_.end() || it->second.info.origin_replica.empty()) return true;
+      viewers = std::move(it->second.viewers);
+      live_.erase(it);
     }
-    v->cv_.notify_one();
+    EndViewers(viewers);
+    return true;
   }
+  {
+    std::lock_guard lock(mutex_);
+    auto it = live_.find(uuid);
+    if (it == live_.end()) {
+      if (live_.size() - static_cast<size_t>(local_) >= static_cast<size_t>(kMaxLiveSessions)) {
+        return false;
+      }
+      // A frame may come first (its begin dropped on the way): either starts it.
+      Live& l = live_[uuid];
+      l.info = n.info;
+      l.info.last_frame_unix_ms = 0;
+      l.info.t_s = 0;
+      l.info.station_dropped = 0;
+      it = live_.find(uuid);
+    } else if (it->second.info.origin_replica.empty()) {
+      return true;  // streaming here: this replica knows best
+    }
+    // The ids stay as first announced; the holder may change (the station
+    // reconnected to a third replica).
+    it->second.info.origin_replica = n.replica_id;
+    it->second.info.frames = n.info.frames;
+    it->second.last_notice_steady_ms = SteadyMs();
+  }
+  if (n.kind == LiveNoticeKind::kFrame) {
+    LiveSessionInfo info;
+    Deliver(uuid, n.frame, /*remote=*/true, &info);
+  }
+  return true;
+}
+
+int LiveHub::ExpireRemote(int64_t silence_ms) {
+  const int64_t now = SteadyMs();
+  std::vector<std::shared_ptr<LiveViewer>> viewers;
+  int expired = 0;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = live_.begin(); it != live_.end();) {
+      if (it->second.info.origin_replica.empty() ||
+          now - it->second.last_notice_steady_ms < silence_ms) {
+        ++it;
+        continue;
+      }
+      for (auto& v : it->second.viewers) viewers.push_back(std::move(v));
+      it = live_.erase(it);
+      ++expired;
+    }
+  }
+  EndViewers(viewers);
+  return expired;
 }
 
 std::vector<LiveSessionInfo> LiveHub::List(const std::string& institution) const {

@@ -15,6 +15,9 @@
 // session's newest frame and hands it to that session's viewers (WebSocket
 // connections of supervisors). Each viewer has a one-slot buffer: a slow
 // viewer only ever gets the newest frame, and publishing never waits for one.
+// With several replicas on PostgreSQL the hub also holds the sessions other
+// replicas stream (remote, from a LiveRelay's notices) and hands its own to
+// the relay; viewers and lists treat both alike.
 namespace ves::server {
 
 // Bounds on a LiveFrame (docs/web.md, "Live proctoring" and "Limits").
@@ -43,6 +46,19 @@ struct LiveSessionInfo {
   uint64_t frames = 0;
   uint64_t station_dropped = 0;
   double t_s = 0;
+  std::string origin_replica;  // "" when streamed to this replica, else the one that holds it
+};
+
+struct LiveNotice;
+
+// Where a hub sends its own sessions for other replicas to see. Called on
+// the stream's thread: must not block (LivePgRelay queues).
+class LiveRelay {
+ public:
+  virtual ~LiveRelay() = default;
+  virtual void Began(const LiveSessionInfo& info) = 0;
+  virtual void Framed(const LiveSessionInfo& info, const v1::LiveFrame& frame) = 0;
+  virtual void Ended(const std::string& session_uuid) = 0;
 };
 
 // One viewer's one-slot buffer.
@@ -64,11 +80,24 @@ class LiveViewer {
 
 class LiveHub {
  public:
+  // Set before serving; nullptr: none (SQLite, one process).
+  void SetRelay(LiveRelay* relay) { relay_ = relay; }
+
   // False (with `why`) when kMaxLiveSessions stream already or the uuid is
-  // streaming from another stream.
+  // streaming from another stream here. A session another replica held
+  // (its station reconnected here) becomes this replica's, viewers kept.
   bool Begin(const LiveSessionInfo& info, std::string* why);
   void Publish(const std::string& session_uuid, const v1::LiveFrame& frame);
   void End(const std::string& session_uuid);
+
+  // A checked notice from another replica (ParseLiveNotice): a begin or
+  // frame starts the remote session when it is new (at most kMaxLiveSessions
+  // remote ones), a frame reaches its viewers, an end ends it. Notices about
+  // a session streaming here are ignored. False when refused (over the bound).
+  bool ApplyRemote(const LiveNotice& notice);
+  // Ends remote sessions that had no notice for `silence_ms` (their replica
+  // died or lost its database connection); how many.
+  int ExpireRemote(int64_t silence_ms);
 
   // Live sessions, all of them (institution "") or one institution's.
   std::vector<LiveSessionInfo> List(const std::string& institution) const;
@@ -84,9 +113,17 @@ class LiveHub {
     LiveSessionInfo info;
     std::shared_ptr<const std::string> latest;
     std::vector<std::shared_ptr<LiveViewer>> viewers;
+    int64_t last_notice_steady_ms = 0;  // remote sessions: for ExpireRemote
   };
+  // The frame to the session's viewers; false when it is not live here.
+  bool Deliver(const std::string& session_uuid, const v1::LiveFrame& frame, bool remote,
+               LiveSessionInfo* info);
+  static void EndViewers(const std::vector<std::shared_ptr<LiveViewer>>& viewers);
+
+  LiveRelay* relay_ = nullptr;
   mutable std::mutex mutex_;
   std::map<std::string, Live> live_;  // by session uuid
+  int local_ = 0;                     // sessions streaming here (the rest are remote)
 };
 
 }  // namespace ves::server

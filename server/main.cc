@@ -80,6 +80,8 @@ int main(int argc, char** argv) {
   options.judge_budget.memory_bytes = static_cast<uint64_t>(judge_memory_mb) << 20;
   options.max_receive_message_bytes = max_message_mb << 20;
   options.log_calls = vm.count("quiet") == 0;
+  // Replicas on one PostgreSQL show each other's live sessions (docs/web.md).
+  if (ves::patient_db::IsPostgresUrl(db_url)) options.live_relay_url = db_url;
   try {
     ves::server::MakeServerCredentials(options);  // refuse bad TLS choices before opening the DB
     ves::server::VesServer server(options, ves::patient_db::OpenStoreFromUrl(db_url));

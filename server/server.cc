@@ -199,6 +199,12 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
   auth_ = std::make_unique<Authenticator>(store_.get());
   judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
   live_ = std::make_unique<LiveHub>();
+  if (!options_.live_relay_url.empty()) {
+    LivePgRelayOptions relay;
+    relay.url = options_.live_relay_url;
+    relay_ = std::make_unique<LivePgRelay>(relay, live_.get());
+    live_->SetRelay(relay_.get());
+  }
   const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get(), live_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);
@@ -257,6 +263,7 @@ void VesServer::Start() {
     }
   }
   judge_->Start();
+  if (relay_) relay_->Start();
 }
 
 void VesServer::Shutdown(std::chrono::milliseconds grace) {
@@ -268,6 +275,9 @@ void VesServer::Shutdown(std::chrono::milliseconds grace) {
     server_->Wait();
   }
   judge_->Stop();  // sessions it did not reach are judged on the next start
+  // The ends of the streams just closed reach the other replicas (or they
+  // expire there by silence).
+  if (relay_) relay_->Stop(std::chrono::seconds(1));
   writer_->Stop();
 }
 

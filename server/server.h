@@ -10,6 +10,7 @@
 #include "server/auth.h"
 #include "server/http_server.h"
 #include "server/live_hub.h"
+#include "server/live_pg_relay.h"
 #include "server/live_service.h"
 #include "server/services.h"
 #include "server/session_writer.h"
@@ -31,6 +32,10 @@ struct ServerOptions {
   // host:port of the web front end and JSON API (docs/web.md); empty: none.
   // HTTPS with the TLS files above; plain HTTP only on a loopback address.
   std::string http_listen;
+  // libpq URI of the store's PostgreSQL: live sessions are shared with the
+  // other replicas on it (LivePgRelay, docs/web.md). Empty: this replica's
+  // only (SQLite: one process).
+  std::string live_relay_url;
 };
 
 // Checks the TLS/plaintext choice and reads the PEM files. Throws
@@ -62,6 +67,7 @@ class VesServer {
   std::unique_ptr<SessionWriter> writer_;
   std::unique_ptr<Authenticator> auth_;
   std::unique_ptr<LiveHub> live_;  // before the services that point to it
+  std::unique_ptr<LivePgRelay> relay_;  // points to live_
   std::unique_ptr<CasesService> cases_;
   std::unique_ptr<SessionsService> sessions_;
   std::unique_ptr<TraineesService> trainees_;

@@ -690,6 +690,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                      {"frames", l.frames},
                      {"station_dropped", l.station_dropped},
                      {"t_s", l.t_s},
+                     {"remote", !l.origin_replica.empty()},
                      {"now_unix_ms", now}});
     }
     return JsonReply(200, {{"live", out}});

@@ -1,0 +1,202 @@
+#include "server/live_notice.h"
+
+#include <openssl/evp.h>
+
+#include <cstdint>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "patient_db/limits.h"
+
+namespace ves::server {
+namespace {
+
+using nlohmann::json;
+
+const char* KindName(LiveNoticeKind k) {
+  switch (k) {
+    case LiveNoticeKind::kBegin:
+      return "begin";
+    case LiveNoticeKind::kFrame:
+      return "frame";
+    case LiveNoticeKind::kEnd:
+      return "end";
+  }
+  return "?";
+}
+
+std::string Base64(const std::string& bytes) {
+  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
+  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                reinterpret_cast<const unsigned char*>(bytes.data()),
+                                static_cast<int>(bytes.size()));
+  out.resize(static_cast<size_t>(n > 0 ? n : 0));
+  return out;
+}
+
+// Strict base64 (no whitespace, padded to a multiple of 4): EVP_DecodeBlock
+// alone skips whitespace and counts padding as zero bytes.
+bool DecodeBase64(const std::string& text, std::string* bytes) {
+  if (text.size() % 4 != 0) return false;
+  size_t pad = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    const bool alnum = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9');
+    if (c == '=' && i + 2 >= text.size()) {
+      ++pad;
+    } else if (!alnum && c != '+' && c != '/') {
+      return false;
+    } else if (pad > 0) {
+      return false;  // data after padding
+    }
+  }
+  bytes->assign(text.size() / 4 * 3, '\0');
+  const int n = EVP_DecodeBlock(reinterpret_cast<unsigned char*>(bytes->data()),
+                                reinterpret_cast<const unsigned char*>(text.data()),
+                                static_cast<int>(text.size()));
+  if (n < 0 || static_cast<size_t>(n) < pad) return false;
+  bytes->resize(static_cast<size_t>(n) - pad);
+  return true;
+}
+
+// A label (the streaming token's) as an id-sized printable string.
+std::string SafeLabel(const std::string& label) {
+  if (label.empty() || patient_db::IsPrintableId(label)) return label;
+  return patient_db::PrintableExcerpt(label, patient_db::kMaxIdBytes / 2);
+}
+
+// Field readers: each returns "" when fine, else what was wrong.
+std::string ReadId(const json& j, const char* key, bool required, std::string* out,
+                   size_t max_bytes = patient_db::kMaxIdBytes) {
+  auto it = j.find(key);
+  if (it == j.end()) return required ? std::string(key) + ": missing" : std::string();
+  if (!it->is_string()) return std::string(key) + ": not a string";
+  const std::string& s = it->get_ref<const std::string&>();
+  if (s.empty() && !required) return {};
+  if (s.size() > max_bytes || !patient_db::IsPrintableText(s) || s.empty()) {
+    return std::string(key) + " = '" + patient_db::PrintableExcerpt(s) + "': not 1.." +
+           std::to_string(max_bytes) + " bytes of printable text";
+  }
+  *out = s;
+  return {};
+}
+
+std::string ReadUnsigned(const json& j, const char* key, uint64_t max, uint64_t* out) {
+  auto it = j.find(key);
+  if (it == j.end()) return std::string(key) + ": missing";
+  if (!it->is_number_unsigned() || it->get<uint64_t>() > max) {
+    return std::string(key) + " = " + patient_db::PrintableExcerpt(it->dump()) +
+           ": not a whole number in 0.." + std::to_string(max);
+  }
+  *out = it->get<uint64_t>();
+  return {};
+}
+
+}  // namespace
+
+std::string EncodeLiveNotice(const LiveNotice& n, bool* jpeg_dropped) {
+  if (jpeg_dropped != nullptr) *jpeg_dropped = false;
+  json j = {{"v", 1},
+            {"kind", KindName(n.kind)},
+            {"replica", n.replica_id},
+            {"session", n.info.session_uuid}};
+  if (n.kind != LiveNoticeKind::kEnd) {
+    j["institution"] = n.info.institution;
+    j["trainee"] = n.info.trainee_id;
+    j["case"] = n.info.case_id;
+    j["case_version"] = n.info.case_version;
+    j["station"] = SafeLabel(n.info.station);
+    j["started_unix_ms"] = n.info.started_unix_ms;
+    j["frames"] = n.info.frames;
+  }
+  const auto dump = [](const json& v) {
+    // ASCII only: the payload is text in whatever encoding the database has.
+    return v.dump(-1, ' ', true, json::error_handler_t::replace);
+  };
+  if (n.kind != LiveNoticeKind::kFrame) {
+    std::string out = dump(j);
+    return out.size() <= kMaxLiveNoticeBytes ? out : std::string();
+  }
+  v1::LiveFrame frame = n.frame;
+  frame.clear_session_uuid();  // in the envelope
+  frame.clear_trainee_id();
+  frame.clear_case_id();
+  j["frame"] = Base64(frame.SerializeAsString());
+  std::string out = dump(j);
+  if (out.size() <= kMaxLiveNoticeBytes) return out;
+  if (frame.endoscope_jpeg().empty()) return {};
+  // Most JPEGs (320 px, 10-20 KiB) do not fit in a notification: the
+  // shapes and figures go on without the picture.
+  frame.clear_endoscope_jpeg();
+  if (jpeg_dropped != nullptr) *jpeg_dropped = true;
+  j["frame"] = Base64(frame.SerializeAsString());
+  out = dump(j);
+  return out.size() <= kMaxLiveNoticeBytes ? out : std::string();
+}
+
+std::optional<LiveNotice> ParseLiveNotice(std::string_view payload, std::string* why) {
+  const auto refuse = [&](std::string w) -> std::optional<LiveNotice> {
+    *why = std::move(w);
+    return std::nullopt;
+  };
+  if (payload.size() > kMaxLiveNoticeBytes) {
+    return refuse(std::to_string(payload.size()) + " bytes, more than " +
+                  std::to_string(kMaxLiveNoticeBytes));
+  }
+  const json j = json::parse(payload, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) return refuse("not JSON");
+  if (!j.is_object()) return refuse("not a JSON object");
+  if (j.value("v", json()) != json(1)) return refuse("v: not 1 (an unknown notice version)");
+  LiveNotice n;
+  const json kind = j.value("kind", json());
+  if (kind == "begin") {
+    n.kind = LiveNoticeKind::kBegin;
+  } else if (kind == "frame") {
+    n.kind = LiveNoticeKind::kFrame;
+  } else if (kind == "end") {
+    n.kind = LiveNoticeKind::kEnd;
+  } else {
+    return refuse("kind = " + patient_db::PrintableExcerpt(kind.dump()) +
+                  ": not begin, frame or end");
+  }
+  std::string w = ReadId(j, "replica", true, &n.replica_id, kMaxReplicaIdBytes);
+  if (w.empty()) w = ReadId(j, "session", true, &n.info.session_uuid);
+  if (!w.empty()) return refuse(w);
+  if (n.kind == LiveNoticeKind::kEnd) return n;
+
+  LiveSessionInfo& info = n.info;
+  w = ReadId(j, "institution", true, &info.institution);
+  if (w.empty()) w = ReadId(j, "trainee", true, &info.trainee_id);
+  if (w.empty()) w = ReadId(j, "case", true, &info.case_id);
+  if (w.empty()) w = ReadId(j, "station", false, &info.station);
+  uint64_t version = 0, started = 0, frames = 0;
+  if (w.empty())
+    w = ReadUnsigned(j, "case_version", std::numeric_limits<uint32_t>::max(), &version);
+  // Up to the year 9999 in ms: a clock, not an arbitrary 64-bit number.
+  if (w.empty()) w = ReadUnsigned(j, "started_unix_ms", 253402300799999ull, &started);
+  if (w.empty()) w = ReadUnsigned(j, "frames", uint64_t{1} << 53, &frames);
+  if (!w.empty()) return refuse(w);
+  info.case_version = static_cast<uint32_t>(version);
+  info.started_unix_ms = static_cast<int64_t>(started);
+  info.frames = frames;
+  if (n.kind == LiveNoticeKind::kBegin) return n;
+
+  auto it = j.find("frame");
+  if (it == j.end() || !it->is_string()) return refuse("frame: missing or not a string");
+  std::string bytes;
+  if (!DecodeBase64(it->get_ref<const std::string&>(), &bytes)) {
+    return refuse("frame: not base64");
+  }
+  if (!n.frame.ParseFromString(bytes)) return refuse("frame: not a LiveFrame (protobuf)");
+  if (!n.frame.session_uuid().empty() || !n.frame.trainee_id().empty() ||
+      !n.frame.case_id().empty()) {
+    return refuse("frame: carries ids (they belong in the envelope)");
+  }
+  w = CheckLiveFrame(n.frame, /*first=*/false);
+  if (!w.empty()) return refuse(w);
+  info.t_s = n.frame.t_s();
+  info.station_dropped = n.frame.dropped_frames();
+  return n;
+}
+
+}  // namespace ves::server

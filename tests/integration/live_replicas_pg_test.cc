@@ -1,0 +1,484 @@
+// Live proctoring across two real ves-server processes on one PostgreSQL
+// database (docs/web.md, "Live proctoring across replicas"): a station
+// streams to replica A; on replica B a supervisor of the same institution
+// lists the session and watches its frames with the tip moving, another
+// institution's supervisor is refused (403) as on A, and B reports the end
+// when the stream ends; a SIGKILLed replica's session expires on the other;
+// the relays reconnect when the database drops their connections; many
+// stations on one replica reach the other without drops.
+// Skipped unless VES_TEST_POSTGRES_URL is set (deploy/with-postgres.sh).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/websocket.hpp>
+#include <deque>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <pqxx/pqxx>
+#include <thread>
+
+#include "patient_db/pg_store.h"
+#include "server/auth.h"
+#include "server/client.h"
+#include "server/live_pg_relay.h"
+#include "tests/integration/test_server.h"
+#include "tests/patient_db/pg_test_util.h"
+#include "tests/server/web_client.h"
+#include "ves/v1/live.grpc.pb.h"
+
+namespace ves::server::testing {
+namespace {
+
+using nlohmann::json;
+using patient_db::StoreRole;
+namespace pg = patient_db::pg_testing;
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace websocket = beast::websocket;
+using tcp = asio::ip::tcp;
+
+int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+struct Replica {
+  pid_t pid = -1;
+  int port = 0;       // gRPC
+  int http_port = 0;  // web API and WebSocket
+  std::string log;
+};
+
+// A WebSocket viewer of /api/v1/live/ws; a read waits at most 10 s.
+class Viewer {
+ public:
+  // 101 when the upgrade was accepted.
+  int Connect(int port, const std::string& session_uuid, const std::string& token) {
+    tcp::resolver resolver(io_);
+    asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
+    const timeval timeout{10, 0};
+    ::setsockopt(ws_.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &timeout,
+                 sizeof timeout);
+    ws_.set_option(websocket::stream_base::decorator([=](websocket::request_type& req) {
+      req.set(beast::http::field::authorization, "Bearer " + token);
+    }));
+    websocket::response_type res;
+    beast::error_code ec;
+    ws_.handshake(res, "127.0.0.1:" + std::to_string(port),
+                  "/api/v1/live/ws?session=" + session_uuid, ec);
+    return static_cast<int>(res.result_int());
+  }
+  // The next message; null when the socket closed or nothing came for 10 s.
+  json Read() {
+    beast::flat_buffer buffer;
+    beast::error_code ec;
+    ws_.read(buffer, ec);
+    if (ec) return json();
+    return json::parse(beast::buffers_to_string(buffer.data()));
+  }
+
+ private:
+  asio::io_context io_;
+  websocket::stream<tcp::socket> ws_{io_};
+};
+
+// A station streaming frames every 50 ms (20 Hz, as ves-station run does)
+// from its own thread, the tip 1 cm deeper each frame, until Finish.
+class StreamingStation {
+ public:
+  StreamingStation(const ClientOptions& client, const std::string& uuid)
+      : stub_(v1::Live::NewStub(MakeClientChannel(client))) {
+    context_.AddMetadata("authorization", "Bearer " + client.token);
+    writer_ = stub_->StreamSession(&context_, &summary_);
+    thread_ = std::thread([this, uuid] {
+      for (int k = 0; !stop_ && k < 2000; ++k) {
+        v1::LiveFrame f;
+        if (k == 0) {
+          f.set_session_uuid(uuid);
+          f.set_trainee_id("t1");
+          f.set_case_id("sample");
+          f.set_case_version(1);
+        }
+        f.set_t_s(0.05 * k);
+        f.set_tip_arc_m(0.01 * k);
+        f.set_inserted_m(0.012 * k);
+        for (int i = 0; i <= 40; ++i) {
+          for (float v : {0.0f, 0.0f, 0.0005f * i * k}) f.add_scope_xyz_m(v);
+          for (float v : {0.01f * i, 0.0f, 0.02f * i}) f.add_colon_xyz_m(v);
+        }
+        for (float v : {0.0f, 0.0f, 0.02f * k}) f.add_tip_xyz_m(v);
+        f.set_sent_unix_ms(NowUnixMs());
+        if (!writer_->Write(f)) return;
+        ++written_;
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      }
+    });
+  }
+  ~StreamingStation() { StopWriting(); }
+  void StopWriting() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  grpc::Status Finish() {
+    StopWriting();
+    writer_->WritesDone();
+    return writer_->Finish();
+  }
+  int written() const { return written_; }
+  uint64_t frames_received() const { return summary_.frames_received(); }
+
+ private:
+  std::unique_ptr<v1::Live::Stub> stub_;
+  grpc::ClientContext context_;
+  v1::LiveStreamSummary summary_;
+  std::unique_ptr<grpc::ClientWriter<v1::LiveFrame>> writer_;
+  std::atomic<bool> stop_{false};
+  std::atomic<int> written_{0};
+  std::thread thread_;
+};
+
+class LiveReplicas : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string base = pg::TestPostgresUrl();
+    if (base.empty()) GTEST_SKIP() << pg::kNoPostgresMessage;
+    schema_ = pg::UniqueSchemaName(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    url_ = pg::FreshSchema(base, schema_);
+    dir_ = MakeTempDir("live-replicas");
+    patient_db::PgStoreOptions o;
+    o.url = url_;
+    o.pool_size = 2;
+    patient_db::PgStore store(o);  // migrates before the servers start
+    store.AddInstitution("north", 1);
+    store.AddInstitution("south", 1);
+    ASSERT_TRUE(store.AddTrainee({"t1", "north", "T", 1}).ok());
+    station_ = NewToken();
+    north_ = NewToken();
+    south_ = NewToken();
+    ASSERT_TRUE(
+        store.AddToken({Sha256HexOf(station_), StoreRole::kStation, "north", "", "st", 1}).ok());
+    ASSERT_TRUE(
+        store.AddToken({Sha256HexOf(north_), StoreRole::kSupervisor, "north", "", "sn", 1}).ok());
+    ASSERT_TRUE(
+        store.AddToken({Sha256HexOf(south_), StoreRole::kSupervisor, "south", "", "ss", 1}).ok());
+    std::mt19937_64 rng(23);
+    uuid_ = NewUuid(rng);
+  }
+  void TearDown() override {
+    for (Replica& r : replicas_) Stop(&r, SIGKILL);
+    if (HasFailure() || std::getenv("VES_TEST_SHOW_LOGS") != nullptr) {
+      for (const Replica& r : replicas_) {
+        std::ifstream in(r.log);
+        std::cerr << "---- " << r.log << "\n" << in.rdbuf() << "\n";
+      }
+    }
+    if (!dir_.empty()) std::filesystem::remove_all(dir_);
+  }
+
+  Replica& Start() {
+    const std::string n = std::to_string(replicas_.size());
+    const std::string port_file = (dir_ / ("port" + n)).string();
+    const std::string http_file = (dir_ / ("http" + n)).string();
+    Replica r;
+    r.log = (dir_ / ("server" + n + ".log")).string();
+    r.pid = ::fork();
+    if (r.pid == 0) {
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive this process
+      const int fd = ::open(r.log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+      ::execl(VES_SERVER_PATH, "ves-server", "--listen", "127.0.0.1:0", "--http", "127.0.0.1:0",
+              "--db", url_.c_str(), "--insecure-loopback", "--quiet", "--port-file",
+              port_file.c_str(), "--http-port-file", http_file.c_str(), nullptr);
+      ::_exit(127);
+    }
+    for (int i = 0;
+         i < 400 && !(std::filesystem::exists(port_file) && std::filesystem::exists(http_file));
+         ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    std::ifstream(port_file) >> r.port;
+    std::ifstream(http_file) >> r.http_port;
+    replicas_.push_back(r);
+    EXPECT_GT(r.http_port, 0) << "ves-server did not start, see " << r.log;
+    return replicas_.back();
+  }
+  static void Stop(Replica* r, int signal) {
+    if (r->pid <= 0) return;
+    ::kill(r->pid, signal);
+    int status = 0;
+    ::waitpid(r->pid, &status, 0);
+    r->pid = -1;
+  }
+  ClientOptions Client(const Replica& r) const {
+    ClientOptions o;
+    o.address = "127.0.0.1:" + std::to_string(r.port);
+    o.token = station_;
+    o.deadline = std::chrono::seconds(60);
+    return o;
+  }
+  // GET /api/v1/live on `r` as `token`: the HTTP status and the list.
+  static std::pair<int, json> Live(const Replica& r, const std::string& token,
+                                   const std::string& query = "") {
+    const HttpResult res = HttpCall(r.http_port, "GET", "/api/v1/live" + query,
+                                    {{"Authorization", "Bearer " + token}});
+    return {res.status, res.status == 200 ? json::parse(res.body)["live"] : json()};
+  }
+  // The session as `r` lists it to the north supervisor; null when not listed.
+  json Listed(const Replica& r) {
+    const auto [status, live] = Live(r, north_);
+    EXPECT_EQ(status, 200);
+    for (const json& l : live) {
+      if (l["session_uuid"] == uuid_) return l;
+    }
+    return json();
+  }
+  // Polls until `r` lists the session (`listed`) or does not, up to `limit`;
+  // how long it took, or -1 ms on timeout.
+  std::chrono::milliseconds WaitListed(const Replica& r, bool listed,
+                                       std::chrono::milliseconds limit) {
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start < limit) {
+      if (Listed(r).is_null() != listed) {
+        return std::chrono::duration_cast<std::chrono::milliseconds>(
+            std::chrono::steady_clock::now() - start);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return std::chrono::milliseconds(-1);
+  }
+
+  // The relays' connections of this test's replicas (application_name
+  // "ves live listen|notify CHANNEL"), by role.
+  int RelayConnections(const std::string& role) {
+    pqxx::connection conn(url_);
+    pqxx::nontransaction q(conn);
+    return q
+        .exec_params("SELECT count(*) FROM pg_stat_activity WHERE application_name = $1",
+                     "ves live " + role + " " + LiveChannelFor(schema_))[0][0]
+        .as<int>();
+  }
+  bool WaitRelayConnections(const std::string& role, int count) {
+    for (int i = 0; i < 500; ++i) {
+      if (RelayConnections(role) == count) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return false;
+  }
+  static std::string ReadLog(const Replica& r) {
+    std::ifstream in(r.log);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+
+  std::string schema_, url_;
+  std::filesystem::path dir_;
+  std::string station_, north_, south_, uuid_;
+  std::deque<Replica> replicas_;  // references stay valid as replicas start
+};
+
+TEST_F(LiveReplicas, ASupervisorOnTheOtherReplicaWatchesTheSessionAndSeesItEnd) {
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  StreamingStation station(Client(a), uuid_);
+  // B's listener may still be connecting: frames keep coming, and any one
+  // of them announces the session.
+  ASSERT_GE(WaitListed(b, true, std::chrono::seconds(15)).count(), 0) << "B never listed it";
+  const json on_b = Listed(b);
+  EXPECT_EQ(on_b["trainee_id"], "t1");
+  EXPECT_EQ(on_b["case_id"], "sample");
+  EXPECT_EQ(on_b["institution"], "north");
+  EXPECT_EQ(on_b["station"], "st");
+  EXPECT_EQ(on_b["remote"], true);
+  EXPECT_EQ(Listed(a)["remote"], false);
+
+  // Another institution's supervisor on B: not listed, refused as on A.
+  const auto [south_status, south_list] = Live(b, south_);
+  EXPECT_EQ(south_status, 200);
+  EXPECT_TRUE(south_list.empty()) << south_list.dump();
+  EXPECT_EQ(Live(b, south_, "?institution=north").first, 403);
+  for (const Replica* r : {&a, &b}) {
+    const HttpResult foreign = HttpCall(r->http_port, "GET", "/api/v1/live/ws?session=" + uuid_,
+                                        {{"Connection", "Upgrade"},
+                                         {"Upgrade", "websocket"},
+                                         {"Sec-WebSocket-Version", "13"},
+                                         {"Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="},
+                                         {"Authorization", "Bearer " + south_}});
+    EXPECT_EQ(foreign.status, 403) << foreign.body;
+    EXPECT_NE(foreign.body.find("PERMISSION_DENIED"), std::string::npos) << foreign.body;
+  }
+
+  // The north supervisor on B sees the tip go deeper.
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(b.http_port, uuid_, north_), 101);
+  std::vector<double> tip_arc_m;
+  std::vector<int64_t> latency_ms;  // station's Write on A to the viewer on B (one clock)
+  int scope_tip_first_mm = -1, scope_tip_last_mm = -1;
+  while (tip_arc_m.size() < 20) {
+    const json f = viewer.Read();
+    ASSERT_FALSE(f.is_null()) << "no frame within 10 s after " << tip_arc_m.size();
+    ASSERT_FALSE(f.value("ended", false)) << "ended while streaming";
+    if (!tip_arc_m.empty()) latency_ms.push_back(NowUnixMs() - f["sent_unix_ms"].get<int64_t>());
+    tip_arc_m.push_back(f["tip_arc_m"].get<double>());
+    const int up_mm = f["scope_mm"].back()[1].get<int>();
+    if (scope_tip_first_mm < 0) scope_tip_first_mm = up_mm;
+    scope_tip_last_mm = up_mm;
+    EXPECT_EQ(f["colon_mm"].size(), 41u);
+  }
+  for (size_t i = 1; i < tip_arc_m.size(); ++i) EXPECT_GT(tip_arc_m[i], tip_arc_m[i - 1]);
+  EXPECT_GT(scope_tip_last_mm, scope_tip_first_mm) << "the scope drawn deeper";
+  std::sort(latency_ms.begin(), latency_ms.end());
+  std::cout << "A to B: " << latency_ms.size() << " frames, latency p50 "
+            << latency_ms[latency_ms.size() / 2] << " ms, max " << latency_ms.back() << " ms\n";
+  EXPECT_LT(latency_ms[latency_ms.size() / 2], 200) << "the live page's latency target";
+  const json listed_later = Listed(b);
+  EXPECT_GT(listed_later["frames"].get<uint64_t>(), 20u);
+  EXPECT_GT(listed_later["t_s"].get<double>(), 0.0);
+
+  // The stream ends on A: B's viewer is told, and B's list forgets it, well
+  // before the 5 s silence timeout (the end notice, not the expiry).
+  const auto end_at = std::chrono::steady_clock::now();
+  const grpc::Status done = station.Finish();
+  ASSERT_TRUE(done.ok()) << done.error_message();
+  EXPECT_EQ(station.frames_received(), static_cast<uint64_t>(station.written()));
+  while (true) {
+    const json f = viewer.Read();
+    ASSERT_FALSE(f.is_null()) << "B's viewer was never told the end";
+    if (f.value("ended", false)) break;
+  }
+  const auto end_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::chrono::steady_clock::now() - end_at);
+  EXPECT_LT(end_ms.count(), 3000) << "the end came by silence, not by notice";
+  EXPECT_TRUE(Listed(b).is_null());
+  EXPECT_TRUE(Listed(a).is_null());
+  std::cout << "end seen on B " << end_ms.count() << " ms after the station finished on A\n";
+}
+
+TEST_F(LiveReplicas, AKilledReplicasSessionEndsOnTheOtherBySilence) {
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  StreamingStation station(Client(a), uuid_);
+  ASSERT_GE(WaitListed(b, true, std::chrono::seconds(15)).count(), 0) << "B never listed it";
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(b.http_port, uuid_, north_), 101);
+  Stop(&a, SIGKILL);  // no end notice will ever come
+  const auto gone = WaitListed(b, false, std::chrono::seconds(12));
+  ASSERT_GE(gone.count(), 0) << "B still lists a dead replica's session";
+  EXPECT_GE(gone.count(), 4000) << "ended before the 5 s silence";
+  bool ended = false;
+  for (int i = 0; i < 200 && !ended; ++i) {
+    const json f = viewer.Read();
+    if (f.is_null()) break;
+    ended = f.value("ended", false);
+  }
+  EXPECT_TRUE(ended) << "B's viewer was not told";
+  std::cout << "B forgot the killed replica's session after " << gone.count() << " ms\n";
+}
+
+// The database drops the relays' connections (a failover, an operator's
+// pg_terminate_backend): both replicas reconnect with backoff, say so in
+// their logs, and B sees A's next session.
+TEST_F(LiveReplicas, RelaysReconnectAfterTheDatabaseDropsTheirConnections) {
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  ASSERT_TRUE(WaitRelayConnections("listen", 2));
+  {  // a first session opens A's publishing connection
+    StreamingStation warmup(Client(a), "warm-up-session");
+    ASSERT_TRUE(WaitRelayConnections("notify", 1));
+    ASSERT_TRUE(warmup.Finish().ok());
+  }
+  {
+    pqxx::connection conn(url_);
+    pqxx::nontransaction q(conn);
+    const pqxx::result r = q.exec_params(
+        "SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE application_name "
+        "IN ($1, $2)",
+        "ves live listen " + LiveChannelFor(schema_), "ves live notify " + LiveChannelFor(schema_));
+    ASSERT_EQ(r.size(), 3u);
+  }
+  ASSERT_TRUE(WaitRelayConnections("listen", 2)) << "the listeners did not come back";
+  StreamingStation station(Client(a), uuid_);
+  ASSERT_GE(WaitListed(b, true, std::chrono::seconds(15)).count(), 0) << "B never listed it";
+  ASSERT_TRUE(station.Finish().ok());
+  ASSERT_GE(WaitListed(b, false, std::chrono::seconds(3)).count(), 0) << "B missed the end";
+  for (const Replica* r : {&a, &b}) {
+    const std::string log = ReadLog(*r);
+    EXPECT_NE(log.find("LISTEN connection to PostgreSQL lost"), std::string::npos) << log;
+    EXPECT_NE(log.find("listening again"), std::string::npos) << log;
+  }
+  const std::string log_a = ReadLog(a);
+  EXPECT_NE(log_a.find("cannot publish to PostgreSQL"), std::string::npos) << log_a;
+  EXPECT_NE(log_a.find("publishing to PostgreSQL again"), std::string::npos) << log_a;
+}
+
+// Many stations on one replica at once (VES_LIVE_STATIONS, default 20, for
+// VES_LIVE_SECONDS, default 3): the other replica lists every one, a viewer
+// there keeps up (latency printed), and the publisher drops nothing.
+TEST_F(LiveReplicas, ManyStationsOnOneReplicaAllReachTheOtherWithoutDrops) {
+  const char* n_env = std::getenv("VES_LIVE_STATIONS");
+  const char* s_env = std::getenv("VES_LIVE_SECONDS");
+  const int stations = n_env != nullptr ? std::atoi(n_env) : 20;
+  const int seconds = s_env != nullptr ? std::atoi(s_env) : 3;
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  ASSERT_TRUE(WaitRelayConnections("listen", 2));
+  std::mt19937_64 rng(29);
+  std::vector<std::string> uuids;
+  std::vector<std::unique_ptr<StreamingStation>> streams;
+  for (int i = 0; i < stations; ++i) {
+    uuids.push_back(NewUuid(rng));
+    streams.push_back(std::make_unique<StreamingStation>(Client(a), uuids.back()));
+  }
+  const auto listed_on_b = [&] {
+    const auto [status, live] = Live(b, north_);
+    return status == 200 ? static_cast<int>(live.size()) : -1;
+  };
+  for (int i = 0; i < 500 && listed_on_b() < stations; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(listed_on_b(), stations);
+  uuid_ = uuids[0];
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(b.http_port, uuid_, north_), 101);
+  std::vector<int64_t> latency_ms;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  viewer.Read();  // the frame it had before this viewer came
+  while (std::chrono::steady_clock::now() < until) {
+    const json f = viewer.Read();
+    ASSERT_FALSE(f.is_null() || f.value("ended", false));
+    latency_ms.push_back(NowUnixMs() - f["sent_unix_ms"].get<int64_t>());
+  }
+  for (auto& st : streams) EXPECT_TRUE(st->Finish().ok());
+  for (int i = 0; i < 150 && listed_on_b() != 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_EQ(listed_on_b(), 0) << "ends missed";
+  Stop(&a, SIGTERM);  // logs the relay's counters
+  const std::string log = ReadLog(a);
+  EXPECT_NE(log.find("dropped 0 (queue full) 0 (too big) 0 (connection lost)"), std::string::npos)
+      << log;
+  std::sort(latency_ms.begin(), latency_ms.end());
+  ASSERT_GE(latency_ms.size(), 10u * seconds / 2) << "the viewer got too few frames";
+  std::cout << stations << " stations: viewer on B got " << latency_ms.size() << " frames in "
+            << seconds << " s, latency p50 " << latency_ms[latency_ms.size() / 2] << " ms, p99 "
+            << latency_ms[latency_ms.size() * 99 / 100] << " ms, max " << latency_ms.back()
+            << " ms\n"
+            << log.substr(log.find("live relay: stopped")) << "\n";
+}
+
+}  // namespace
+}  // namespace ves::server::testing
