@@ -8,7 +8,10 @@
 // press_past, press_gate; show_damage=1 prints each damage episode,
 // show_over10=1 the base force over 10 N, trace_from=T 12 steps from T.
 // The line gives the roll torque's peak, its 10 ms mean's peak (the force
-// metric's resolution) and roll_over1, the share of steps over 1 N·m.
+// metric's resolution) and roll_over1, the share of steps over 1 N·m;
+// damage counts episodes of the largest wall force's 10 ms mean over the
+// damage level (as the session's metrics do), damage_1ms those of single
+// steps (show_damage=1 prints these).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -103,11 +106,16 @@ int main(int argc, char** argv) {
   double t_cecum = -1.0, inserted_at_cecum = -1.0, max_tip = 0.0, peak_force = 0.0;
   double peak_roll = 0.0, peak_fixed = 0.0, pain15_s = 0.0, pain20_s = 0.0, pain_s = 0.0;
   long over10 = 0, steps = 0;
-  // Damage episodes as the session's metrics count them: wall force over the
-  // threshold, episodes closer than the merge gap counted once.
+  // Damage episodes of single steps: wall force over the threshold,
+  // episodes closer than the merge gap counted once.
   const ves::training::MetricThresholds thresholds;
   int damage_events = 0;
   double peak_wall_N = 0.0, last_damage_s = -1e9;
+  // The same of the largest wall force's 10 ms mean, as the session's
+  // metrics count them: a contact spike of a few steps is counted above only.
+  ves::bench::TenStepMean wall_10ms;
+  int damage10_events = 0;
+  double last_damage10_s = -1e9;
   ves::bench::TenStepMean force_10ms;  // of |force|
   // The roll torque likewise: its peak, its 10 ms mean's peak, steps over 1 N·m.
   ves::bench::TenStepMean roll_10ms;
@@ -196,6 +204,10 @@ int main(int argc, char** argv) {
       }
       last_damage_s = state.time_s;
     }
+    if (wall_10ms.Add(out.peak_wall_force_N) > thresholds.damage_wall_force_N) {
+      if (state.time_s - last_damage10_s > thresholds.episode_merge_gap_s) ++damage10_events;
+      last_damage10_s = state.time_s;
+    }
     peak_fixed = std::max(peak_fixed, out.peak_fixed_displacement_m);
     max_tip = std::max(max_tip, state.tip_arc_m);
     if (out.peak_stretch_m > 0.015) pain15_s += params.dt_s;
@@ -209,11 +221,12 @@ int main(int argc, char** argv) {
   }
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
-              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_roll_10ms=%.2f roll_over1=%.2f%% peak_wall=%.1f damage=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
+              "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_roll_10ms=%.2f roll_over1=%.2f%% peak_wall=%.1f damage=%d damage_1ms=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
               "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
               100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_roll_10ms,
-              100.0 * roll_over1 / std::max(1L, steps), peak_wall_N, damage_events, 1e3 * peak_fixed,
+              100.0 * roll_over1 / std::max(1L, steps), peak_wall_N, damage10_events, damage_events,
+              1e3 * peak_fixed,
               pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
   return 0;
 }

@@ -25,6 +25,18 @@ double LoopIndex::Update(double inserted_m, double tip_arc_m) {
   return value_;
 }
 
+double MetricsAccumulator::WindowMean::Add(double value, int window_steps) {
+  if (count_ == window_steps) {
+    sum_ -= values_[next_];
+  } else {
+    ++count_;
+  }
+  values_[next_] = value;
+  sum_ += value;
+  next_ = (next_ + 1) % window_steps;
+  return sum_ / count_;
+}
+
 MetricsAccumulator::MetricsAccumulator(const MetricThresholds& thresholds)
     : thresholds_(thresholds),
       force_(thresholds.episode_merge_gap_s),
@@ -42,30 +54,27 @@ void MetricsAccumulator::Add(const StepObservation& o) {
   const double force_N = std::abs(o.base_force_N);
   const int window_steps =
       std::clamp(static_cast<int>(std::lround(kForceWindow_s / dt)), 1, kForceWindowMaxSteps);
-  if (force_window_count_ == window_steps) {
-    force_window_sum_N_ -= force_window_N_[force_window_next_];
-  } else {
-    ++force_window_count_;
-  }
-  force_window_N_[force_window_next_] = force_N;
-  force_window_sum_N_ += force_N;
-  force_window_next_ = (force_window_next_ + 1) % window_steps;
-  peak_force_N_ = std::max(peak_force_N_, force_window_sum_N_ / force_window_count_);
+  peak_force_N_ = std::max(peak_force_N_, hand_force_window_.Add(force_N, window_steps));
   force_integral_N_s_ += force_N * dt;
 
   const bool force_over = o.max_wall_force_N > th.excessive_wall_force_N;
   force_.Update(o.t_s, dt, force_over, o.max_wall_force_N, o.max_wall_force_arc_m,
                 o.max_wall_force_N - th.excessive_wall_force_N);
-  const bool damage_over = o.max_wall_force_N > th.damage_wall_force_N;
-  damage_.Update(o.t_s, dt, damage_over, o.max_wall_force_N, o.max_wall_force_arc_m,
-                 o.max_wall_force_N - th.damage_wall_force_N);
+  // Damage: the largest wall force held over the perforation load for the
+  // force window, not a transient of a step or three (docs/scoring.md).
+  const double wall_mean_N = wall_force_window_.Add(o.max_wall_force_N, window_steps);
+  damage_.Update(o.t_s, dt, wall_mean_N > th.damage_wall_force_N, wall_mean_N,
+                 o.max_wall_force_arc_m, wall_mean_N - th.damage_wall_force_N);
+  // The map shows where the wall was pressed during damage episodes.
   if (!o.segment_wall_force_N.empty()) {
     if (damage_map_N_s_.size() != o.segment_wall_force_N.size()) {
       damage_map_N_s_.assign(o.segment_wall_force_N.size(), 0.0);
     }
     for (std::size_t i = 0; i < o.segment_wall_force_N.size(); ++i) {
       const double excess_N = o.segment_wall_force_N[i] - th.damage_wall_force_N;
-      if (excess_N > 0.0) damage_map_N_s_[i] += excess_N * dt;
+      if (excess_N > 0.0 && wall_mean_N > th.damage_wall_force_N) {
+        damage_map_N_s_[i] += excess_N * dt;
+      }
     }
   }
 

@@ -114,15 +114,24 @@ class MetricsAccumulator {
   double cecum_inserted_m_{0.0};
   double peak_force_N_{0.0};
   double force_integral_N_s_{0.0};
-  // The peak is taken of the force averaged over kForceWindow_s (what a hand
-  // and a force sensor resolve), so a single 1 ms contact transient of the
-  // model does not become the session's peak (docs/scoring.md).
+  // Forces are judged as their mean over kForceWindow_s (what a hand and a
+  // force sensor resolve), so a 1-3 ms contact transient of the model does not
+  // become the session's peak hand force or a damage event (docs/scoring.md).
   static constexpr double kForceWindow_s = 0.01;
   static constexpr int kForceWindowMaxSteps = 64;
-  std::array<double, kForceWindowMaxSteps> force_window_N_{};
-  int force_window_next_{0};
-  int force_window_count_{0};
-  double force_window_sum_N_{0.0};
+  class WindowMean {
+   public:
+    // The mean of the last `window_steps` values (fewer at the start).
+    double Add(double value, int window_steps);
+
+   private:
+    std::array<double, kForceWindowMaxSteps> values_{};
+    int next_{0};
+    int count_{0};
+    double sum_{0.0};
+  };
+  WindowMean hand_force_window_;
+  WindowMean wall_force_window_;  // of the largest wall force
   EpisodeTracker force_;
   EpisodeTracker pain_;
   EpisodeTracker loop_;

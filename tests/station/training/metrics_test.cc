@@ -315,12 +315,52 @@ TEST(Metrics, DamageMapAccumulatesPerSegmentImpulse) {
   for (auto& s : steps) {
     s.segment_wall_force_N = forces;
     s.segment_arc_m = arcs;
+    s.max_wall_force_N = 10.0;
   }
   const auto acc = Accumulate(steps);
   ASSERT_EQ(acc.damage_map_N_s().size(), 3u);
   EXPECT_EQ(acc.damage_map_N_s()[0], 0.0);
   EXPECT_EQ(acc.damage_map_N_s()[1], 1.0);
   EXPECT_EQ(acc.damage_map_N_s()[2], 0.0);
+}
+
+// At 1 ms steps a wall force counts as damage once its 10 ms mean is over
+// the threshold: the model's contact transients of 1-3 steps (a sample
+// changing segment at a sharp fold, docs/model-shortening-notes.md) do not,
+// a press held for 20 ms does, and the map marks only the pressed segment.
+TEST(Metrics, DamageNeedsTheWallForceHeldOverTheForceWindow) {
+  constexpr int kSteps = 400;  // the two are further apart than the 0.2 s merge gap
+  const std::vector<double> quiet = {1.0, 1.0}, spike = {20.0, 1.0}, press = {1.0, 12.0};
+  const std::vector<double> arcs = {0.1, 0.2};
+  std::vector<StepObservation> steps(kSteps);
+  for (int i = 0; i < kSteps; ++i) {
+    steps[i].t_s = (i + 1) * 0.001;
+    steps[i].dt_s = 0.001;
+    steps[i].max_wall_force_N = 1.0;
+    steps[i].segment_wall_force_N = quiet;
+    steps[i].segment_arc_m = arcs;
+  }
+  for (int i = 20; i < 23; ++i) {  // a 3 ms spike to 20 N on segment 0
+    steps[i].max_wall_force_N = 20.0;
+    steps[i].max_wall_force_arc_m = 0.1;
+    steps[i].segment_wall_force_N = spike;
+  }
+  for (int i = 300; i < 320; ++i) {  // 20 ms at 12 N on segment 1
+    steps[i].max_wall_force_N = 12.0;
+    steps[i].max_wall_force_arc_m = 0.2;
+    steps[i].segment_wall_force_N = press;
+  }
+  const auto acc = Accumulate(steps);  // damage over 8 N
+  const Metrics m = acc.Result();
+  EXPECT_EQ(m.damage_events, 1u);
+  EXPECT_GT(m.damage_impulse_N_s, 0.0);
+  EXPECT_EQ(acc.damage_map_N_s()[0], 0.0);
+  EXPECT_GT(acc.damage_map_N_s()[1], 0.0);
+  for (const Event& e : acc.Events()) {
+    if (e.kind == EventKind::kDamage) {
+      EXPECT_EQ(e.arc_m, 0.2);
+    }
+  }
 }
 
 TEST(Metrics, MaxInsertionIsTheDeepestInsertion) {
