@@ -34,6 +34,7 @@
 #include "tests/integration/test_server.h"
 #include "tests/patient_db/pg_test_util.h"
 #include "tests/server/web_client.h"
+#include "tests/server/ws_viewer.h"
 #include "ves/v1/live.grpc.pb.h"
 
 namespace ves::server::testing {
@@ -60,38 +61,7 @@ struct Replica {
   std::string log;
 };
 
-// A WebSocket viewer of /api/v1/live/ws; a read waits at most 10 s.
-class Viewer {
- public:
-  // 101 when the upgrade was accepted.
-  int Connect(int port, const std::string& session_uuid, const std::string& token) {
-    tcp::resolver resolver(io_);
-    asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
-    const timeval timeout{10, 0};
-    ::setsockopt(ws_.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &timeout,
-                 sizeof timeout);
-    ws_.set_option(websocket::stream_base::decorator([=](websocket::request_type& req) {
-      req.set(beast::http::field::authorization, "Bearer " + token);
-    }));
-    websocket::response_type res;
-    beast::error_code ec;
-    ws_.handshake(res, "127.0.0.1:" + std::to_string(port),
-                  "/api/v1/live/ws?session=" + session_uuid, ec);
-    return static_cast<int>(res.result_int());
-  }
-  // The next message; null when the socket closed or nothing came for 10 s.
-  json Read() {
-    beast::flat_buffer buffer;
-    beast::error_code ec;
-    ws_.read(buffer, ec);
-    if (ec) return json();
-    return json::parse(beast::buffers_to_string(buffer.data()));
-  }
-
- private:
-  asio::io_context io_;
-  websocket::stream<tcp::socket> ws_{io_};
-};
+using Viewer = WsViewer;  // tests/server/ws_viewer.h
 
 // A station streaming frames every 50 ms (20 Hz, as ves-station run does)
 // from its own thread, the tip 1 cm deeper each frame, until Finish.

@@ -25,6 +25,7 @@
 #include "station/sync/live_stream.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
+#include "tests/server/ws_viewer.h"
 
 namespace ves::server::testing {
 namespace {
@@ -38,40 +39,7 @@ using tcp = asio::ip::tcp;
 
 static_assert(sync::kMaxLiveJpegBytes == kMaxLiveJpegBytes, "station and server JPEG bounds");
 
-// A WebSocket viewer of /api/v1/live/ws (synchronous, loopback).
-class Viewer {
- public:
-  // The handshake's HTTP status: 101 when accepted.
-  int Connect(int port, const std::string& session_uuid, const std::string& token,
-              const std::string& cookie = "") {
-    tcp::resolver resolver(io_);
-    asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
-    ws_.set_option(websocket::stream_base::decorator([=](websocket::request_type& req) {
-      if (!token.empty()) req.set(beast::http::field::authorization, "Bearer " + token);
-      if (!cookie.empty()) req.set(beast::http::field::cookie, cookie);
-    }));
-    websocket::response_type res;
-    beast::error_code ec;
-    ws_.handshake(res, "127.0.0.1:" + std::to_string(port),
-                  "/api/v1/live/ws?session=" + session_uuid, ec);
-    body_ = res.body();
-    return static_cast<int>(res.result_int());
-  }
-  // The next message as JSON; null when the socket closed.
-  json Read() {
-    beast::flat_buffer buffer;
-    beast::error_code ec;
-    ws_.read(buffer, ec);
-    if (ec) return json();
-    return json::parse(beast::buffers_to_string(buffer.data()));
-  }
-  const std::string& body() const { return body_; }
-
- private:
-  asio::io_context io_;
-  websocket::stream<tcp::socket> ws_{io_};
-  std::string body_;
-};
+using Viewer = WsViewer;  // tests/server/ws_viewer.h
 
 // A raw station stream (the fake station).
 struct Station {
