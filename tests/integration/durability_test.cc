@@ -3,42 +3,19 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
-#include <fcntl.h>
 #include <unistd.h>
 
-#include <fstream>
 #include <mutex>
 #include <set>
 #include <thread>
 
+#include "tests/integration/server_process.h"
 #include "tests/integration/test_server.h"
 
 namespace ves::server::testing {
 namespace {
 
 using patient_db::StoreRole;
-
-// ves-server on 127.0.0.1:0 over `db`; returns its pid and port.
-pid_t StartServer(const std::filesystem::path& dir, int* port) {
-  const std::string port_file = (dir / "port").string();
-  std::filesystem::remove(port_file);
-  const std::string db = "sqlite:" + (dir / "ves.db").string();
-  const std::string log = (dir / "server.log").string();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    ::dup2(fd, 1);
-    ::dup2(fd, 2);
-    ::execl(VES_SERVER_PATH, "ves-server", "--listen", "127.0.0.1:0", "--db", db.c_str(),
-            "--insecure-loopback", "--quiet", "--port-file", port_file.c_str(), nullptr);
-    ::_exit(127);
-  }
-  for (int i = 0; i < 200 && !std::filesystem::exists(port_file); ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  std::ifstream(port_file) >> *port;
-  return pid;
-}
 
 struct Loop {
   std::mutex mutex;
@@ -78,11 +55,11 @@ TEST(Durability, SigkillMidLoopLosesNoAcknowledgedRecordAndSigtermDrains) {
     token = NewToken();
     store->AddToken({Sha256HexOf(token), StoreRole::kStation, "north", "", "station", 1});
   }
-  int port = 0;
-  pid_t pid = StartServer(dir, &port);
-  ASSERT_GT(port, 0) << "ves-server did not start, see " << dir / "server.log";
+  const std::string db = "sqlite:" + (dir / "ves.db").string();
+  ServerProcess server = StartServerProcess(db, dir, "");
+  ASSERT_GT(server.port, 0) << "ves-server did not start, see " << server.log;
   ClientOptions o;
-  o.address = "127.0.0.1:" + std::to_string(port);
+  o.address = server.address();
   o.token = token;
   o.deadline = std::chrono::seconds(5);
 
@@ -92,16 +69,14 @@ TEST(Durability, SigkillMidLoopLosesNoAcknowledgedRecordAndSigtermDrains) {
   for (int i = 0; i < 400 && Acknowledged(loop) < 300; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ASSERT_EQ(::kill(pid, SIGKILL), 0);  // in the middle of the loop
-  int wstatus = 0;
-  ::waitpid(pid, &wstatus, 0);
+  ASSERT_NE(StopServerProcess(&server, SIGKILL), -1);  // in the middle of the loop
   loop.stop = true;
   for (auto& t : clients) t.join();
   const std::set<std::string> acked = loop.acknowledged;
   ASSERT_GE(acked.size(), 300u);
 
-  pid = StartServer(dir, &port);
-  ASSERT_GT(port, 0);
+  server = StartServerProcess(db, dir, "");
+  ASSERT_GT(server.port, 0) << "ves-server did not restart, see " << server.log;
   {
     auto store = patient_db::OpenStore("sqlite:" + (dir / "ves.db").string());
     size_t missing = 0;
@@ -109,14 +84,14 @@ TEST(Durability, SigkillMidLoopLosesNoAcknowledgedRecordAndSigtermDrains) {
     EXPECT_EQ(missing, 0u) << "of " << acked.size() << " acknowledged records";
   }
   // SIGTERM while uploads are in flight: exit 0, every acknowledged record kept.
-  o.address = "127.0.0.1:" + std::to_string(port);
+  o.address = server.address();
   Loop second;
   std::thread client(UploadLoop, o, &second, 999);
   for (int i = 0; i < 400 && Acknowledged(second) < 50; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  ASSERT_EQ(::kill(pid, SIGTERM), 0);
-  ::waitpid(pid, &wstatus, 0);
+  const int wstatus = StopServerProcess(&server, SIGTERM);
+  ASSERT_NE(wstatus, -1);
   second.stop = true;
   client.join();
   EXPECT_TRUE(WIFEXITED(wstatus) && WEXITSTATUS(wstatus) == 0) << "status " << wstatus;

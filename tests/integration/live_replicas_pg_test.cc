@@ -7,20 +7,12 @@
 // the relays reconnect when the database drops their connections; many
 // stations on one replica reach the other without drops.
 // Skipped unless VES_TEST_POSTGRES_URL is set (deploy/with-postgres.sh).
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/prctl.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
-#include <boost/asio/connect.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <deque>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -31,6 +23,7 @@
 #include "server/auth.h"
 #include "server/client.h"
 #include "server/live_pg_relay.h"
+#include "tests/integration/server_process.h"
 #include "tests/integration/test_server.h"
 #include "tests/patient_db/pg_test_util.h"
 #include "tests/server/web_client.h"
@@ -43,10 +36,6 @@ namespace {
 using nlohmann::json;
 using patient_db::StoreRole;
 namespace pg = patient_db::pg_testing;
-namespace asio = boost::asio;
-namespace beast = boost::beast;
-namespace websocket = beast::websocket;
-using tcp = asio::ip::tcp;
 
 int64_t NowUnixMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -54,12 +43,7 @@ int64_t NowUnixMs() {
       .count();
 }
 
-struct Replica {
-  pid_t pid = -1;
-  int port = 0;       // gRPC
-  int http_port = 0;  // web API and WebSocket
-  std::string log;
-};
+using Replica = ServerProcess;
 
 using Viewer = WsViewer;  // tests/server/ws_viewer.h
 
@@ -157,43 +141,16 @@ class LiveReplicas : public ::testing::Test {
   }
 
   Replica& Start() {
-    const std::string n = std::to_string(replicas_.size());
-    const std::string port_file = (dir_ / ("port" + n)).string();
-    const std::string http_file = (dir_ / ("http" + n)).string();
-    Replica r;
-    r.log = (dir_ / ("server" + n + ".log")).string();
-    r.pid = ::fork();
-    if (r.pid == 0) {
-      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive this process
-      const int fd = ::open(r.log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      ::execl(VES_SERVER_PATH, "ves-server", "--listen", "127.0.0.1:0", "--http", "127.0.0.1:0",
-              "--db", url_.c_str(), "--insecure-loopback", "--quiet", "--port-file",
-              port_file.c_str(), "--http-port-file", http_file.c_str(), nullptr);
-      ::_exit(127);
-    }
-    for (int i = 0;
-         i < 400 && !(std::filesystem::exists(port_file) && std::filesystem::exists(http_file));
-         ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-    std::ifstream(port_file) >> r.port;
-    std::ifstream(http_file) >> r.http_port;
-    replicas_.push_back(r);
-    EXPECT_GT(r.http_port, 0) << "ves-server did not start, see " << r.log;
+    replicas_.push_back(
+        StartServerProcess(url_, dir_, std::to_string(replicas_.size()), /*with_http=*/true));
+    EXPECT_GT(replicas_.back().http_port, 0)
+        << "ves-server did not start, see " << replicas_.back().log;
     return replicas_.back();
   }
-  static void Stop(Replica* r, int signal) {
-    if (r->pid <= 0) return;
-    ::kill(r->pid, signal);
-    int status = 0;
-    ::waitpid(r->pid, &status, 0);
-    r->pid = -1;
-  }
+  static void Stop(Replica* r, int signal) { StopServerProcess(r, signal); }
   ClientOptions Client(const Replica& r) const {
     ClientOptions o;
-    o.address = "127.0.0.1:" + std::to_string(r.port);
+    o.address = r.address();
     o.token = station_;
     o.deadline = std::chrono::seconds(60);
     return o;

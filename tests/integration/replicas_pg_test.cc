@@ -5,10 +5,7 @@
 // taken during uploads restores to a consistent database.
 // Skipped unless VES_TEST_POSTGRES_URL is set (deploy/with-postgres.sh).
 #include <gtest/gtest.h>
-#include <fcntl.h>
 #include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -24,6 +21,7 @@
 #include "patient_db/case_bundle.h"
 #include "patient_db/pg_store.h"
 #include "server/auth.h"
+#include "tests/integration/server_process.h"
 #include "tests/integration/test_server.h"
 #include "tests/patient_db/pg_test_util.h"
 
@@ -35,11 +33,7 @@ using patient_db::PgStoreOptions;
 using patient_db::StoreRole;
 namespace pg = patient_db::pg_testing;
 
-struct Replica {
-  pid_t pid = -1;
-  int port = 0;
-  std::string address() const { return "127.0.0.1:" + std::to_string(port); }
-};
+using Replica = ServerProcess;
 
 // The PostgreSQL tool `name` (pg_dump, pg_restore): on PATH (with-postgres.sh
 // puts the server's bin dir first) or in Debian's versioned directory.
@@ -82,35 +76,11 @@ class Replicas : public ::testing::Test {
   }
 
   Replica& Start() {
-    const int n = static_cast<int>(replicas_.size());
-    const std::string port_file = (dir_ / ("port" + std::to_string(n))).string();
-    const std::string log = (dir_ / ("server" + std::to_string(n) + ".log")).string();
-    Replica r;
-    r.pid = ::fork();
-    if (r.pid == 0) {
-      ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive this process
-      const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-      ::execl(VES_SERVER_PATH, "ves-server", "--listen", "127.0.0.1:0", "--db", url_.c_str(),
-              "--insecure-loopback", "--quiet", "--port-file", port_file.c_str(), nullptr);
-      ::_exit(127);
-    }
-    for (int i = 0; i < 400 && !std::filesystem::exists(port_file); ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-    std::ifstream(port_file) >> r.port;
-    replicas_.push_back(r);
-    EXPECT_GT(r.port, 0) << "ves-server did not start, see " << log;
+    replicas_.push_back(StartServerProcess(url_, dir_, std::to_string(replicas_.size())));
+    EXPECT_GT(replicas_.back().port, 0) << "ves-server did not start, see " << replicas_.back().log;
     return replicas_.back();
   }
-  static void Stop(Replica* r, int signal) {
-    if (r->pid <= 0) return;
-    ::kill(r->pid, signal);
-    int status = 0;
-    ::waitpid(r->pid, &status, 0);
-    r->pid = -1;
-  }
+  static void Stop(Replica* r, int signal) { StopServerProcess(r, signal); }
   ClientOptions Client(const Replica& r, const std::string& token) const {
     ClientOptions o;
     o.address = r.address();

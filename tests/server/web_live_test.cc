@@ -9,10 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -33,8 +30,6 @@ namespace {
 using nlohmann::json;
 using patient_db::StoreRole;
 namespace asio = boost::asio;
-namespace beast = boost::beast;
-namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 
 static_assert(sync::kMaxLiveJpegBytes == kMaxLiveJpegBytes, "station and server JPEG bounds");

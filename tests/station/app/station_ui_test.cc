@@ -10,14 +10,9 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/file.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <boost/asio/connect.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
@@ -38,6 +33,7 @@
 #include "station/sync/station_paths.h"
 #include "station/ui/training_screen.h"
 #include "tests/server/web_client.h"
+#include "tests/server/ws_viewer.h"
 #include "tests/station/app/station_fixture.h"
 #include "tests/station/app/xwd_image.h"
 
@@ -70,40 +66,6 @@ bool OnPath(const std::string& program) {
   return false;
 }
 
-// A supervisor's WebSocket view of one live session (docs/web.md): reads
-// fail after 10 s of silence rather than hang the test.
-class LiveViewer {
- public:
-  int Connect(int http_port, const std::string& session_uuid, const std::string& token) {
-    namespace beast = boost::beast;
-    boost::asio::ip::tcp::resolver resolver(io_);
-    boost::asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(http_port)));
-    const timeval timeout{10, 0};
-    ::setsockopt(ws_.next_layer().native_handle(), SOL_SOCKET, SO_RCVTIMEO, &timeout,
-                 sizeof timeout);
-    ws_.set_option(beast::websocket::stream_base::decorator(
-        [=](beast::websocket::request_type& req) {
-          req.set(beast::http::field::authorization, "Bearer " + token);
-        }));
-    beast::websocket::response_type res;
-    beast::error_code ec;
-    ws_.handshake(res, "127.0.0.1:" + std::to_string(http_port),
-                  "/api/v1/live/ws?session=" + session_uuid, ec);
-    return static_cast<int>(res.result_int());
-  }
-  // The next frame; null when the socket closed or stayed silent.
-  nlohmann::json Read() {
-    boost::beast::flat_buffer buffer;
-    boost::beast::error_code ec;
-    ws_.read(buffer, ec);
-    if (ec) return nlohmann::json();
-    return nlohmann::json::parse(boost::beast::buffers_to_string(buffer.data()));
-  }
-
- private:
-  boost::asio::io_context io_;
-  boost::beast::websocket::stream<boost::asio::ip::tcp::socket> ws_{io_};
-};
 
 // Share of the pixels of `region` that changed between two screenshots.
 double ChangedShare(const cv::Mat& a, const cv::Mat& b, const cv::Rect& region) {
@@ -618,7 +580,7 @@ TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
   ASSERT_EQ(second.size(), 1u) << "the repeated session is not live alone: " << last_list;
   ASSERT_NE(second[0], first[0]);
 
-  LiveViewer viewer;
+  server::testing::WsViewer viewer;  // reads give up after 10 s
   ASSERT_EQ(viewer.Connect(http_port_, second[0], supervisor_token_), 101);
   std::mutex seen_mutex;
   std::vector<double> tip_arc_m;
