@@ -19,12 +19,6 @@ int64_t NowMs() {
       .count();
 }
 
-int64_t SteadyMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 std::string Base64(const std::string& bytes) {
   std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
   const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
@@ -152,6 +146,12 @@ uint64_t LiveViewer::overwritten() const {
   return overwritten_;
 }
 
+int64_t SteadyNowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 bool LiveHub::Begin(const LiveSessionInfo& info, std::string* why) {
   LiveSessionInfo begun;
   {
@@ -271,7 +271,7 @@ bool LiveHub::ApplyRemote(const LiveNotice& n) {
     // reconnected to a third replica).
     it->second.info.origin_replica = n.replica_id;
     it->second.info.frames = n.info.frames;
-    it->second.last_notice_steady_ms = SteadyMs();
+    it->second.last_notice_steady_ms = SteadyNowMs();
   }
   if (n.kind == LiveNoticeKind::kFrame) {
     LiveSessionInfo info;
@@ -281,7 +281,7 @@ bool LiveHub::ApplyRemote(const LiveNotice& n) {
 }
 
 int LiveHub::ExpireRemote(int64_t silence_ms) {
-  const int64_t now = SteadyMs();
+  const int64_t now = SteadyNowMs();
   std::vector<std::shared_ptr<LiveViewer>> viewers;
   int expired = 0;
   {

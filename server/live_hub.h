@@ -51,6 +51,10 @@ struct LiveSessionInfo {
 
 struct LiveNotice;
 
+// Milliseconds on the steady clock: remote sessions' silence and the relay's
+// throttling and backoff are measured on it.
+int64_t SteadyNowMs();
+
 // Where a hub sends its own sessions for other replicas to see. Called on
 // the stream's thread: must not block (LivePgRelay queues).
 class LiveRelay {

@@ -12,12 +12,6 @@
 namespace ves::server {
 namespace {
 
-int64_t SteadyNowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 // 64 random bits as hex: unique enough among a handful of replicas, and
 // new on every start, so a restarted replica is never taken for its old self.
 std::string NewReplicaId() {
