@@ -13,7 +13,7 @@ bool LiveImageAssembly::Await(LiveNotice frame) {
 LiveImageAssembly::Outcome LiveImageAssembly::Add(const LiveNotice& n, LiveNotice* frame,
                                                   std::string* why) {
   const std::string name = "image " + std::to_string(n.image) + " part " +
-                            std::to_string(n.part.part) + " of " + std::to_string(n.part.parts);
+                           std::to_string(n.part.part) + " of " + std::to_string(n.part.parts);
   auto it = waiting_.find(n.info.session_uuid);
   if (it == waiting_.end() || it->second.frame.replica_id != n.replica_id ||
       n.image < it->second.frame.image) {
@@ -40,8 +40,7 @@ LiveImageAssembly::Outcome LiveImageAssembly::Add(const LiveNotice& n, LiveNotic
   std::string& slot = w.parts[static_cast<size_t>(n.part.part)];
   if (!slot.empty()) return discard("came twice");
   if (w.bytes + n.part.bytes.size() > kMaxLiveJpegBytes) {
-    return discard("the image would be more than " + std::to_string(kMaxLiveJpegBytes) +
-                   " bytes");
+    return discard("the image would be more than " + std::to_string(kMaxLiveJpegBytes) + " bytes");
   }
   slot = n.part.bytes;
   w.bytes += slot.size();

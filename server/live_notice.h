@@ -38,9 +38,9 @@ enum class LiveNoticeKind { kBegin, kFrame, kEnd, kImage };
 
 // One part of an image: kImage notices.
 struct LiveImagePart {
-  int part = 0;        // 0..parts-1
-  int parts = 0;       // 1..kMaxLiveImageParts
-  std::string bytes;   // this part's JPEG bytes (1..kLiveImagePartBytes when sent)
+  int part = 0;       // 0..parts-1
+  int parts = 0;      // 1..kMaxLiveImageParts
+  std::string bytes;  // this part's JPEG bytes (1..kLiveImagePartBytes when sent)
 };
 
 struct LiveNotice {

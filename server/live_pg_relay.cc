@@ -197,8 +197,7 @@ void LivePgRelay::Enqueue(Outgoing o) {
   queue_cv_.notify_one();
 }
 
-void LivePgRelay::EnqueueFrame(Outgoing frame, std::shared_ptr<const std::string> jpeg,
-                               int parts) {
+void LivePgRelay::EnqueueFrame(Outgoing frame, std::shared_ptr<const std::string> jpeg, int parts) {
   {
     std::lock_guard lock(mutex_);
     const size_t room = options_.queue_capacity - std::min(queue_.size(), options_.queue_capacity);
@@ -266,8 +265,8 @@ void LivePgRelay::RunPublisher() {
     if (image_part) {
       notice.part.part = o.part;
       notice.part.parts = o.parts;
-      notice.part.bytes = o.jpeg->substr(static_cast<size_t>(o.part) * kLiveImagePartBytes,
-                                         kLiveImagePartBytes);
+      notice.part.bytes =
+          o.jpeg->substr(static_cast<size_t>(o.part) * kLiveImagePartBytes, kLiveImagePartBytes);
     }
     const std::string payload = EncodeLiveNotice(notice);
     if (payload.empty()) {

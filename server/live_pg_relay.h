@@ -46,9 +46,9 @@ struct LivePgRelayOptions {
   // one at most every 200 ms; the margin absorbs the network's jitter). A
   // frame with its JPEG is never thinned.
   int min_image_interval_ms = 150;
-  size_t queue_capacity = 256;      // notices waiting for the publisher
-  int remote_silence_ms = 5000;     // a remote session without a notice this long has ended
-  int max_backoff_ms = 10000;       // reconnect backoff: 250 ms doubling up to this
+  size_t queue_capacity = 256;   // notices waiting for the publisher
+  int remote_silence_ms = 5000;  // a remote session without a notice this long has ended
+  int max_backoff_ms = 10000;    // reconnect backoff: 250 ms doubling up to this
 };
 
 // "ves_live" for the schema public, else "ves_live_" and 16 hex digits of
@@ -139,11 +139,11 @@ class LivePgRelay final : public LiveRelay {
   const std::string replica_id_;
 
   mutable std::mutex mutex_;
-  std::condition_variable queue_cv_;              // the publisher waits here (queue, stop)
-  std::condition_variable stop_cv_;               // the listener's backoff waits here (stop)
-  std::deque<Outgoing> queue_;                    // guarded by mutex_
-  std::map<std::string, Outbound> outbound_;      // by session uuid; guarded by mutex_
-  bool stopping_ = false;                         // guarded by mutex_
+  std::condition_variable queue_cv_;          // the publisher waits here (queue, stop)
+  std::condition_variable stop_cv_;           // the listener's backoff waits here (stop)
+  std::deque<Outgoing> queue_;                // guarded by mutex_
+  std::map<std::string, Outbound> outbound_;  // by session uuid; guarded by mutex_
+  bool stopping_ = false;                     // guarded by mutex_
   std::chrono::steady_clock::time_point drain_until_;
   bool listening_ = false;           // guarded by mutex_
   Stats stats_;                      // guarded by mutex_
