@@ -92,16 +92,20 @@ std::string CheckLiveFrame(const v1::LiveFrame& f, bool first) {
   bad(CheckNumber(f.inserted_m(), "frame.inserted_m", 1e3));
   bad(CheckNumber(f.tip_arc_m(), "frame.tip_arc_m", 1e3));
   bad(CheckNumber(f.stretch_m(), "frame.stretch_m", 1e3));
-  if (f.endoscope_jpeg().size() > kMaxLiveJpegBytes) {
-    bad("frame.endoscope_jpeg: " + std::to_string(f.endoscope_jpeg().size()) +
-        " bytes, more than " + std::to_string(kMaxLiveJpegBytes));
-  }
-  if (!f.endoscope_jpeg().empty() &&
-      (f.endoscope_jpeg().size() < 3 ||
-       f.endoscope_jpeg().compare(0, 3, std::string("\xFF\xD8\xFF", 3)) != 0)) {
-    bad("frame.endoscope_jpeg: not a JPEG (no FF D8 FF start)");
-  }
+  bad(CheckLiveJpeg(f.endoscope_jpeg()));
   return why;
+}
+
+std::string CheckLiveJpeg(const std::string& jpeg) {
+  if (jpeg.size() > kMaxLiveJpegBytes) {
+    return "frame.endoscope_jpeg: " + std::to_string(jpeg.size()) + " bytes, more than " +
+           std::to_string(kMaxLiveJpegBytes);
+  }
+  if (!jpeg.empty() &&
+      (jpeg.size() < 3 || jpeg.compare(0, 3, std::string("\xFF\xD8\xFF", 3)) != 0)) {
+    return "frame.endoscope_jpeg: not a JPEG (no FF D8 FF start)";
+  }
+  return {};
 }
 
 std::string LiveFrameJson(const v1::LiveFrame& f, int64_t received_unix_ms) {

@@ -29,6 +29,8 @@ inline constexpr int kMaxLiveViewersPerSession = 32;
 // INVALID_ARGUMENT-style message naming the first bad field ("" when fine).
 // `first` frames must name session_uuid, trainee_id and case_id.
 std::string CheckLiveFrame(const v1::LiveFrame& frame, bool first);
+// The frame's JPEG part of CheckLiveFrame: size and FF D8 FF signature.
+std::string CheckLiveJpeg(const std::string& jpeg);
 
 // The frame as the live page's JSON (scope_mm / colon_mm in the AP
 // projection the replay uses; the JPEG as base64).

@@ -21,6 +21,8 @@ const char* KindName(LiveNoticeKind k) {
       return "frame";
     case LiveNoticeKind::kEnd:
       return "end";
+    case LiveNoticeKind::kImage:
+      return "image";
   }
   return "?";
 }
@@ -92,15 +94,51 @@ std::string ReadUnsigned(const json& j, const char* key, uint64_t max, uint64_t*
   return {};
 }
 
+// Image numbers count up from 1 per session; JSON keeps integers exact to 2^53.
+constexpr uint64_t kMaxImageNumber = uint64_t{1} << 53;
+
+// The rest of a kImage notice: which image, which part of how many, its
+// bytes. Whether the parts make a JPEG is LiveImageAssembly's to check.
+std::optional<LiveNotice> ParseImagePart(const json& j, LiveNotice n, std::string* why) {
+  uint64_t image = 0, part = 0, parts = 0;
+  std::string w = ReadUnsigned(j, "image", kMaxImageNumber, &image);
+  if (w.empty()) w = ReadUnsigned(j, "parts", kMaxLiveImageParts, &parts);
+  if (w.empty() && image == 0) w = "image = 0: images count from 1";
+  if (w.empty() && parts == 0) w = "parts = 0: an image has at least one part";
+  if (w.empty()) w = ReadUnsigned(j, "part", parts - 1, &part);
+  if (w.empty()) {
+    auto it = j.find("data");
+    if (it == j.end() || !it->is_string()) {
+      w = "data: missing or not a string";
+    } else if (!DecodeBase64(it->get_ref<const std::string&>(), &n.part.bytes)) {
+      w = "data: not base64";
+    } else if (n.part.bytes.empty()) {
+      w = "data: empty";
+    }
+  }
+  if (!w.empty()) {
+    *why = std::move(w);
+    return std::nullopt;
+  }
+  n.image = image;
+  n.part.part = static_cast<int>(part);
+  n.part.parts = static_cast<int>(parts);
+  return n;
+}
+
 }  // namespace
 
-std::string EncodeLiveNotice(const LiveNotice& n, bool* jpeg_dropped) {
-  if (jpeg_dropped != nullptr) *jpeg_dropped = false;
+std::string EncodeLiveNotice(const LiveNotice& n) {
   json j = {{"v", 1},
             {"kind", KindName(n.kind)},
             {"replica", n.replica_id},
             {"session", n.info.session_uuid}};
-  if (n.kind != LiveNoticeKind::kEnd) {
+  if (n.kind == LiveNoticeKind::kImage) {
+    j["image"] = n.image;
+    j["part"] = n.part.part;
+    j["parts"] = n.part.parts;
+    j["data"] = Base64(n.part.bytes);
+  } else if (n.kind != LiveNoticeKind::kEnd) {
     j["institution"] = n.info.institution;
     j["trainee"] = n.info.trainee_id;
     j["case"] = n.info.case_id;
@@ -109,29 +147,23 @@ std::string EncodeLiveNotice(const LiveNotice& n, bool* jpeg_dropped) {
     j["started_unix_ms"] = n.info.started_unix_ms;
     j["frames"] = n.info.frames;
   }
-  const auto dump = [](const json& v) {
-    // ASCII only: the payload is text in whatever encoding the database has.
-    return v.dump(-1, ' ', true, json::error_handler_t::replace);
-  };
-  if (n.kind != LiveNoticeKind::kFrame) {
-    std::string out = dump(j);
-    return out.size() <= kMaxLiveNoticeBytes ? out : std::string();
+  if (n.kind == LiveNoticeKind::kFrame) {
+    v1::LiveFrame frame = n.frame;
+    frame.clear_session_uuid();  // in the envelope
+    frame.clear_trainee_id();
+    frame.clear_case_id();
+    frame.clear_endoscope_jpeg();  // in image notices
+    j["frame"] = Base64(frame.SerializeAsString());
+    if (n.image != 0) j["image"] = n.image;
   }
-  v1::LiveFrame frame = n.frame;
-  frame.clear_session_uuid();  // in the envelope
-  frame.clear_trainee_id();
-  frame.clear_case_id();
-  j["frame"] = Base64(frame.SerializeAsString());
-  std::string out = dump(j);
-  if (out.size() <= kMaxLiveNoticeBytes) return out;
-  if (frame.endoscope_jpeg().empty()) return {};
-  // Most JPEGs (320 px, 10-20 KiB) do not fit in a notification: the
-  // shapes and figures go on without the picture.
-  frame.clear_endoscope_jpeg();
-  if (jpeg_dropped != nullptr) *jpeg_dropped = true;
-  j["frame"] = Base64(frame.SerializeAsString());
-  out = dump(j);
+  // ASCII only: the payload is text in whatever encoding the database has.
+  std::string out = j.dump(-1, ' ', true, json::error_handler_t::replace);
   return out.size() <= kMaxLiveNoticeBytes ? out : std::string();
+}
+
+int LiveImagePartCount(size_t jpeg_bytes) {
+  const size_t parts = (jpeg_bytes + kLiveImagePartBytes - 1) / kLiveImagePartBytes;
+  return parts <= static_cast<size_t>(kMaxLiveImageParts) ? static_cast<int>(parts) : 0;
 }
 
 std::optional<LiveNotice> ParseLiveNotice(std::string_view payload, std::string* why) {
@@ -155,14 +187,17 @@ std::optional<LiveNotice> ParseLiveNotice(std::string_view payload, std::string*
     n.kind = LiveNoticeKind::kFrame;
   } else if (kind == "end") {
     n.kind = LiveNoticeKind::kEnd;
+  } else if (kind == "image") {
+    n.kind = LiveNoticeKind::kImage;
   } else {
     return refuse("kind = " + patient_db::PrintableExcerpt(kind.dump()) +
-                  ": not begin, frame or end");
+                  ": not begin, frame, end or image");
   }
   std::string w = ReadId(j, "replica", true, &n.replica_id, kMaxReplicaIdBytes);
   if (w.empty()) w = ReadId(j, "session", true, &n.info.session_uuid);
   if (!w.empty()) return refuse(w);
   if (n.kind == LiveNoticeKind::kEnd) return n;
+  if (n.kind == LiveNoticeKind::kImage) return ParseImagePart(j, std::move(n), why);
 
   LiveSessionInfo& info = n.info;
   w = ReadId(j, "institution", true, &info.institution);
@@ -196,6 +231,10 @@ std::optional<LiveNotice> ParseLiveNotice(std::string_view payload, std::string*
   if (!w.empty()) return refuse(w);
   info.t_s = n.frame.t_s();
   info.station_dropped = n.frame.dropped_frames();
+  if (j.contains("image")) {
+    w = ReadUnsigned(j, "image", kMaxImageNumber, &n.image);
+    if (!w.empty()) return refuse(w);
+  }
   return n;
 }
 

@@ -104,10 +104,12 @@ void LivePgRelay::Stop(std::chrono::milliseconds drain) {
   const Stats s = stats();
   spdlog::info(
       "live relay: stopped; {} notices published, {} frames thinned out, dropped {} (queue "
-      "full) {} (too big) {} (connection lost), {} JPEGs left out; {} received, {} refused, {} "
-      "remote sessions expired",
+      "full) {} (too big) {} (connection lost); images: {} published, {} thinned out, {} "
+      "dropped; {} received, {} refused, {} remote sessions expired; images from other "
+      "replicas: {} received, {} completed",
       s.published, s.throttled, s.dropped_full, s.dropped_oversize, s.dropped_failed,
-      s.jpeg_left_out, s.received, s.refused, s.expired);
+      s.images_published, s.images_thinned, s.images_dropped, s.received, s.refused, s.expired,
+      s.images_received, s.images_completed);
 }
 
 bool LivePgRelay::listening() const {
@@ -129,28 +131,51 @@ void LivePgRelay::Began(const LiveSessionInfo& info) {
 
 void LivePgRelay::Framed(const LiveSessionInfo& info, const v1::LiveFrame& frame) {
   const int64_t now = SteadyNowMs();
+  const std::string& jpeg = frame.endoscope_jpeg();
+  const int parts = LiveImagePartCount(jpeg.size());
+  Outgoing o;
   {
     std::lock_guard lock(mutex_);
-    auto [it, fresh] = last_frame_ms_.try_emplace(info.session_uuid, now);
-    if (!fresh) {
-      if (now - it->second < options_.min_frame_interval_ms) {
-        ++stats_.throttled;
-        return;
+    Outbound& out = outbound_[info.session_uuid];
+    bool with_image = false;
+    if (!jpeg.empty()) {
+      // The receiver shows only whole JPEGs (FF D9 at the end): one that is
+      // not is not sent.
+      if (parts == 0 || jpeg.size() < 2 || jpeg.compare(jpeg.size() - 2, 2, "\xFF\xD9") != 0) {
+        ++stats_.images_dropped;
+      } else if (out.any_image && now - out.last_image_ms < options_.min_image_interval_ms) {
+        ++stats_.images_thinned;
+      } else {
+        with_image = true;
       }
-      it->second = now;
+    }
+    if (!with_image && out.any_frame && now - out.last_frame_ms < options_.min_frame_interval_ms) {
+      ++stats_.throttled;
+      return;
+    }
+    out.any_frame = true;
+    out.last_frame_ms = now;
+    if (with_image) {
+      out.any_image = true;
+      out.last_image_ms = now;
+      o.image = ++out.images;
     }
   }
-  Outgoing o;
   o.kind = LiveNoticeKind::kFrame;
   o.info = info;
   o.frame = frame;
-  Enqueue(std::move(o));
+  std::shared_ptr<const std::string> image;
+  if (o.image != 0) {
+    image = std::make_shared<const std::string>(std::move(*o.frame.mutable_endoscope_jpeg()));
+  }
+  o.frame.clear_endoscope_jpeg();
+  EnqueueFrame(std::move(o), std::move(image), parts);
 }
 
 void LivePgRelay::Ended(const std::string& session_uuid) {
   {
     std::lock_guard lock(mutex_);
-    last_frame_ms_.erase(session_uuid);
+    outbound_.erase(session_uuid);
   }
   Outgoing o;
   o.kind = LiveNoticeKind::kEnd;
@@ -172,11 +197,44 @@ void LivePgRelay::Enqueue(Outgoing o) {
   queue_cv_.notify_one();
 }
 
+void LivePgRelay::EnqueueFrame(Outgoing frame, std::shared_ptr<const std::string> jpeg, int parts) {
+  {
+    std::lock_guard lock(mutex_);
+    const size_t room = options_.queue_capacity - std::min(queue_.size(), options_.queue_capacity);
+    if (frame.image != 0 && room < 1 + static_cast<size_t>(parts)) {
+      // Part of an image is no use to anyone: the frame goes without it.
+      ++stats_.images_dropped;
+      frame.image = 0;
+    }
+    if (room < 1) {
+      ++stats_.dropped_full;
+      return;
+    }
+    const uint64_t image = frame.image;
+    const std::string session = frame.info.session_uuid;
+    queue_.push_back(std::move(frame));
+    for (int i = 0; image != 0 && i < parts; ++i) {
+      Outgoing o;
+      o.kind = LiveNoticeKind::kImage;
+      o.info.session_uuid = session;
+      o.image = image;
+      o.part = i;
+      o.parts = parts;
+      o.jpeg = jpeg;
+      queue_.push_back(std::move(o));
+    }
+  }
+  queue_cv_.notify_one();
+}
+
 void LivePgRelay::RunPublisher() {
   std::unique_ptr<pqxx::connection> conn;
   std::string channel;
   int backoff_ms = 0;
   bool failing = false;
+  // An image whose frame or part was lost: its remaining parts are no use.
+  std::string lost_session;
+  uint64_t lost_image = 0;
   while (true) {
     Outgoing o;
     {
@@ -188,16 +246,35 @@ void LivePgRelay::RunPublisher() {
       o = std::move(queue_.front());
       queue_.pop_front();
     }
+    const bool image_part = o.kind == LiveNoticeKind::kImage;
+    if (image_part && o.image == lost_image && o.info.session_uuid == lost_session) continue;
+    const std::string session = o.info.session_uuid;
+    const auto lose_image = [&] {
+      if (o.image == 0) return;
+      lost_session = session;
+      lost_image = o.image;
+      std::lock_guard lock(mutex_);
+      ++stats_.images_dropped;
+    };
     LiveNotice notice;
     notice.kind = o.kind;
     notice.replica_id = replica_id_;
     notice.info = std::move(o.info);
     notice.frame = std::move(o.frame);
-    bool jpeg_dropped = false;
-    const std::string payload = EncodeLiveNotice(notice, &jpeg_dropped);
+    notice.image = o.image;
+    if (image_part) {
+      notice.part.part = o.part;
+      notice.part.parts = o.parts;
+      notice.part.bytes =
+          o.jpeg->substr(static_cast<size_t>(o.part) * kLiveImagePartBytes, kLiveImagePartBytes);
+    }
+    const std::string payload = EncodeLiveNotice(notice);
     if (payload.empty()) {
-      std::lock_guard lock(mutex_);
-      ++stats_.dropped_oversize;
+      {
+        std::lock_guard lock(mutex_);
+        ++stats_.dropped_oversize;
+      }
+      lose_image();
       continue;
     }
     try {
@@ -212,7 +289,7 @@ void LivePgRelay::RunPublisher() {
       backoff_ms = 0;
       std::lock_guard lock(mutex_);
       ++stats_.published;
-      if (jpeg_dropped) ++stats_.jpeg_left_out;
+      if (image_part && o.part + 1 == o.parts) ++stats_.images_published;
     } catch (const std::exception& e) {
       conn.reset();
       backoff_ms = NextBackoffMs(backoff_ms, options_.max_backoff_ms);
@@ -227,6 +304,7 @@ void LivePgRelay::RunPublisher() {
         std::lock_guard lock(mutex_);
         ++stats_.dropped_failed;
       }
+      lose_image();
       std::unique_lock lock(mutex_);
       queue_cv_.wait_for(lock, std::chrono::milliseconds(backoff_ms), [&] { return stopping_; });
     }
@@ -303,6 +381,12 @@ void LivePgRelay::ExpireTick() {
   if (now - last_expire_ms_ < 250) return;
   last_expire_ms_ = now;
   const int expired = hub_->ExpireRemote(options_.remote_silence_ms);
+  // Frames waiting for images of sessions that ended or expired, or moved
+  // to another replica, are freed.
+  images_.Retain([&](const std::string& session_uuid, const std::string& replica) {
+    LiveSessionInfo info;
+    return hub_->Find(session_uuid, &info) && info.origin_replica == replica;
+  });
   if (expired > 0) {
     spdlog::info("live relay: {} remote live session(s) ended after {} ms without a notice",
                  expired, options_.remote_silence_ms);
@@ -313,7 +397,7 @@ void LivePgRelay::ExpireTick() {
 
 void LivePgRelay::OnNotification(const std::string& payload) {
   std::string why;
-  const std::optional<LiveNotice> notice = ParseLiveNotice(payload, &why);
+  std::optional<LiveNotice> notice = ParseLiveNotice(payload, &why);
   if (!notice) {
     {
       std::lock_guard lock(mutex_);
@@ -323,7 +407,20 @@ void LivePgRelay::OnNotification(const std::string& payload) {
     return;
   }
   if (notice->replica_id == replica_id_) return;  // our own, back from the channel
-  if (!hub_->ApplyRemote(*notice)) {
+  if (notice->kind == LiveNoticeKind::kImage) {
+    OnImagePart(*notice);
+    return;
+  }
+  const bool awaits_image = notice->kind == LiveNoticeKind::kFrame && notice->image != 0;
+  LiveNotice applied;
+  if (awaits_image) {
+    // The hub hears of the session now; viewers get the frame with its
+    // image, as a local frame that carries one.
+    applied.kind = LiveNoticeKind::kBegin;
+    applied.replica_id = notice->replica_id;
+    applied.info = notice->info;
+  }
+  if (!hub_->ApplyRemote(awaits_image ? applied : *notice)) {
     {
       std::lock_guard lock(mutex_);
       ++stats_.refused;
@@ -332,8 +429,44 @@ void LivePgRelay::OnNotification(const std::string& payload) {
                " remote live sessions already");
     return;
   }
+  // A newer frame, or the end, frees what waited for an image that did not come.
+  if (awaits_image) {
+    images_.Await(std::move(*notice));
+  } else if (notice->kind != LiveNoticeKind::kBegin) {
+    images_.Forget(notice->info.session_uuid);
+  }
   std::lock_guard lock(mutex_);
   ++stats_.received;
+  if (awaits_image) ++stats_.images_received;
+}
+
+void LivePgRelay::OnImagePart(const LiveNotice& part) {
+  LiveNotice frame;
+  std::string why;
+  switch (images_.Add(part, &frame, &why)) {
+    case LiveImageAssembly::Outcome::kPending: {
+      std::lock_guard lock(mutex_);
+      ++stats_.received;
+      return;
+    }
+    case LiveImageAssembly::Outcome::kComplete: {
+      const bool shown = hub_->ApplyRemote(frame);
+      std::lock_guard lock(mutex_);
+      ++stats_.received;
+      if (shown) ++stats_.images_completed;
+      return;
+    }
+    case LiveImageAssembly::Outcome::kIgnored:
+      return;  // its frame was lost or ended: nothing to show it with
+    case LiveImageAssembly::Outcome::kRefused: {
+      {
+        std::lock_guard lock(mutex_);
+        ++stats_.refused;
+      }
+      LogRefused("session " + part.info.session_uuid + " " + why);
+      return;
+    }
+  }
 }
 
 void LivePgRelay::LogRefused(const std::string& why) {

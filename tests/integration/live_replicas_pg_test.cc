@@ -5,9 +5,11 @@
 // institution's supervisor is refused (403) as on A, and B reports the end
 // when the stream ends; a SIGKILLed replica's session expires on the other;
 // the relays reconnect when the database drops their connections; many
-// stations on one replica reach the other without drops.
+// stations on one replica reach the other without drops; a viewer on B gets
+// the endoscope JPEGs a station streams to A byte for byte.
 // Skipped unless VES_TEST_POSTGRES_URL is set (deploy/with-postgres.sh).
 #include <gtest/gtest.h>
+#include <openssl/evp.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -17,6 +19,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <pqxx/pqxx>
+#include <random>
+#include <regex>
 #include <thread>
 
 #include "patient_db/pg_store.h"
@@ -47,15 +51,39 @@ using Replica = ServerProcess;
 
 using Viewer = WsViewer;  // tests/server/ws_viewer.h
 
+// Frame k's endoscope picture: 16 KiB (a 320-pixel view is 10-20 KiB) that
+// differ for every k, a JPEG's start and end markers around them.
+std::string StationJpeg(int k) {
+  std::mt19937 rng(static_cast<uint32_t>(k));
+  std::string jpeg(16 << 10, '\0');
+  for (char& c : jpeg) c = static_cast<char>(rng());
+  jpeg.replace(0, 4, "\xFF\xD8\xFF\xE0");
+  jpeg.replace(jpeg.size() - 2, 2, "\xFF\xD9");
+  return jpeg;
+}
+
+std::string FromBase64(const std::string& text) {
+  std::string bytes(text.size() / 4 * 3, '\0');
+  const int n = EVP_DecodeBlock(reinterpret_cast<unsigned char*>(bytes.data()),
+                                reinterpret_cast<const unsigned char*>(text.data()),
+                                static_cast<int>(text.size()));
+  if (n < 0) return {};
+  const size_t pad = text.size() - text.find_last_not_of('=') - 1;
+  bytes.resize(static_cast<size_t>(n) - pad);
+  return bytes;
+}
+
 // A station streaming frames every 50 ms (20 Hz, as ves-station run does)
-// from its own thread, the tip 1 cm deeper each frame, until Finish.
+// from its own thread, the tip 1 cm deeper each frame, until Finish. With
+// `jpeg_every`, every that many frames carry StationJpeg(k) (4: every
+// 0.2 s, as ves-station run sends them).
 class StreamingStation {
  public:
-  StreamingStation(const ClientOptions& client, const std::string& uuid)
+  StreamingStation(const ClientOptions& client, const std::string& uuid, int jpeg_every = 0)
       : stub_(v1::Live::NewStub(MakeClientChannel(client))) {
     context_.AddMetadata("authorization", "Bearer " + client.token);
     writer_ = stub_->StreamSession(&context_, &summary_);
-    thread_ = std::thread([this, uuid] {
+    thread_ = std::thread([this, uuid, jpeg_every] {
       for (int k = 0; !stop_ && k < 2000; ++k) {
         v1::LiveFrame f;
         if (k == 0) {
@@ -72,6 +100,7 @@ class StreamingStation {
           for (float v : {0.01f * i, 0.0f, 0.02f * i}) f.add_colon_xyz_m(v);
         }
         for (float v : {0.0f, 0.0f, 0.02f * k}) f.add_tip_xyz_m(v);
+        if (jpeg_every > 0 && k % jpeg_every == 0) f.set_endoscope_jpeg(StationJpeg(k));
         f.set_sent_unix_ms(NowUnixMs());
         if (!writer_->Write(f)) return;
         ++written_;
@@ -405,6 +434,56 @@ TEST_F(LiveReplicas, ManyStationsOnOneReplicaAllReachTheOtherWithoutDrops) {
             << latency_ms[latency_ms.size() * 99 / 100] << " ms, max " << latency_ms.back()
             << " ms\n"
             << log.substr(log.find("live relay: stopped")) << "\n";
+}
+
+// The endoscope JPEG crosses in image notices (too big for one): a viewer
+// on B gets the very bytes the station streamed to A, each with the frame
+// that carried it, and both relays count the images when they stop.
+TEST_F(LiveReplicas, AViewerOnTheOtherReplicaGetsTheStationsJpegsByteForByte) {
+  Replica& a = Start();
+  Replica& b = Start();
+  ASSERT_TRUE(a.http_port > 0 && b.http_port > 0);
+  ASSERT_TRUE(WaitRelayConnections("listen", 2));
+  StreamingStation station(Client(a), uuid_, /*jpeg_every=*/4);
+  ASSERT_GE(WaitListed(b, true, std::chrono::seconds(15)).count(), 0) << "B never listed it";
+  Viewer viewer;
+  ASSERT_EQ(viewer.Connect(b.http_port, uuid_, north_), 101);
+  int images = 0, frames = 0;
+  std::vector<int64_t> latency_ms;  // station's Write on A to the viewer on B (one clock)
+  while (images < 8) {
+    const json f = viewer.Read();
+    ASSERT_FALSE(f.is_null()) << "nothing within 10 s after " << images << " images";
+    ASSERT_FALSE(f.value("ended", false)) << "ended while streaming";
+    ++frames;
+    if (!f.contains("jpeg_base64")) continue;
+    const int k = static_cast<int>(std::lround(f["t_s"].get<double>() / 0.05));
+    EXPECT_EQ(k % 4, 0) << "a frame that carried no JPEG got one";
+    const std::string jpeg = FromBase64(f["jpeg_base64"].get<std::string>());
+    ASSERT_EQ(jpeg.size(), StationJpeg(k).size()) << "frame " << k;
+    EXPECT_TRUE(jpeg == StationJpeg(k)) << "frame " << k << ": not the station's bytes";
+    EXPECT_DOUBLE_EQ(f["tip_arc_m"].get<double>(), 0.01 * k) << "with the frame that carried it";
+    latency_ms.push_back(NowUnixMs() - f["sent_unix_ms"].get<int64_t>());
+    ++images;
+  }
+  ASSERT_TRUE(station.Finish().ok());
+  ASSERT_GE(WaitListed(b, false, std::chrono::seconds(3)).count(), 0) << "B missed the end";
+  Stop(&a, SIGTERM);  // both log their relay's counters
+  Stop(&b, SIGTERM);
+  const auto counter = [](const std::string& log, const std::string& pattern) {
+    std::smatch m;
+    return std::regex_search(log, m, std::regex(pattern)) ? std::stoll(m[1]) : -1;
+  };
+  const std::string log_a = ReadLog(a), log_b = ReadLog(b);
+  EXPECT_GT(counter(log_a, R"(images: (\d+) published)"), 0) << log_a;
+  EXPECT_EQ(counter(log_a, R"(images: \d+ published, \d+ thinned out, (\d+) dropped)"), 0) << log_a;
+  EXPECT_GE(counter(log_b, R"(images from other replicas: \d+ received, (\d+) completed)"), images)
+      << log_b;
+  std::sort(latency_ms.begin(), latency_ms.end());
+  std::cout << "A to B: " << images << " JPEGs of 16 KiB among " << frames
+            << " frames, latency p50 " << latency_ms[latency_ms.size() / 2] << " ms, max "
+            << latency_ms.back() << " ms\n"
+            << log_a.substr(log_a.find("live relay: stopped")) << "\n"
+            << log_b.substr(log_b.find("live relay: stopped")) << "\n";
 }
 
 }  // namespace
