@@ -82,6 +82,7 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
     if (axial_m > hit.penetration_m) {
       hit.penetration_m = axial_m;
       hit.normal = tb;
+      hit.end_cap = true;
     }
   }
   return hit;
@@ -174,11 +175,20 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
       continue;
     }
     c.touching = true;
+    if (params.contacts_across_scope && !hit.end_cap && i + 1 < samples) {
+      // The wall presses on the scope's side, so across its axis. Where the
+      // colon is folded askew the lumen's plane is tilted against the scope
+      // and its normal would hold the shaft along its length like a barb.
+      const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
+      const Eigen::Vector3d across = hit.normal - hit.normal.dot(axis) * axis;
+      const double across_norm = across.norm();
+      if (across_norm > 1e-3) sc->sample_normal_W[i] = across / across_norm;
+    }
     const ColonPoint& wall = params.colon.points[hit.t < 0.5 ? c.segment : c.segment + 1];
     const TissueParams& tissue = wall.tissue;
     const WallResponse response =
         CalcWallResponse(tissue, params.wall_hardening_ratio, hit.penetration_m);
-    const Eigen::Vector3d& n = hit.normal;
+    const Eigen::Vector3d& n = sc->sample_normal_W[i];
     const double f_n = response.force_N;
     const Eigen::Vector3d f_n_vec = -f_n * n;  // pushes the scope back toward the axis
     // Elastic stick spring: the tangential force that would hold the contact.

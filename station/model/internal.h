@@ -91,6 +91,7 @@ struct SegmentHit {
   Eigen::Vector3d normal{Eigen::Vector3d::UnitX()};  // from the lumen axis outward
   double penetration_m{-1.0};    // l: > 0 when the scope presses the wall
   double radius_m{0.0};
+  bool end_cap{false};           // the closed end past the deepest point
 };
 SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& state, int segment,
                           const Eigen::Vector3d& p_W);

@@ -75,6 +75,12 @@ struct ModelParams {
   // gaps, never below the mesentery length), so gathered colon lies on its
   // root. false: the reach is fixed.
   bool mesentery_reach_gathers{false};
+  // A sample's wall contact pushes across the scope's axis: the side of a
+  // cylinder takes only radial loads (the tip keeps its end face). Where the
+  // colon folds askew onto the scope the lumen plane's offset points along
+  // the shaft, and held a withdrawing scope like a barb (docs/model.md,
+  // "Contact"). false: along the offset, as before 2026-12-02.
+  bool contacts_across_scope{true};
   bool operator==(const ModelParams&) const = default;
 };
 
