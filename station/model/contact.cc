@@ -179,6 +179,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
       // The wall presses on the scope's side, so across its axis. Where the
       // colon is folded askew the lumen's plane is tilted against the scope
       // and its normal would hold the shaft along its length like a barb.
+      // (An offset almost along the axis gives no side to push on: kept.)
       const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
       const Eigen::Vector3d across = hit.normal - hit.normal.dot(axis) * axis;
       const double across_norm = across.norm();
