@@ -67,7 +67,15 @@ InputSample ExpertOperator::Act(const Perception& p) {
       stall_since_s_ = p.t_s;
     }
     const bool stalled = p.t_s - stall_since_s_ > kStall_s;
-    if ((deeper && hooked && loop_m > k.loop_limit_m) || (scope_used_up && (deeper || stalled))) {
+    // Stalled in fixed colon (the tip has not moved for kStall_s), it pulls
+    // back to straighten the scope even without a hook or a loop reading,
+    // once per kReduceAgainDepth_m of depth: repeated pull-backs at one
+    // place pressed the rectosigmoid (redundant-sigmoid, docs/scoring.md).
+    const bool stalled_in_fixed = stalled && p.tip_into_fixed_colon_m > 0.0 &&
+                                  p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
+    if (stalled_in_fixed) last_stall_reduce_tip_m_ = p.tip_arc_m;
+    if ((deeper && hooked && loop_m > k.loop_limit_m) || (scope_used_up && (deeper || stalled)) ||
+        stalled_in_fixed) {
       reducing_ = true;
       stall_since_s_ = p.t_s;
       last_reduce_tip_m_ = p.tip_arc_m;

@@ -64,8 +64,9 @@ class NoviceOperator final : public ScriptedOperator {
 // (knobs held), pulls back and turns the shaft clockwise: the loop comes out
 // and the colon pleats onto the scope while the tip holds or even advances.
 // It stops pulling once the tip starts to come back with the scope (the loop
-// is out), and advances again. When little scope is left it takes the loops
-// out too. Fluoroscopy off, textured view.
+// is out), and advances again. When little scope is left, or the tip has
+// stalled in fixed colon, it takes the loops out too. Fluoroscopy off,
+// textured view.
 class ExpertOperator final : public ScriptedOperator {
  public:
   // The main settings; each must keep the expert working when moved by 20 %.
@@ -117,6 +118,7 @@ class ExpertOperator final : public ScriptedOperator {
   bool started_{false};
   LoopIndex loop_index_;
   double last_reduce_tip_m_{-1.0};
+  double last_stall_reduce_tip_m_{-1.0};  // tip at the last pull-back for a stall
   double stall_tip_m_{0.0};
   double stall_since_s_{0.0};
   double settle_until_s_{0.0};
