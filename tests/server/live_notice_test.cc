@@ -107,6 +107,22 @@ void ExpectRefused(const std::string& payload, const std::string& field, const s
   EXPECT_NE(why.find(field), std::string::npos) << what << ": " << why;
 }
 
+// A valid payload with one field replaced or removed, as JSON text: the
+// malformed-payload tests start from a good notice and break one thing.
+struct JsonEdits {
+  json good;
+  std::string with(const std::string& key, const json& value) const {
+    json j = good;
+    j[key] = value;
+    return j.dump();
+  }
+  std::string without(const std::string& key) const {
+    json j = good;
+    j.erase(key);
+    return j.dump();
+  }
+};
+
 TEST(LiveNotice, AFrameRoundTripsWithItsSessionAndNumbers) {
   const LiveNotice sent = Notice(LiveNoticeKind::kFrame);
   const std::string payload = Encode(sent);
@@ -191,35 +207,26 @@ TEST(LiveNotice, MalformedImagePartsAreRefusedNamingTheProblem) {
   const json good = json::parse(Encode(ImageParts(Jpeg(12000), 7)[1]));
   ASSERT_EQ(good["part"], 1);
   ASSERT_EQ(good["parts"], 3);
-  const auto with = [&](const std::string& key, const json& value) {
-    json j = good;
-    j[key] = value;
-    return j.dump();
-  };
-  const auto without = [&](const std::string& key) {
-    json j = good;
-    j.erase(key);
-    return j.dump();
-  };
-  ExpectRefused(without("image"), "image: missing", "no image number");
-  ExpectRefused(with("image", 0), "image = 0", "image 0");
-  ExpectRefused(with("image", -3), "image", "negative image");
-  ExpectRefused(with("image", (1ull << 53) + 1), "image", "image number past 2^53");
-  ExpectRefused(without("parts"), "parts: missing", "no part count");
-  ExpectRefused(with("parts", 0), "parts = 0", "no parts");
-  ExpectRefused(with("parts", kMaxLiveImageParts + 1), "parts", "more parts than the bound");
-  ExpectRefused(with("parts", 2.5), "parts", "fractional parts");
-  ExpectRefused(without("part"), "part: missing", "no part index");
-  ExpectRefused(with("part", 3), "part = 3", "index = count");
-  ExpectRefused(with("part", -1), "part", "negative index");
-  ExpectRefused(without("data"), "data: missing", "no data");
-  ExpectRefused(with("data", 17), "data: missing or not a string", "numeric data");
-  ExpectRefused(with("data", ""), "data: empty", "empty data");
-  ExpectRefused(with("data", "QUJD\nREVG"), "data: not base64", "whitespace");
-  ExpectRefused(with("data", "QUJ"), "data: not base64", "not padded");
-  ExpectRefused(with("data", "not*base64!!"), "data: not base64", "bad alphabet");
-  ExpectRefused(with("session", "abc\x1b[2Jdef"), "session", "control characters");
-  ExpectRefused(with("replica", std::string(65, 'a')), "replica", "long replica id");
+  const JsonEdits edit{good};
+  ExpectRefused(edit.without("image"), "image: missing", "no image number");
+  ExpectRefused(edit.with("image", 0), "image = 0", "image 0");
+  ExpectRefused(edit.with("image", -3), "image", "negative image");
+  ExpectRefused(edit.with("image", (1ull << 53) + 1), "image", "image number past 2^53");
+  ExpectRefused(edit.without("parts"), "parts: missing", "no part count");
+  ExpectRefused(edit.with("parts", 0), "parts = 0", "no parts");
+  ExpectRefused(edit.with("parts", kMaxLiveImageParts + 1), "parts", "more parts than the bound");
+  ExpectRefused(edit.with("parts", 2.5), "parts", "fractional parts");
+  ExpectRefused(edit.without("part"), "part: missing", "no part index");
+  ExpectRefused(edit.with("part", 3), "part = 3", "index = count");
+  ExpectRefused(edit.with("part", -1), "part", "negative index");
+  ExpectRefused(edit.without("data"), "data: missing", "no data");
+  ExpectRefused(edit.with("data", 17), "data: missing or not a string", "numeric data");
+  ExpectRefused(edit.with("data", ""), "data: empty", "empty data");
+  ExpectRefused(edit.with("data", "QUJD\nREVG"), "data: not base64", "whitespace");
+  ExpectRefused(edit.with("data", "QUJ"), "data: not base64", "not padded");
+  ExpectRefused(edit.with("data", "not*base64!!"), "data: not base64", "bad alphabet");
+  ExpectRefused(edit.with("session", "abc\x1b[2Jdef"), "session", "control characters");
+  ExpectRefused(edit.with("replica", std::string(65, 'a')), "replica", "long replica id");
   std::string why;
   EXPECT_TRUE(ParseLiveNotice(good.dump(), &why).has_value()) << why;
 }
@@ -340,51 +347,42 @@ TEST(LiveNotice, TheLargestFrameTheServerAcceptsStillFits) {
 
 TEST(LiveNotice, MalformedPayloadsAreRefusedNamingTheProblem) {
   const json good = json::parse(Encode(Notice(LiveNoticeKind::kFrame)));
-  const auto with = [&](const std::string& key, const json& value) {
-    json j = good;
-    j[key] = value;
-    return j.dump();
-  };
-  const auto without = [&](const std::string& key) {
-    json j = good;
-    j.erase(key);
-    return j.dump();
-  };
+  const JsonEdits edit{good};
   ExpectRefused(std::string(kMaxLiveNoticeBytes + 1, ' '), "more than 7999", "oversize");
   ExpectRefused("", "not JSON", "empty");
   ExpectRefused("{\"v\":1,", "not JSON", "cut short");
   ExpectRefused(std::string(3990, '[') + std::string(3990, ']'), "not a JSON object",
                 "deeply nested");
   ExpectRefused("[1,2]", "not a JSON object", "an array");
-  ExpectRefused(with("v", 2), "v:", "a newer version");
-  ExpectRefused(without("v"), "v:", "no version");
-  ExpectRefused(with("kind", "explode"), "kind", "unknown kind");
-  ExpectRefused(with("image", -1), "image", "a negative image number");
-  ExpectRefused(with("kind", 3), "kind", "numeric kind");
-  ExpectRefused(without("replica"), "replica", "no replica");
-  ExpectRefused(with("replica", std::string(65, 'a')), "replica", "long replica id");
-  ExpectRefused(with("replica", json::array()), "replica", "replica not a string");
-  ExpectRefused(with("session", ""), "session", "empty session");
-  ExpectRefused(with("session", "abc\x1b[2Jdef"), "session", "control characters");
-  ExpectRefused(with("session", std::string(129, 'u')), "session", "long session");
-  ExpectRefused(without("institution"), "institution", "no institution");
-  ExpectRefused(with("trainee", 12), "trainee", "numeric trainee");
+  ExpectRefused(edit.with("v", 2), "v:", "a newer version");
+  ExpectRefused(edit.without("v"), "v:", "no version");
+  ExpectRefused(edit.with("kind", "explode"), "kind", "unknown kind");
+  ExpectRefused(edit.with("image", -1), "image", "a negative image number");
+  ExpectRefused(edit.with("kind", 3), "kind", "numeric kind");
+  ExpectRefused(edit.without("replica"), "replica", "no replica");
+  ExpectRefused(edit.with("replica", std::string(65, 'a')), "replica", "long replica id");
+  ExpectRefused(edit.with("replica", json::array()), "replica", "replica not a string");
+  ExpectRefused(edit.with("session", ""), "session", "empty session");
+  ExpectRefused(edit.with("session", "abc\x1b[2Jdef"), "session", "control characters");
+  ExpectRefused(edit.with("session", std::string(129, 'u')), "session", "long session");
+  ExpectRefused(edit.without("institution"), "institution", "no institution");
+  ExpectRefused(edit.with("trainee", 12), "trainee", "numeric trainee");
   {
     std::string bad_utf8 = good.dump();
     bad_utf8.replace(bad_utf8.find("\"sample\""), 8, "\"\xC0\xAF\"");
     ExpectRefused(bad_utf8, "not JSON", "invalid UTF-8");
   }
-  ExpectRefused(with("case_version", -1), "case_version", "negative version");
-  ExpectRefused(with("case_version", 1.5), "case_version", "fractional version");
-  ExpectRefused(with("case_version", 1ull << 32), "case_version", "version over 32 bits");
-  ExpectRefused(with("started_unix_ms", "yesterday"), "started_unix_ms", "a string clock");
-  ExpectRefused(with("started_unix_ms", 1ull << 62), "started_unix_ms", "a clock past 9999");
-  ExpectRefused(with("frames", -5), "frames", "negative frames");
-  ExpectRefused(without("frame"), "frame", "a frame notice without one");
-  ExpectRefused(with("frame", "not*base64!"), "frame: not base64", "bad alphabet");
-  ExpectRefused(with("frame", "QUJD\nREVG"), "frame: not base64", "whitespace");
-  ExpectRefused(with("frame", "QQ==QUJD"), "frame: not base64", "data after padding");
-  ExpectRefused(with("frame", "/////w=="), "LiveFrame", "not protobuf");
+  ExpectRefused(edit.with("case_version", -1), "case_version", "negative version");
+  ExpectRefused(edit.with("case_version", 1.5), "case_version", "fractional version");
+  ExpectRefused(edit.with("case_version", 1ull << 32), "case_version", "version over 32 bits");
+  ExpectRefused(edit.with("started_unix_ms", "yesterday"), "started_unix_ms", "a string clock");
+  ExpectRefused(edit.with("started_unix_ms", 1ull << 62), "started_unix_ms", "a clock past 9999");
+  ExpectRefused(edit.with("frames", -5), "frames", "negative frames");
+  ExpectRefused(edit.without("frame"), "frame", "a frame notice without one");
+  ExpectRefused(edit.with("frame", "not*base64!"), "frame: not base64", "bad alphabet");
+  ExpectRefused(edit.with("frame", "QUJD\nREVG"), "frame: not base64", "whitespace");
+  ExpectRefused(edit.with("frame", "QQ==QUJD"), "frame: not base64", "data after padding");
+  ExpectRefused(edit.with("frame", "/////w=="), "LiveFrame", "not protobuf");
   {
     v1::LiveFrame f = Frame(1);
     f.set_t_s(std::numeric_limits<double>::quiet_NaN());
@@ -418,14 +416,14 @@ TEST(LiveNotice, MalformedPayloadsAreRefusedNamingTheProblem) {
     };
     v1::LiveFrame gif = Frame(1);
     gif.set_endoscope_jpeg("GIF89a");
-    ExpectRefused(with("frame", forged(gif)), "frame.endoscope_jpeg", "not a JPEG");
+    ExpectRefused(edit.with("frame", forged(gif)), "frame.endoscope_jpeg", "not a JPEG");
     v1::LiveFrame with_id = Frame(1);
     with_id.set_trainee_id("someone");
-    ExpectRefused(with("frame", forged(with_id)), "carries ids", "ids inside the frame");
+    ExpectRefused(edit.with("frame", forged(with_id)), "carries ids", "ids inside the frame");
   }
   // Unknown extra fields are ignored (a newer replica may add some).
   std::string why;
-  EXPECT_TRUE(ParseLiveNotice(with("future", "x"), &why).has_value()) << why;
+  EXPECT_TRUE(ParseLiveNotice(edit.with("future", "x"), &why).has_value()) << why;
 }
 
 TEST(LiveHubRemote, ARemoteSessionIsListedWatchedAndEnded) {
