@@ -19,15 +19,6 @@ int64_t NowMs() {
       .count();
 }
 
-std::string Base64(const std::string& bytes) {
-  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
-  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
-                                reinterpret_cast<const unsigned char*>(bytes.data()),
-                                static_cast<int>(bytes.size()));
-  out.resize(static_cast<size_t>(std::max(0, n)));
-  return out;
-}
-
 template <class Floats>
 std::string CheckFloats(const Floats& v, const char* name, int max_count, int multiple_of) {
   if (v.size() > max_count) {
@@ -126,7 +117,7 @@ std::string LiveFrameJson(const v1::LiveFrame& f, int64_t received_unix_ms) {
                    std::lround(f.tip_xyz_m(2) * 1000.0)};
   }
   if (f.tip_dir().size() == 3) j["tip_dir"] = {f.tip_dir(0), f.tip_dir(1), f.tip_dir(2)};
-  if (!f.endoscope_jpeg().empty()) j["jpeg_base64"] = Base64(f.endoscope_jpeg());
+  if (!f.endoscope_jpeg().empty()) j["jpeg_base64"] = EncodeBase64(f.endoscope_jpeg());
   // '<', '>' and '&' never reach a page unescaped (ids are not in frames, but
   // the same rule as every API reply).
   return j.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
@@ -148,6 +139,15 @@ std::string LiveViewer::Next(int wait_ms, bool* ended) {
 uint64_t LiveViewer::overwritten() const {
   std::lock_guard lock(mutex_);
   return overwritten_;
+}
+
+std::string EncodeBase64(const std::string& bytes) {
+  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
+  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                reinterpret_cast<const unsigned char*>(bytes.data()),
+                                static_cast<int>(bytes.size()));
+  out.resize(static_cast<size_t>(std::max(0, n)));
+  return out;
 }
 
 int64_t SteadyNowMs() {

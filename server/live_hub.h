@@ -36,6 +36,10 @@ std::string CheckLiveJpeg(const std::string& jpeg);
 // projection the replay uses; the JPEG as base64).
 std::string LiveFrameJson(const v1::LiveFrame& frame, int64_t received_unix_ms);
 
+// Standard base64 with padding, no line breaks (the JPEG in a viewer's frame,
+// the protobuf and image parts in a replica notice).
+std::string EncodeBase64(const std::string& bytes);
+
 struct LiveSessionInfo {
   std::string session_uuid;
   std::string institution;  // the trainee's

@@ -27,15 +27,6 @@ const char* KindName(LiveNoticeKind k) {
   return "?";
 }
 
-std::string Base64(const std::string& bytes) {
-  std::string out(4 * ((bytes.size() + 2) / 3) + 1, '\0');
-  const int n = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
-                                reinterpret_cast<const unsigned char*>(bytes.data()),
-                                static_cast<int>(bytes.size()));
-  out.resize(static_cast<size_t>(n > 0 ? n : 0));
-  return out;
-}
-
 // Strict base64 (no whitespace, padded to a multiple of 4): EVP_DecodeBlock
 // alone skips whitespace and counts padding as zero bytes.
 bool DecodeBase64(const std::string& text, std::string* bytes) {
@@ -137,7 +128,7 @@ std::string EncodeLiveNotice(const LiveNotice& n) {
     j["image"] = n.image;
     j["part"] = n.part.part;
     j["parts"] = n.part.parts;
-    j["data"] = Base64(n.part.bytes);
+    j["data"] = EncodeBase64(n.part.bytes);
   } else if (n.kind != LiveNoticeKind::kEnd) {
     j["institution"] = n.info.institution;
     j["trainee"] = n.info.trainee_id;
@@ -153,7 +144,7 @@ std::string EncodeLiveNotice(const LiveNotice& n) {
     frame.clear_trainee_id();
     frame.clear_case_id();
     frame.clear_endoscope_jpeg();  // in image notices
-    j["frame"] = Base64(frame.SerializeAsString());
+    j["frame"] = EncodeBase64(frame.SerializeAsString());
     if (n.image != 0) j["image"] = n.image;
   }
   // ASCII only: the payload is text in whatever encoding the database has.
