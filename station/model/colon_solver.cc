@@ -53,13 +53,14 @@ Eigen::Vector3d CalcKinkDirection(const Eigen::Vector3d& rest_mean, const Eigen:
                                   const Eigen::Vector3d& fallback) {
   const double length = mean_sum.norm();
   if (length < 1e-6) return fallback;
-  const Eigen::Vector3d mean = mean_sum / length;
+  const Eigen::Vector3d mean = mean_sum * (1.0 / length);
   const Eigen::Vector3d c = rest_mean.cross(mean);
   const double cos_turn = rest_mean.dot(mean);
   if (cos_turn < -0.99) return fallback;  // turned about half a turn: no smallest rotation
-  // Rodrigues for the rotation taking rest_mean onto mean: v + c x v + c x (c x v) / (1 + cos).
+  // Rodrigues for the rotation taking rest_mean onto mean: v + c x v + c x (c x v) / (1 + cos)
+  // (a rotation: the unit rest direction stays unit).
   const Eigen::Vector3d cv = c.cross(rest_direction);
-  return (rest_direction + cv + c.cross(cv) / (1.0 + cos_turn)).normalized();
+  return rest_direction + cv + c.cross(cv) * (1.0 / (1.0 + cos_turn));
 }
 
 }  // namespace
@@ -97,6 +98,8 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   sc->colon_suspension_N_per_m.assign(N, 0.0);
   sc->colon_damping_N_s_per_m.assign(N, 0.0);
   sc->colon_tether_N_per_m.assign(N, 0.0);
+  sc->colon_own_diag.assign(N, Eigen::Matrix3d::Zero());
+  sc->colon_relax_factor.assign(N, 0.0);
   sc->colon_pair_gap_m.assign(N, 1.0);
   sc->colon_pair_kink_N_per_m.assign(N, 0.0);
   sc->colon_pair_pleat_limit.assign(N, 1.0);
@@ -109,6 +112,13 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
     sc->colon_damping_N_s_per_m[i] = t.suspension_damping_N_s_per_m2 * h;
     sc->colon_tether_N_per_m[i] = t.mesentery_stiffness_N_per_m2 * h;
+    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d P = I - pts[i].rest_tangent * pts[i].rest_tangent.transpose();
+    sc->colon_own_diag[i] =
+        sc->colon_damping_N_s_per_m[i] * I + (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
+    if (t.suspension_relaxation_s > 0.0) {
+      sc->colon_relax_factor[i] = params.dt_s / (t.suspension_relaxation_s + params.dt_s);
+    }
     smallest_pleat_limit = std::min(smallest_pleat_limit, t.pleat_limit);
   }
   for (int i = 0; i + 1 < N; ++i) {
@@ -137,7 +147,10 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   }
 }
 
-void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc) {
+// flatten: at -O2 GCC left Eigen's small products out of line, and their calls
+// were a large part of the solve (docs/model.md, "Speed").
+[[gnu::flatten]] void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s,
+                                 Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
   const double dt = params.dt_s;
@@ -154,12 +167,12 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
   // and the mesentery tether.
   for (int i = 0; i <= end; ++i) {
     const ColonPoint& p = pts[i];
-    const Eigen::Matrix3d P = I - p.rest_tangent * p.rest_tangent.transpose();
     const double K_c = sc->colon_suspension_N_per_m[i];
-    diag[i] = sc->colon_damping_N_s_per_m[i] * I + (dt * K_c) * P;
+    diag[i] = sc->colon_own_diag[i];
     // paper §3.3.2: K_c ||d_ri|| pulls the point home within its plane P_i
     // (home: its reference, which may have settled since rest).
-    rhs[i] = -(dt * K_c) * (P * (x[i] - s->colon_reference_m[i]));
+    const Eigen::Vector3d d = x[i] - s->colon_reference_m[i];
+    rhs[i] = -(dt * K_c) * (d - p.rest_tangent.dot(d) * p.rest_tangent);
     upper[i].setZero();
     // Mesentery: its reach is measured in the tether's metric, in which a
     // move along the root counts mesentery_shear_ratio times: rho^2 = r^T G r
@@ -229,8 +242,6 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
     const PairAxial a = CalcPairAxial(params, std::min(pleat_limit, 1.0), g / g0 - 1.0);
     // Tension also resists the pair turning (a taut string); compression does
     // not push it sideways (dropping that term keeps the matrix definite).
-    Eigen::Matrix3d C = (a.slope_N / g0) * u * u.transpose();
-    if (a.force_N > 0.0 && g > 1e-12) C += (a.force_N / g) * (I - u * u.transpose());
     // Kink tension: the pair is pulled toward the tube's local direction,
     // never along it, so the tube stays smooth and still pleats freely. That
     // direction is the pair's rest direction turned as the mean of its ends'
@@ -239,13 +250,16 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
     const Eigen::Vector3d m = CalcKinkDirection(sc->colon_pair_rest_mean_tangent[i],
                                                 s->colon_tangent[i] + s->colon_tangent[i + 1],
                                                 sc->colon_pair_rest_direction[i], u);
-    const Eigen::Matrix3d Pm = I - m * m.transpose();
     const double k = sc->colon_pair_kink_N_per_m[i];  // T over the natural gap
-    C.noalias() += k * Pm;
-    const Eigen::Vector3d F = a.force_N * u + k * (Pm * seg);  // on point i; -F on i+1
-    diag[i] += dt * C;
-    diag[i + 1] += dt * C;
-    upper[i] = -dt * C;
+    // C = (slope/g0) u u^T + (f/g)(I - u u^T) [taut only] + k (I - m m^T).
+    const double taut = a.force_N > 0.0 && g > 1e-12 ? a.force_N / g : 0.0;
+    const Eigen::Matrix3d dtC = (dt * (taut + k)) * I +
+                                (dt * (a.slope_N / g0 - taut)) * (u * u.transpose()) -
+                                (dt * k) * (m * m.transpose());
+    const Eigen::Vector3d F = a.force_N * u + k * (seg - m.dot(seg) * m);  // on point i; -F on i+1
+    diag[i] += dtC;
+    diag[i + 1] += dtC;
+    upper[i] = -dtC;
     rhs[i] += dt * F;
     rhs[i + 1] -= dt * F;
   }
@@ -313,20 +327,51 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
   }
   // Block Thomas over points 1..last (point 0 and the points past `last`
   // held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
-  // M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1).
+  // M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1). M_i is
+  // symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
+  // triangle is formed and it is inverted by its adjugate, in scalars: the
+  // generic 3x3 products were most of the step (docs/model.md, "Speed").
   auto& gain = sc->colon_work;
   for (int i = 1; i <= last; ++i) {
-    Eigen::Matrix3d M = diag[i];
+    const Eigen::Matrix3d& D = diag[i];
+    double m00 = D(0, 0), m01 = D(0, 1), m02 = D(0, 2), m11 = D(1, 1), m12 = D(1, 2), m22 = D(2, 2);
     Eigen::Vector3d y = rhs[i];
     if (i > 1) {
-      M.noalias() -= upper[i - 1].transpose() * gain[i - 1];
-      y.noalias() -= upper[i - 1].transpose() * rhs[i - 1];
+      const Eigen::Matrix3d& U = upper[i - 1];
+      const Eigen::Matrix3d& G = gain[i - 1];
+      const Eigen::Vector3d u0 = U.col(0), u1 = U.col(1), u2 = U.col(2);
+      m00 -= u0.dot(G.col(0));
+      m01 -= u0.dot(G.col(1));
+      m02 -= u0.dot(G.col(2));
+      m11 -= u1.dot(G.col(1));
+      m12 -= u1.dot(G.col(2));
+      m22 -= u2.dot(G.col(2));
+      const Eigen::Vector3d& r = rhs[i - 1];
+      y -= Eigen::Vector3d(u0.dot(r), u1.dot(r), u2.dot(r));
     }
-    const Eigen::Matrix3d M_inv = M.inverse();
-    gain[i].noalias() = M_inv * (i < last ? upper[i] : Eigen::Matrix3d::Zero().eval());
-    rhs[i].noalias() = M_inv * y;
+    // The adjugate of the symmetric M over its determinant.
+    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
+                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
+                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
+    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
+    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det,
+                 i11 = c11 * inv_det, i12 = c12 * inv_det, i22 = c22 * inv_det;
+    auto apply_inverse = [&](const Eigen::Vector3d& v) {
+      return Eigen::Vector3d(i00 * v.x() + i01 * v.y() + i02 * v.z(),
+                             i01 * v.x() + i11 * v.y() + i12 * v.z(),
+                             i02 * v.x() + i12 * v.y() + i22 * v.z());
+    };
+    if (i < last) {
+      const Eigen::Matrix3d& U = upper[i];
+      gain[i].col(0) = apply_inverse(U.col(0));
+      gain[i].col(1) = apply_inverse(U.col(1));
+      gain[i].col(2) = apply_inverse(U.col(2));
+    } else {
+      gain[i].setZero();
+    }
+    rhs[i] = apply_inverse(y);
   }
-  for (int i = last - 1; i >= 1; --i) rhs[i].noalias() -= gain[i] * rhs[i + 1];
+  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
 
   const double inv_dt = 1.0 / dt;
   for (int i = 1; i <= last; ++i) {
@@ -334,22 +379,22 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
     s->colon_velocity_m_per_s[i] = rhs[i] * inv_dt;
     s->p_WColon[i] = pts[i].rest_position_m + s->colon_displacement_m[i];
     // The suspension's reference settles toward where the point is.
-    const double relax_s = pts[i].tissue.suspension_relaxation_s;
-    if (relax_s > 0.0) {
-      s->colon_reference_m[i] += (dt / (relax_s + dt)) * (s->p_WColon[i] - s->colon_reference_m[i]);
-    }
+    const double relax = sc->colon_relax_factor[i];
+    if (relax > 0.0) s->colon_reference_m[i] += relax * (s->p_WColon[i] - s->colon_reference_m[i]);
   }
   // Folds set where a gap is held shortened, and release slowly elsewhere.
   if (params.colon_pleat_set_s > 0.0) {
+    const double set = dt / (params.colon_pleat_set_s + dt);
+    const double release = dt / (params.colon_pleat_release_s + dt);
     for (int i = 0; i < std::min(last + 1, N - 1); ++i) {
       const double g = (s->p_WColon[i + 1] - s->p_WColon[i]).norm();
       double& rest_m = s->colon_pair_rest_gap_m[i];
       const double natural_m = sc->colon_pair_gap_m[i];
       if (g < rest_m) {
         const double floor_m = sc->colon_pair_pleat_limit[i] * natural_m;
-        rest_m += (dt / (params.colon_pleat_set_s + dt)) * (std::max(g, floor_m) - rest_m);
+        rest_m += set * (std::max(g, floor_m) - rest_m);
       } else if (rest_m < natural_m) {
-        rest_m += (dt / (params.colon_pleat_release_s + dt)) * (natural_m - rest_m);
+        rest_m += release * (natural_m - rest_m);
       }
     }
   }

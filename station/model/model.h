@@ -255,6 +255,8 @@ struct Scratch {
   std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i (in P_i)
   std::vector<double> colon_damping_N_s_per_m;     // [i]: D_c h_i
   std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
+  std::vector<Eigen::Matrix3d> colon_own_diag;     // [i]: D_c h_i I + dt K_c h_i P_i
+  std::vector<double> colon_relax_factor;          // [i]: dt / (suspension relaxation + dt)
   std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
   std::vector<double> colon_pair_kink_N_per_m;     // [i]: T / gap
   std::vector<double> colon_pair_pleat_limit;      // [i]: smaller pleat_limit of i, i+1

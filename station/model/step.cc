@@ -124,6 +124,9 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->peak_wall_force_N = 0.0;
   out->peak_fixed_displacement_m = 0.0;
   double colon_sum_m = 0.0;
+  // Gap lengths |r_(i+1) - r_i|, each taken once: the one behind point i
+  // and the one ahead of it (0 past the ends, where the point's own is used).
+  double gap_behind_m = 0.0;
   for (int i = 0; i < N; ++i) {
     const ColonPoint& p = pts[i];
     const double moved_m = s->colon_displacement_m[i].norm();
@@ -145,11 +148,10 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     }
     out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
     // Pleat ratio: the tube's current length over its rest length around r_i.
-    const int a = std::max(i - 1, 0), b = std::min(i + 1, N - 1);
+    const double gap_ahead_m = i + 1 < N ? (s->p_WColon[i + 1] - s->p_WColon[i]).norm() : 0.0;
     const double rest_m = p.length_m;  // half of each neighbouring gap at rest
-    const double now_m = 0.5 * ((s->p_WColon[b] - s->p_WColon[i]).norm() +
-                                (s->p_WColon[i] - s->p_WColon[a]).norm());
-    out->pleat_ratio[i] = now_m / rest_m;
+    out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
+    gap_behind_m = gap_ahead_m;
   }
   SampleContact tip = s->contact[samples - 1];
   if (tip.inside) {
