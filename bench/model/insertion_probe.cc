@@ -145,6 +145,7 @@ int main(int argc, char** argv) {
   double next_print_s = 0.0;
   double max_tip_arc_m = 0.0, max_stretch_m = 0.0, max_wall_N = 0.0, max_base_N = 0.0;
   double max_fixed_m = 0.0, max_roll_Nm = 0.0;
+  double max_mobile_m = 0.0, max_mobile_arc_m = 0.0, max_beyond_meso_m = -1.0;
   long over_10N_steps = 0, steps = 0;
   double stretch_over_s[4] = {0, 0, 0, 0};  // time with the stretch over 1, 2, 3, 4 cm
   int spikes_printed = 0;
@@ -296,6 +297,18 @@ int main(int argc, char** argv) {
     max_base_N = std::max(max_base_N, std::abs(out.base_force_N));
     max_roll_Nm = std::max(max_roll_Nm, std::abs(out.roll_torque_Nm));
     max_fixed_m = std::max(max_fixed_m, out.peak_fixed_displacement_m);
+    // How far the mobile colon was carried from its rest place, and how far
+    // beyond its mesocolon height (a loop's size as the abdomen feels it).
+    for (size_t i = 0; i < params.colon.points.size(); ++i) {
+      const ves::model::ColonPoint& point = params.colon.points[i];
+      if (!point.tissue.mobile) continue;
+      const double moved_m = state.colon_displacement_m[i].norm();
+      if (moved_m > max_mobile_m) {
+        max_mobile_m = moved_m;
+        max_mobile_arc_m = point.arc_m;
+      }
+      max_beyond_meso_m = std::max(max_beyond_meso_m, moved_m - point.tissue.mesentery_length_m);
+    }
     if (std::abs(out.base_force_N) > 10.0) ++over_10N_steps;
     // Chatter of the base force: step-to-step change, and the 10 ms mean.
     base_jump_sum_N += std::abs(out.base_force_N - last_base_N);
@@ -550,6 +563,8 @@ int main(int argc, char** argv) {
               100.0 * over_10N_steps / std::max(1L, steps), max_roll_Nm, 1e3 * max_fixed_m);
   std::printf("base force: mean step-to-step change %.2f N, 10 ms mean over 10 N %.1f %% of steps\n",
               base_jump_sum_N / std::max(1L, steps), 100.0 * over_10N_mean_steps / std::max(1L, steps));
+  std::printf("mobile colon moved: peak %.1f cm at arc %.3f m, %.1f cm beyond its mesocolon height\n",
+              1e2 * max_mobile_m, max_mobile_arc_m, 1e2 * max_beyond_meso_m);
   std::printf("stretch over 1/2/3/4 cm: %.1f / %.1f / %.1f / %.1f s\n", stretch_over_s[0],
               stretch_over_s[1], stretch_over_s[2], stretch_over_s[3]);
   return 0;

@@ -74,11 +74,17 @@ InputSample ExpertOperator::Act(const Perception& p) {
     const bool stalled_in_fixed = stalled && p.tip_into_fixed_colon_m > 0.0 &&
                                   p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
     if (stalled_in_fixed) last_stall_reduce_tip_m_ = p.tip_arc_m;
-    if ((deeper && hooked && loop_m > k.loop_limit_m) || (scope_used_up && (deeper || stalled)) ||
-        stalled_in_fixed) {
+    const bool reduce = (deeper && hooked && loop_m > k.loop_limit_m) ||
+                        (scope_used_up && (deeper || stalled)) || stalled_in_fixed;
+    // Stalled again in fixed colon where it already pulled back: it backs the
+    // tip off a little and steers again ("pull back to find the lumen"); a
+    // back-off is not a reduction, so the next one still waits only for depth.
+    const bool back_off = !reduce && stalled && p.tip_into_fixed_colon_m > 0.0;
+    if (reduce || back_off) {
       reducing_ = true;
+      backing_off_ = back_off;
       stall_since_s_ = p.t_s;
-      last_reduce_tip_m_ = p.tip_arc_m;
+      if (reduce) last_reduce_tip_m_ = p.tip_arc_m;
       reduce_start_s_ = p.t_s;
       reduce_start_inserted_m_ = p.inserted_m;
       reduce_tip_max_m_ = p.tip_arc_m;
@@ -88,7 +94,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // image move one to one again); also stop after a long pull or a while.
     reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
     if (p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m ||
-        reduce_start_inserted_m_ - p.inserted_m > kMaxWithdraw_m ||
+        reduce_start_inserted_m_ - p.inserted_m > (backing_off_ ? kBackOff_m : kMaxWithdraw_m) ||
         p.t_s - reduce_start_s_ > kMaxReduce_s) {
       reducing_ = false;
       settle_until_s_ = p.t_s + k.settle_s;
@@ -104,7 +110,8 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // Tip hooked (knobs held), withdraw and turn clockwise (+ roll about the
     // insertion axis, seen from the endoscopist).
     target_speed_m_per_s = -k.withdraw_speed_m_per_s;
-    roll_rad_ = std::min(kMaxRoll_rad, roll_rad_ + k.roll_rate_rad_per_s * dt_s_);
+    if (!backing_off_)
+      roll_rad_ = std::min(kMaxRoll_rad, roll_rad_ + k.roll_rate_rad_per_s * dt_s_);
   } else {
     // Steer: turn the knobs so the lumen moves to the image centre, never
     // past kKnobMax_rad (a tip bent further only hooks the wall).
@@ -129,8 +136,9 @@ InputSample ExpertOperator::Act(const Perception& p) {
   // The hand: its force follows the speed error, within its limits.
   const double speed_m_per_s = (p.inserted_m - last_inserted_m_) / dt_s_;
   last_inserted_m_ = p.inserted_m;
-  hand_N_ = std::clamp(hand_N_ + kHandGain_N_s_per_m * (target_speed_m_per_s - speed_m_per_s) * dt_s_,
-                       -k.pull_limit_N, k.push_limit_N);
+  hand_N_ =
+      std::clamp(hand_N_ + kHandGain_N_s_per_m * (target_speed_m_per_s - speed_m_per_s) * dt_s_,
+                 -k.pull_limit_N, k.push_limit_N);
   in.push_force_N = hand_N_;
   in.roll_rad = roll_rad_;
   in.knob_up_rad = knob_up_rad_;

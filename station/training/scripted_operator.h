@@ -81,7 +81,7 @@ class ExpertOperator final : public ScriptedOperator {
     // Loop index (scope in beyond the shortest it has been for this depth,
     // LoopIndex) at which it reduces, once the tip is hooked in fixed colon.
     double loop_limit_m{0.10};
-    double roll_rate_rad_per_s{0.5};      // clockwise turn of the shaft while reducing
+    double roll_rate_rad_per_s{0.5};  // clockwise turn of the shaft while reducing
     // After a reduction it holds still this long, the shaft turned, so the
     // colon settles onto the straightened scope before it pushes on.
     double settle_s{0.0};
@@ -101,8 +101,11 @@ class ExpertOperator final : public ScriptedOperator {
   static constexpr double kScopeLeft_m = 0.08;
   static constexpr double kStall_s = 15.0;
   static constexpr double kStallAdvance_m = 0.005;
-  static constexpr double kTipBack_m = 0.015;      // the tip coming back this far: loop out
-  static constexpr double kMaxWithdraw_m = 0.30;   // longest single pull-back
+  static constexpr double kTipBack_m = 0.015;     // the tip coming back this far: loop out
+  static constexpr double kMaxWithdraw_m = 0.30;  // longest single pull-back
+  // Stalled again where it has already pulled back, it only backs the tip
+  // off the wall this far (no roll) and steers on.
+  static constexpr double kBackOff_m = 0.03;
   static constexpr double kMaxReduce_s = 40.0;
   static constexpr double kMaxRoll_rad = 1.5;      // the hand turns the shaft at most this far
   static constexpr double kRollRelax_per_s = 0.3;  // and lets it untwist while advancing
@@ -115,6 +118,7 @@ class ExpertOperator final : public ScriptedOperator {
   double dt_s_;
   Settings settings_;
   bool reducing_{false};
+  bool backing_off_{false};  // the pull-back is a short back-off, not a reduction
   bool started_{false};
   LoopIndex loop_index_;
   double last_reduce_tip_m_{-1.0};
