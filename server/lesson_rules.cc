@@ -16,6 +16,8 @@ bool IsId(const std::string& s) {
   return true;
 }
 
+constexpr double kMaxInsertedLimit_m = 5.0;  // the message below says 5
+
 std::string CheckThresholds(const ves::v1::PassCriteria& p, const std::string& at) {
   const std::pair<bool, std::pair<double, const char*>> values[] = {
       {p.has_max_time_to_cecum_s(), {p.max_time_to_cecum_s(), "max_time_to_cecum_s"}},
@@ -29,6 +31,8 @@ std::string CheckThresholds(const ves::v1::PassCriteria& p, const std::string& a
        {p.min_mucosa_seen_fraction(), "min_mucosa_seen_fraction"}},
       {p.has_max_peak_insertion_force_n(),
        {p.max_peak_insertion_force_n(), "max_peak_insertion_force_N"}},
+      {p.has_max_inserted_at_cecum_m(),
+       {p.max_inserted_at_cecum_m(), "max_inserted_at_cecum_m"}},
   };
   for (const auto& [has, value] : values) {
     if (has && (!std::isfinite(value.first) || value.first < 0)) {
@@ -39,6 +43,13 @@ std::string CheckThresholds(const ves::v1::PassCriteria& p, const std::string& a
   if (p.has_min_mucosa_seen_fraction() && p.min_mucosa_seen_fraction() > 1) {
     return at + ".pass.min_mucosa_seen_fraction = " +
            std::to_string(p.min_mucosa_seen_fraction()) + ": must be <= 1";
+  }
+  // No colonoscope is longer than a few metres, and a limit of 0 could
+  // never be met: either is a mistake in the file.
+  if (p.has_max_inserted_at_cecum_m() &&
+      (p.max_inserted_at_cecum_m() <= 0 || p.max_inserted_at_cecum_m() > kMaxInsertedLimit_m)) {
+    return at + ".pass.max_inserted_at_cecum_m = " + std::to_string(p.max_inserted_at_cecum_m()) +
+           ": must be in (0, 5] m";
   }
   if (p.has_min_score() && p.min_score() > 100) {
     return at + ".pass.min_score = " + std::to_string(p.min_score()) + ": must be <= 100";

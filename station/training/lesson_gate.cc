@@ -95,9 +95,14 @@ std::vector<std::string> DescribePassCriteria(const v1::Lesson& lesson) {
   std::vector<std::string> out;
   out.push_back("use the whole " + Num(lesson.time_limit_s()) +
                 " s unless the cecum is reached (stopping early fails)");
-  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s()) out.push_back("reach the cecum");
+  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s() || p.has_max_inserted_at_cecum_m()) {
+    out.push_back("reach the cecum");
+  }
   if (p.has_max_time_to_cecum_s()) {
     out.push_back("time_to_cecum_s <= " + Num(p.max_time_to_cecum_s()) + " s");
+  }
+  if (p.has_max_inserted_at_cecum_m()) {
+    out.push_back("inserted_at_cecum_m <= " + Num(p.max_inserted_at_cecum_m()) + " m");
   }
   if (p.has_max_pain_s()) out.push_back("pain_s <= " + Num(p.max_pain_s()) + " s");
   if (p.has_max_xray_s()) out.push_back("xray_s <= " + Num(p.max_xray_s()) + " s");
@@ -134,8 +139,13 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
   c.Rule(m.completed() || m.duration_s() + kFullTimeTolerance_s >= lesson.time_limit_s(),
          "duration_s " + Num(m.duration_s()) + " >= " + Num(lesson.time_limit_s()) +
              " or cecum reached");
-  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s()) {
+  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s() || p.has_max_inserted_at_cecum_m()) {
     c.Rule(m.completed(), std::string("cecum ") + (m.completed() ? "reached" : "not reached"));
+  }
+  if (p.has_max_inserted_at_cecum_m()) {
+    c.Rule(m.completed() && m.inserted_at_cecum_m() <= p.max_inserted_at_cecum_m() + kTolerance,
+           "inserted_at_cecum_m " + Num(m.inserted_at_cecum_m()) +
+               " <= " + Num(p.max_inserted_at_cecum_m()));
   }
   if (p.has_max_time_to_cecum_s()) {
     c.Rule(m.completed() && m.time_to_cecum_s() <= p.max_time_to_cecum_s() + kTolerance,

@@ -1,6 +1,8 @@
 // Curriculum rules without storage or network (server/lesson_rules.h).
 #include "server/lesson_rules.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 namespace ves::server {
@@ -53,6 +55,15 @@ TEST(CheckCurriculum, NamesTheFirstBadField) {
   c = ThreeLessons();
   c.mutable_lessons(0)->mutable_pass()->set_min_mucosa_seen_fraction(1.5);
   EXPECT_NE(CheckCurriculum(c).find("min_mucosa_seen_fraction"), std::string::npos);
+  for (const double bad : {0.0, 5.5, std::nan("")}) {
+    c = ThreeLessons();
+    c.mutable_lessons(1)->mutable_pass()->set_max_inserted_at_cecum_m(bad);
+    EXPECT_NE(CheckCurriculum(c).find("lessons[1].pass.max_inserted_at_cecum_m"), std::string::npos)
+        << bad << ": " << CheckCurriculum(c);
+  }
+  c = ThreeLessons();
+  c.mutable_lessons(1)->mutable_pass()->set_max_inserted_at_cecum_m(1.45);
+  EXPECT_EQ(CheckCurriculum(c), "");
   c.clear_lessons();
   EXPECT_NE(CheckCurriculum(c).find("at least one lesson"), std::string::npos);
   c = ThreeLessons();

@@ -47,6 +47,33 @@ TEST(CheckLessonGate, ThresholdsAreInclusive) {
   EXPECT_TRUE(HasCheck(g, "max_tip_arc_m 0.15 >= 0.15: ok"));
 }
 
+// The scope in at the cecum tells a loop left in (the novice that pushes the
+// whole 1.68 m scope round a mobile colon) from a reduced one.
+TEST(CheckLessonGate, ScopeInAtTheCecumIsLimitedAndImpliesTheCecum) {
+  v1::Lesson l = Lenient();
+  l.mutable_pass()->set_max_inserted_at_cecum_m(1.45);
+  v1::SessionMetrics m;
+  m.set_duration_s(5);
+  m.set_completed(true);
+  m.set_inserted_at_cecum_m(1.45);  // exactly at the limit: passes
+  EXPECT_TRUE(CheckLessonGate(l, m, 0, false).passed);
+  m.set_inserted_at_cecum_m(1.68);
+  GateResult g = CheckLessonGate(l, m, 0, false);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "inserted_at_cecum_m 1.68 <= 1.45: FAILED")) << PrintToString(g.checks);
+  // Not reached: its 0 m must not count as a short scope.
+  m.set_completed(false);
+  m.set_inserted_at_cecum_m(0);
+  g = CheckLessonGate(l, m, 0, false);
+  EXPECT_FALSE(g.passed);
+  EXPECT_TRUE(HasCheck(g, "cecum not reached: FAILED")) << PrintToString(g.checks);
+  bool described = false;
+  for (const auto& line : DescribePassCriteria(l)) {
+    described = described || line == "inserted_at_cecum_m <= 1.45 m";
+  }
+  EXPECT_TRUE(described) << PrintToString(DescribePassCriteria(l));
+}
+
 TEST(CheckLessonGate, StoppingBeforeTheTimeLimitFailsUnlessTheCecumWasReached) {
   const v1::Lesson l = Lenient();  // 5 s, no other rule
   v1::SessionMetrics m;

@@ -1,12 +1,17 @@
 // The simulator must separate skill levels the way validated simulators do
 // (docs/scoring.md): on the shipped cases the scripted expert should reach the
 // cecum sooner, with less pain and less loop time than the scripted novice.
+#include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "patient_db/case_format.h"
 #include "station/training/case_run.h"
+#include "station/training/lesson_gate.h"
+#include "station/training/session.h"
 #include "station/training/session_file.h"
 
 namespace ves::training {
@@ -39,6 +44,21 @@ Pair RunBoth(const char* case_id, double seconds) {
               SummaryLine(p.novice).c_str(), p.novice.metrics.max_tip_arc_m, case_id,
               SummaryLine(p.expert).c_str(), p.expert.metrics.max_tip_arc_m);
   return p;
+}
+
+// A lesson of the shipped curriculum (patient_db/curricula/x-ray-free.textproto).
+v1::Lesson ShippedLesson(const std::string& lesson_id) {
+  std::ifstream in(std::filesystem::path(VES_SOURCE_DIR) / "patient_db" / "curricula" /
+                   "x-ray-free.textproto");
+  std::stringstream text;
+  text << in.rdbuf();
+  v1::Curriculum c;
+  EXPECT_TRUE(google::protobuf::TextFormat::ParseFromString(text.str(), &c));
+  for (const auto& lesson : c.lessons()) {
+    if (lesson.lesson_id() == lesson_id) return lesson;
+  }
+  ADD_FAILURE() << "no lesson " << lesson_id << " in the shipped curriculum";
+  return {};
 }
 
 class SkillSeparation : public ::testing::TestWithParam<const char*> {};
@@ -91,7 +111,8 @@ TEST(CecumReached, ExpertReachesTheCecumAndTheNoviceDoesNot) {
 // (docs/scoring.md, "Known gaps"). What separates them: the expert arrives
 // with the colon shortened onto the scope, within issue #17's 0.65-1.30 m
 // (and at least 0.2 m less scope in than the novice), within the pain
-// limit, looping less.
+// limit, looping less; so lesson 5 (this case, scope in at the cecum at
+// most 1.45 m) passes the expert and fails the novice.
 TEST(CecumReachedOnTheMobileDescendingColon, ExpertArrivesWithTheColonShortenedTheNoviceOnlyByForce) {
   const Pair p = RunBoth("mobile-descending", 600.0);
   ExpectTheExpertArrivesCleanly(p);
@@ -104,6 +125,19 @@ TEST(CecumReachedOnTheMobileDescendingColon, ExpertArrivesWithTheColonShortenedT
   }
   EXPECT_LT(p.expert.metrics.pain_s, 30.0);
   EXPECT_LT(p.expert.metrics.loop_s, p.novice.metrics.loop_s);
+
+  // Lesson 5's gate on both runs. In the lesson the station forces
+  // fluoroscopy off; the novice ignores the view, so its run is the same
+  // with no X-ray time, and only the other criteria may fail it.
+  const v1::Lesson lesson = ShippedLesson("x-ray-free-5-mobile-descending-no-x-ray");
+  ASSERT_TRUE(lesson.pass().has_max_inserted_at_cecum_m());
+  const GateResult expert_gate =
+      CheckLessonGate(lesson, ToProto(p.expert.metrics), p.expert.score, false);
+  EXPECT_TRUE(expert_gate.passed) << ::testing::PrintToString(expert_gate.checks);
+  v1::SessionMetrics novice = ToProto(p.novice.metrics);
+  novice.set_xray_s(0.0);
+  const GateResult novice_gate = CheckLessonGate(lesson, novice, p.novice.score, false);
+  EXPECT_FALSE(novice_gate.passed) << ::testing::PrintToString(novice_gate.checks);
 }
 
 // The redundant sigmoid (1.833 m to the cecum) is longer than the scope
