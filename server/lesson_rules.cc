@@ -16,7 +16,7 @@ bool IsId(const std::string& s) {
   return true;
 }
 
-constexpr double kMaxInsertedLimit_m = 5.0;  // the message below says 5
+constexpr int kMaxInsertedLimit_m = 5;  // no colonoscope is near this long
 
 std::string CheckThresholds(const ves::v1::PassCriteria& p, const std::string& at) {
   const std::pair<bool, std::pair<double, const char*>> values[] = {
@@ -44,12 +44,12 @@ std::string CheckThresholds(const ves::v1::PassCriteria& p, const std::string& a
     return at + ".pass.min_mucosa_seen_fraction = " +
            std::to_string(p.min_mucosa_seen_fraction()) + ": must be <= 1";
   }
-  // No colonoscope is longer than a few metres, and a limit of 0 could
-  // never be met: either is a mistake in the file.
+  // A limit of 0 could never be met, one past kMaxInsertedLimit_m never
+  // bites: either is a mistake in the file.
   if (p.has_max_inserted_at_cecum_m() &&
       (p.max_inserted_at_cecum_m() <= 0 || p.max_inserted_at_cecum_m() > kMaxInsertedLimit_m)) {
     return at + ".pass.max_inserted_at_cecum_m = " + std::to_string(p.max_inserted_at_cecum_m()) +
-           ": must be in (0, 5] m";
+           ": must be in (0, " + std::to_string(kMaxInsertedLimit_m) + "] m";
   }
   if (p.has_min_score() && p.min_score() > 100) {
     return at + ".pass.min_score = " + std::to_string(p.min_score()) + ": must be <= 100";

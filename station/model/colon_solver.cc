@@ -96,7 +96,6 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
   sc->colon_suspension_N_per_m.assign(N, 0.0);
-  sc->colon_damping_N_s_per_m.assign(N, 0.0);
   sc->colon_tether_N_per_m.assign(N, 0.0);
   sc->colon_own_diag.assign(N, Eigen::Matrix3d::Zero());
   sc->colon_relax_factor.assign(N, 0.0);
@@ -106,16 +105,15 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   sc->colon_pair_rest_direction.assign(N, Eigen::Vector3d::UnitZ());
   sc->colon_pair_rest_mean_tangent.assign(N, Eigen::Vector3d::UnitZ());
   double smallest_pleat_limit = 1.0;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   for (int i = 0; i < N; ++i) {
     const TissueParams& t = pts[i].tissue;
     const double h = pts[i].length_m;
     sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
-    sc->colon_damping_N_s_per_m[i] = t.suspension_damping_N_s_per_m2 * h;
     sc->colon_tether_N_per_m[i] = t.mesentery_stiffness_N_per_m2 * h;
-    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
     const Eigen::Matrix3d P = I - pts[i].rest_tangent * pts[i].rest_tangent.transpose();
-    sc->colon_own_diag[i] =
-        sc->colon_damping_N_s_per_m[i] * I + (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
+    sc->colon_own_diag[i] = (t.suspension_damping_N_s_per_m2 * h) * I +
+                            (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
     if (t.suspension_relaxation_s > 0.0) {
       sc->colon_relax_factor[i] = params.dt_s / (t.suspension_relaxation_s + params.dt_s);
     }

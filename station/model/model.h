@@ -253,7 +253,6 @@ struct Scratch {
   // Constant parts, computed once by MakeScratch from the rest geometry (a
   // Scratch belongs to the params it was made from).
   std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i (in P_i)
-  std::vector<double> colon_damping_N_s_per_m;     // [i]: D_c h_i
   std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
   std::vector<Eigen::Matrix3d> colon_own_diag;     // [i]: D_c h_i I + dt K_c h_i P_i
   std::vector<double> colon_relax_factor;          // [i]: dt / (suspension relaxation + dt)

@@ -88,6 +88,11 @@ std::string CheckJudgeBounds(const v1::Lesson& lesson, const v1::InputLog& log,
   return {};
 }
 
+// A limit on the arrival (its time, the scope in) implies the arrival.
+bool RequiresCecum(const v1::PassCriteria& p) {
+  return p.must_reach_cecum() || p.has_max_time_to_cecum_s() || p.has_max_inserted_at_cecum_m();
+}
+
 }  // namespace
 
 std::vector<std::string> DescribePassCriteria(const v1::Lesson& lesson) {
@@ -95,9 +100,7 @@ std::vector<std::string> DescribePassCriteria(const v1::Lesson& lesson) {
   std::vector<std::string> out;
   out.push_back("use the whole " + Num(lesson.time_limit_s()) +
                 " s unless the cecum is reached (stopping early fails)");
-  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s() || p.has_max_inserted_at_cecum_m()) {
-    out.push_back("reach the cecum");
-  }
+  if (RequiresCecum(p)) out.push_back("reach the cecum");
   if (p.has_max_time_to_cecum_s()) {
     out.push_back("time_to_cecum_s <= " + Num(p.max_time_to_cecum_s()) + " s");
   }
@@ -139,7 +142,7 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
   c.Rule(m.completed() || m.duration_s() + kFullTimeTolerance_s >= lesson.time_limit_s(),
          "duration_s " + Num(m.duration_s()) + " >= " + Num(lesson.time_limit_s()) +
              " or cecum reached");
-  if (p.must_reach_cecum() || p.has_max_time_to_cecum_s() || p.has_max_inserted_at_cecum_m()) {
+  if (RequiresCecum(p)) {
     c.Rule(m.completed(), std::string("cecum ") + (m.completed() ? "reached" : "not reached"));
   }
   if (p.has_max_inserted_at_cecum_m()) {

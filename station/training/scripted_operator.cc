@@ -71,15 +71,16 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // back to straighten the scope even without a hook or a loop reading,
     // once per kReduceAgainDepth_m of depth: repeated pull-backs at one
     // place pressed the rectosigmoid (redundant-sigmoid, docs/scoring.md).
-    const bool stalled_in_fixed = stalled && p.tip_into_fixed_colon_m > 0.0 &&
-                                  p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
-    if (stalled_in_fixed) last_stall_reduce_tip_m_ = p.tip_arc_m;
+    const bool stalled_in_fixed = stalled && p.tip_into_fixed_colon_m > 0.0;
+    const bool stall_reduce =
+        stalled_in_fixed && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
+    if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
     const bool reduce = (deeper && hooked && loop_m > k.loop_limit_m) ||
-                        (scope_used_up && (deeper || stalled)) || stalled_in_fixed;
+                        (scope_used_up && (deeper || stalled)) || stall_reduce;
     // Stalled again in fixed colon where it already pulled back: it backs the
     // tip off a little and steers again ("pull back to find the lumen"); a
     // back-off is not a reduction, so the next one still waits only for depth.
-    const bool back_off = !reduce && stalled && p.tip_into_fixed_colon_m > 0.0;
+    const bool back_off = !reduce && stalled_in_fixed;
     if (reduce || back_off) {
       reducing_ = true;
       backing_off_ = back_off;
@@ -110,8 +111,9 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // Tip hooked (knobs held), withdraw and turn clockwise (+ roll about the
     // insertion axis, seen from the endoscopist).
     target_speed_m_per_s = -k.withdraw_speed_m_per_s;
-    if (!backing_off_)
+    if (!backing_off_) {
       roll_rad_ = std::min(kMaxRoll_rad, roll_rad_ + k.roll_rate_rad_per_s * dt_s_);
+    }
   } else {
     // Steer: turn the knobs so the lumen moves to the image centre, never
     // past kKnobMax_rad (a tip bent further only hooks the wall).
