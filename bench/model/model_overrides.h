@@ -19,8 +19,8 @@
 //   colon: shear, anchor_arc (0/1), reach_gathers (0/1), abdomen (m),
 //     across (0/1)
 //   scope: ei (insertion tube EI x), bend_ei, links, growth, passive_m, passive_ei
-//   step: dt_ms, pleat_k, toe_k, toe_strain, pleat_set_s, pleat_release_s,
-//     press_k, press_slack
+//   step: dt_ms, pleat_k, toe_k, toe_strain, toe_regions (bit 1 << Region),
+//     pleat_set_s, pleat_release_s, press_k, press_slack
 namespace ves::bench {
 
 using OverrideGetter = std::function<double(const char* key, double fallback)>;
@@ -59,6 +59,8 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   params->colon_pleat_stiffness_N = get("pleat_k", params->colon_pleat_stiffness_N);
   params->colon_toe_stiffness_N = get("toe_k", params->colon_toe_stiffness_N);
   params->colon_toe_strain = get("toe_strain", params->colon_toe_strain);
+  params->colon_toe_regions =
+      static_cast<std::uint32_t>(get("toe_regions", params->colon_toe_regions));
   params->colon_pleat_set_s = get("pleat_set_s", params->colon_pleat_set_s);
   params->colon_pleat_release_s = get("pleat_release_s", params->colon_pleat_release_s);
   params->abdominal_pressure_stiffness_N_per_m2 =

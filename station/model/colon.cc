@@ -144,12 +144,6 @@ ColonSpec MakeColonFromPoints(const std::vector<Eigen::Vector3d>& positions_m, d
   return colon;
 }
 
-double CalcTetherDistance(const Eigen::Vector3d& r, const Eigen::Vector3d& root_direction,
-                          double shear_ratio) {
-  const double along = r.dot(root_direction);
-  return std::sqrt(std::max(0.0, r.squaredNorm() + (shear_ratio * shear_ratio - 1.0) * along * along));
-}
-
 void CalcMesenteryAnchors(ColonSpec* colon) {
   const double shear_ratio = colon->mesentery_shear_ratio;
   auto& pts = colon->points;

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -183,9 +185,14 @@ void ValidateColon(const ColonSpec& colon);
 void CalcMesenteryAnchors(ColonSpec* colon);
 
 // Distance of r (from a point's anchor) in its tether's metric: the part
-// along the root direction counts shear_ratio times.
-double CalcTetherDistance(const Eigen::Vector3d& r, const Eigen::Vector3d& root_direction,
-                          double shear_ratio);
+// along the root direction counts shear_ratio times. Inline: the colon solve
+// takes it for every point every step.
+inline double CalcTetherDistance(const Eigen::Vector3d& r, const Eigen::Vector3d& root_direction,
+                                 double shear_ratio) {
+  const double along = r.dot(root_direction);
+  return std::sqrt(
+      std::max(0.0, r.squaredNorm() + (shear_ratio * shear_ratio - 1.0) * along * along));
+}
 
 // The older, radial-only model the paper compares against in §3.6
 // ("--stiff-colon"): every point fixed, with the stiffest suspension found in

@@ -53,25 +53,28 @@ Eigen::Vector3d CalcKinkDirection(const Eigen::Vector3d& rest_mean, const Eigen:
                                   const Eigen::Vector3d& fallback) {
   const double length = mean_sum.norm();
   if (length < 1e-6) return fallback;
-  const Eigen::Vector3d mean = mean_sum * (1.0 / length);
-  const Eigen::Vector3d c = rest_mean.cross(mean);
-  const double cos_turn = rest_mean.dot(mean);
-  if (cos_turn < -0.99) return fallback;  // turned about half a turn: no smallest rotation
-  // Rodrigues for the rotation taking rest_mean onto mean: v + c x v + c x (c x v) / (1 + cos)
-  // (a rotation: the unit rest direction stays unit).
+  // Rodrigues for the rotation taking rest_mean onto mean = mean_sum / length:
+  // v + c x v + c x (c x v) / (1 + cos) with c = rest_mean x mean, cos =
+  // rest_mean . mean (a rotation: the unit rest direction stays unit). Taken
+  // with the unnormalised sum, c' = length c and cos' = length cos, it needs
+  // one division: 1 / (length (length + cos')).
+  const Eigen::Vector3d c = rest_mean.cross(mean_sum);
+  const double cos_sum = rest_mean.dot(mean_sum);
+  if (cos_sum < -0.99 * length) return fallback;  // turned about half a turn: no smallest rotation
+  const double inv = 1.0 / (length * (length + cos_sum));
   const Eigen::Vector3d cv = c.cross(rest_direction);
-  return rest_direction + cv + c.cross(cv) * (1.0 / (1.0 + cos_turn));
+  return rest_direction + ((length + cos_sum) * inv) * cv + inv * c.cross(cv);
 }
 
 }  // namespace
 
-PairAxial CalcPairAxial(const ModelParams& params, double pleat_limit, double strain) {
+PairAxial CalcPairAxial(const ModelParams& params, double toe_N, double pleat_limit, double strain) {
   const double soft = params.colon_pleat_stiffness_N;
   if (strain >= 0.0) {
     // Tension, J-shaped: the slope rises from `soft` to the toe's over the
     // onset strain, stays there through the toe, then becomes EA (the wall's
     // linear modulus).
-    const double toe = params.colon_toe_stiffness_N;
+    const double toe = toe_N;
     const double e_b = std::min(kTensionOnsetStrain, params.colon_toe_strain);
     const double e_t = params.colon_toe_strain;
     if (strain <= e_b) {
@@ -102,6 +105,7 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   sc->colon_pair_gap_m.assign(N, 1.0);
   sc->colon_pair_kink_N_per_m.assign(N, 0.0);
   sc->colon_pair_pleat_limit.assign(N, 1.0);
+  sc->colon_pair_toe_N.assign(N, params.colon_tension_stiffness_N);
   sc->colon_pair_rest_direction.assign(N, Eigen::Vector3d::UnitZ());
   sc->colon_pair_rest_mean_tangent.assign(N, Eigen::Vector3d::UnitZ());
   double smallest_pleat_limit = 1.0;
@@ -119,6 +123,9 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     }
     smallest_pleat_limit = std::min(smallest_pleat_limit, t.pleat_limit);
   }
+  const auto has_toe = [&](Region r) {
+    return ((params.colon_toe_regions >> static_cast<unsigned>(r)) & 1u) != 0;
+  };
   for (int i = 0; i + 1 < N; ++i) {
     const double gap = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
     const double T =
@@ -126,6 +133,9 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     sc->colon_pair_gap_m[i] = gap;
     sc->colon_pair_kink_N_per_m[i] = T / gap;
     sc->colon_pair_pleat_limit[i] = std::min(pts[i].tissue.pleat_limit, pts[i + 1].tissue.pleat_limit);
+    if (has_toe(pts[i].region) && has_toe(pts[i + 1].region)) {
+      sc->colon_pair_toe_N[i] = params.colon_toe_stiffness_N;
+    }
     sc->colon_pair_rest_direction[i] = (pts[i + 1].rest_position_m - pts[i].rest_position_m) / gap;
     const Eigen::Vector3d mean = pts[i].rest_tangent + pts[i + 1].rest_tangent;
     sc->colon_pair_rest_mean_tangent[i] =
@@ -231,13 +241,15 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   for (int i = 0; i < end; ++i) {
     const Eigen::Vector3d seg = x[i + 1] - x[i];
     const double g = seg.norm();
+    const double inv_g = g > 1e-12 ? 1.0 / g : 0.0;
     // Strain against the gap's rest length (shorter where folds have set);
     // the folds pack at pleat_limit of the natural gap.
-    const double g0 = s->colon_pair_rest_gap_m[i];
+    const double inv_g0 = 1.0 / s->colon_pair_rest_gap_m[i];
     const double natural_gap_m = sc->colon_pair_gap_m[i];
-    const Eigen::Vector3d u = g > 1e-12 ? Eigen::Vector3d(seg / g) : pts[i].rest_tangent;
-    const double pleat_limit = sc->colon_pair_pleat_limit[i] * natural_gap_m / g0;
-    const PairAxial a = CalcPairAxial(params, std::min(pleat_limit, 1.0), g / g0 - 1.0);
+    const Eigen::Vector3d u = g > 1e-12 ? Eigen::Vector3d(seg * inv_g) : pts[i].rest_tangent;
+    const double pleat_limit = sc->colon_pair_pleat_limit[i] * natural_gap_m * inv_g0;
+    const PairAxial a = CalcPairAxial(params, sc->colon_pair_toe_N[i], std::min(pleat_limit, 1.0),
+                                      g * inv_g0 - 1.0);
     // Tension also resists the pair turning (a taut string); compression does
     // not push it sideways (dropping that term keeps the matrix definite).
     // Kink tension: the pair is pulled toward the tube's local direction,
@@ -250,9 +262,9 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
                                                 sc->colon_pair_rest_direction[i], u);
     const double k = sc->colon_pair_kink_N_per_m[i];  // T over the natural gap
     // C = (slope/g0) u u^T + (f/g)(I - u u^T) [taut only] + k (I - m m^T).
-    const double taut = a.force_N > 0.0 && g > 1e-12 ? a.force_N / g : 0.0;
+    const double taut = a.force_N > 0.0 ? a.force_N * inv_g : 0.0;
     const Eigen::Matrix3d dtC = (dt * (taut + k)) * I +
-                                (dt * (a.slope_N / g0 - taut)) * (u * u.transpose()) -
+                                (dt * (a.slope_N * inv_g0 - taut)) * (u * u.transpose()) -
                                 (dt * k) * (m * m.transpose());
     const Eigen::Vector3d F = a.force_N * u + k * (seg - m.dot(seg) * m);  // on point i; -F on i+1
     diag[i] += dtC;

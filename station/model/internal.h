@@ -61,14 +61,16 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
 void UpdateColonTangents(int from, int to, ModelState* state);
 
 // Axial force of a neighbour pair (+ pulls the pair together) for the strain
-// of its gap, and its slope per unit strain: the wall's tension stiffness
-// (reached over a small onset strain), the soft pleating down to pleat_limit,
-// then the packed folds.
+// of its gap, and its slope per unit strain: the wall's toe (toe_N per unit
+// strain up to colon_toe_strain; the tension stiffness where the gap has no
+// toe) and then its tension stiffness, both reached over a small onset
+// strain; shortened, the soft pleating down to pleat_limit, then the packed
+// folds.
 struct PairAxial {
   double force_N;
   double slope_N;
 };
-PairAxial CalcPairAxial(const ModelParams& params, double pleat_limit, double strain);
+PairAxial CalcPairAxial(const ModelParams& params, double toe_N, double pleat_limit, double strain);
 
 // Moves a sample's tracked segment toward p by at most `window` segments,
 // plane by plane (the lumen planes of CalcSegmentHit); it crosses a

@@ -54,6 +54,11 @@ struct ModelParams {
   // softly down to each region's pleat_limit, then the folds are packed.
   double colon_toe_stiffness_N{500.0};
   double colon_toe_strain{0.2};
+  // Regions whose wall has the toe (bit 1 << Region; all by default): a gap
+  // has it when both its points are in one of them. A toe in the sigmoid
+  // alone was measured on 2026-12-03 and not kept either
+  // (docs/model-shortening-notes.md, "A sigmoid that stretches").
+  std::uint32_t colon_toe_regions{~0u};
   double colon_tension_stiffness_N{500.0};
   double colon_pleat_stiffness_N{1.0};
   double colon_packed_stiffness_N{500.0};
@@ -259,6 +264,7 @@ struct Scratch {
   std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
   std::vector<double> colon_pair_kink_N_per_m;     // [i]: T / gap
   std::vector<double> colon_pair_pleat_limit;      // [i]: smaller pleat_limit of i, i+1
+  std::vector<double> colon_pair_toe_N;            // [i]: the toe's stiffness of gap i
   std::vector<Eigen::Vector3d> colon_pair_rest_direction;     // [i]: unit, i -> i+1 at rest
   std::vector<Eigen::Vector3d> colon_pair_rest_mean_tangent;  // [i]: mean of i's, i+1's
   double tracking_arc_ratio{0.0};                  // as used (ModelParams::tracking_arc_ratio)
