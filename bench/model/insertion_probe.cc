@@ -1,6 +1,6 @@
 // insertion_probe: drives the model on a case and prints where the tip is,
 // once per simulated second, so a model or operator change can be judged by
-// what it does to an insertion (docs/model.md, "Probing an insertion").
+// what it does to an insertion (docs/model-shortening-notes.md, "To measure").
 //   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
 // Without PROBE_OPERATOR it inserts by position at the given speed with the
 // simple steering rule (knobs turned toward the lumen 4 cm ahead), which is
