@@ -6,7 +6,8 @@
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
 // press_past, press_gate; show_damage=1 prints each damage episode,
-// show_over10=1 the base force over 10 N, trace_from=T 12 steps from T.
+// show_over10=1 the base force over 10 N, show_roll=1 each step with the
+// roll torque over 1 N·m, trace_from=T 12 steps from T.
 // The line gives the roll torque's peak, its 10 ms mean's peak (the force
 // metric's resolution) and roll_over1, the share of steps over 1 N·m;
 // damage counts episodes of the largest wall force's 10 ms mean over the
@@ -137,6 +138,7 @@ int main(int argc, char** argv) {
   // while the base force is over 10 N.
   const double trace_from_s = get("trace_from", 1e9);
   const bool show_over10 = get("show_over10", 0.0) != 0.0;
+  const bool show_roll = get("show_roll", 0.0) != 0.0;
   double last_over10_shown_s = -1.0;
   bool pressing[9] = {false};
   double press_from_s[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
@@ -187,7 +189,14 @@ int main(int argc, char** argv) {
     }
     ++steps;
     peak_roll = std::max(peak_roll, std::abs(out.roll_torque_Nm));
-    if (std::abs(out.roll_torque_Nm) > 1.0) ++roll_over1;
+    if (std::abs(out.roll_torque_Nm) > 1.0) {
+      ++roll_over1;
+      if (show_roll) {
+        std::printf("  roll t=%.3f %.2f N m base %.1f N wall %.1f N inserted %.3f tip %.3f roll_in %.3f\n",
+                    state.time_s, out.roll_torque_Nm, out.base_force_N, out.peak_wall_force_N,
+                    state.inserted_m, state.tip_arc_m, sample.roll_rad);
+      }
+    }
     peak_roll_10ms = std::max(peak_roll_10ms, roll_10ms.Add(std::abs(out.roll_torque_Nm)));
     peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);
     if (out.peak_wall_force_N > thresholds.damage_wall_force_N) {

@@ -2,6 +2,7 @@
 // held still, and the paper's Fig. 10 on paper-sigmoid.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -232,6 +233,74 @@ TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
               "scope; smallest pleat ratio %.2f\n", farthest_m, smallest_pleat);
   EXPECT_LT(smallest_pleat, 0.9);  // the withdrawal did pleat the colon
   EXPECT_LT(farthest_m, kWallGive_m);
+}
+
+// The wall's toe can be confined to some regions (ModelParams::
+// colon_toe_regions): inserted 0.4 m with the simple steering rule into
+// standard-adult, a toe in the sigmoid alone (10 N to 20 %, the variant of
+// docs/model-shortening-notes.md, "A sigmoid that stretches") lets the
+// sigmoid lengthen while the rectum, without it, keeps the wall's modulus;
+// with no toe anywhere the sigmoid does not lengthen either.
+double LargestStrainIn(const Sim& sim, Region region) {
+  double largest = 0.0;
+  const auto& pts = sim.params.colon.points;
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    if (pts[i].region != region || pts[i + 1].region != region) continue;
+    const double rest = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
+    const double now = (sim.state.p_WColon[i + 1] - sim.state.p_WColon[i]).norm();
+    largest = std::max(largest, now / rest - 1.0);
+  }
+  return largest;
+}
+
+struct RegionStrains {
+  double sigmoid{0.0};
+  double rectum{0.0};
+};
+
+RegionStrains InsertWithToeIn(std::uint32_t toe_regions) {
+  constexpr double kSpeed_m_per_s = 0.02;
+  constexpr double kSteerGain_per_s = 8.0;
+  ModelParams params = LoadParams("standard-adult");
+  params.colon_toe_stiffness_N = 10.0;
+  params.colon_toe_strain = 0.2;
+  params.colon_toe_regions = toe_regions;
+  Sim sim(params);
+  StepInput in;
+  in.thrust_mode = ThrustMode::kPosition;
+  RegionStrains strains;
+  while (sim.state.time_s < 20.0) {
+    const auto p = training::Perceive(sim.params, sim.state, sim.out);
+    in.knob_up_rad = std::clamp(
+        in.knob_up_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) * sim.params.dt_s,
+        -p.angulation_up_rad, p.angulation_up_rad);
+    in.knob_right_rad = std::clamp(
+        in.knob_right_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) * sim.params.dt_s,
+        -p.angulation_right_rad, p.angulation_right_rad);
+    in.insertion_m += kSpeed_m_per_s * sim.params.dt_s;
+    sim.StepOnce(in);
+    EXPECT_TRUE(sim.out.finite);
+    if (!sim.out.finite) break;
+    strains.sigmoid = std::max(strains.sigmoid, LargestStrainIn(sim, Region::kSigmoid));
+    strains.rectum = std::max(strains.rectum, LargestStrainIn(sim, Region::kRectum));
+  }
+  return strains;
+}
+
+TEST(WallToe, ConfinedToTheSigmoidLengthensOnlyTheSigmoid) {
+  const RegionStrains sigmoid_toe = InsertWithToeIn(1u << static_cast<unsigned>(Region::kSigmoid));
+  const RegionStrains no_toe = InsertWithToeIn(0u);
+  const RegionStrains toe_everywhere = InsertWithToeIn(~0u);
+  std::printf("WallToe: largest gap strain with the toe in the sigmoid: sigmoid %.4f rectum %.4f; "
+              "without a toe: sigmoid %.4f rectum %.4f; everywhere: sigmoid %.4f rectum %.4f\n",
+              sigmoid_toe.sigmoid, sigmoid_toe.rectum, no_toe.sigmoid, no_toe.rectum,
+              toe_everywhere.sigmoid, toe_everywhere.rectum);
+  EXPECT_GT(sigmoid_toe.sigmoid, 0.02);  // 5 %: the toe in the sigmoid
+  EXPECT_LT(no_toe.sigmoid, 0.01);       // 0.2 %: the wall's modulus
+  // The rectum is loaded too: with a toe of its own it lengthens (0.6 %),
+  // without one (the toe in the sigmoid alone) it keeps the modulus (0.1 %).
+  EXPECT_GT(toe_everywhere.rectum, 0.003);
+  EXPECT_LT(sigmoid_toe.rectum, 0.5 * toe_everywhere.rectum);
 }
 
 }  // namespace
