@@ -7,7 +7,8 @@
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
 // press_past, press_gate; show_damage=1 prints each damage episode,
 // show_over10=1 the base force over 10 N, show_roll=1 each step with the
-// roll torque over 1 N·m, trace_from=T 12 steps from T.
+// roll torque over 1 N·m, trace_from=T 12 steps from T (samples near the
+// largest wall force, ring contacts).
 // The line gives the roll torque's peak, its 10 ms mean's peak (the force
 // metric's resolution) and roll_over1, the share of steps over 1 N·m;
 // damage counts episodes of the largest wall force's 10 ms mean over the
@@ -30,11 +31,12 @@
 
 namespace {
 
-// One step of trace_from=T: the largest wall force and where, and every
-// sample tracked within 4 segments of it (a sample changing segment from step
-// to step shows up here).
+// One step of trace_from=T: the largest wall force and where, every sample
+// tracked within 4 segments of it (a sample changing segment from step to
+// step shows up here), and every ring contact with its load.
 void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::ModelState& state,
-                    const ves::model::StepOutput& out, double hand_N) {
+                    const ves::model::StepOutput& out, const ves::model::Scratch& scratch,
+                    double hand_N) {
   const int at = ves::bench::LargestWallForcePoint(out);
   std::printf("  trace t=%.3f base %.2f N hand %.2f N thrust %+.1f um; wall %.2f N at point %d (arc %.3f)\n",
               state.time_s, out.base_force_N, hand_N, 1e6 * state.insertion_rate_m_per_s * params.dt_s,
@@ -56,6 +58,12 @@ void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::Mod
     }
   }
   std::printf("\n");
+  for (int j = 0; j < scratch.ring_contact_count; ++j) {
+    const auto& rc = scratch.ring_contacts[j];
+    std::printf("     ring: point %d on the piece after sample %d (t %.2f), %.1f mm in, %.2f N "
+                "(onset %.2f)\n",
+                rc.point, rc.sample, rc.piece_t, 1e3 * rc.penetration_m, rc.force_N, rc.onset);
+  }
 }
 
 }  // namespace
@@ -174,7 +182,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     if (state.time_s >= trace_from_s && state.time_s < trace_from_s + 0.012) {
-      PrintStepTrace(params, state, out, sample.push_force_N);
+      PrintStepTrace(params, state, out, scratch, sample.push_force_N);
     }
     const double f = std::abs(out.base_force_N);
     peak_force = std::max(peak_force, force_10ms.Add(f));

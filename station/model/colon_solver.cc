@@ -328,10 +328,10 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
         rc.piece_t * (s->p_WSample[rc.sample + 1] - sc->sample_delta_m[rc.sample + 1]);
     const double penetration_m = rc.penetration_m + rc.normal_W.dot(moved);
     const double force_N = penetration_m > 0.0
-                               ? CalcWallResponse(pts[m].tissue, params.wall_hardening_ratio,
-                                                  penetration_m).force_N
+                               ? rc.onset * CalcWallResponse(pts[m].tissue, params.wall_hardening_ratio,
+                                                             penetration_m).force_N
                                : rc.slope_N_per_m * penetration_m;
-    const double a = dt * rc.slope_N_per_m + pts[m].tissue.wall_damping_N_s_per_m;
+    const double a = dt * rc.slope_N_per_m + rc.onset * pts[m].tissue.wall_damping_N_s_per_m;
     rhs[m] += (dt * force_N) * rc.normal_W;
     diag[m] += a * rc.normal_W * rc.normal_W.transpose();
   }

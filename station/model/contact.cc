@@ -251,6 +251,8 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
   const int last_point = static_cast<int>(params.colon.points.size()) - 1;
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
   sc->ring_contact_count = 0;
+  std::fill(sc->ring_held.begin(), sc->ring_held.end(), std::uint8_t{0});
+  const double onset_rate = params.ring_onset_s > 0.0 ? params.dt_s / params.ring_onset_s : 1.0;
   for (int i = s->first_inside_sample; i + 1 < samples; ++i) {
     const int from = std::max(s->contact[i].segment + 2, 1);
     const int to = std::min(s->contact[i + 1].segment - 1, last_point);
@@ -276,10 +278,21 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
       rc.p_W = q;
       rc.normal_W = w / d;
       rc.penetration_m = penetration_m;
-      rc.force_N = r.force_N;
-      rc.slope_N_per_m = r.slope_N_per_m;
-      rc.stiffness_N_per_m = r.slope_N_per_m + ring.tissue.wall_damping_N_s_per_m / params.dt_s;
+      // A point handed from a sample's segment to the piece between two
+      // samples takes its ring load over ring_onset_s: where the colon folds
+      // sharply it arrives centimetres inside (docs/model.md, "Ring contacts").
+      const double onset = std::min(1.0, s->ring_onset[m] + onset_rate);
+      s->ring_onset[m] = onset;
+      sc->ring_held[m] = 1;
+      rc.onset = onset;
+      rc.force_N = onset * r.force_N;
+      rc.slope_N_per_m = onset * r.slope_N_per_m;
+      rc.stiffness_N_per_m =
+          onset * (r.slope_N_per_m + ring.tissue.wall_damping_N_s_per_m / params.dt_s);
     }
+  }
+  for (size_t m = 0; m < sc->ring_held.size(); ++m) {
+    if (!sc->ring_held[m]) s->ring_onset[m] = 0.0;
   }
 }
 

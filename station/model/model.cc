@@ -58,6 +58,7 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, colon_tension_stiffness_N]");
   Require(InRange(p.colon_toe_strain, 0.0, 2.0), "colon_toe_strain", p.colon_toe_strain,
           "must be in [0, 2]");
+  Require(InRange(p.ring_onset_s, 0.0, 1.0), "ring_onset_s", p.ring_onset_s, "must be in [0, 1] s");
   Require(InRange(p.colon_pleat_stiffness_N, 0.0, p.colon_tension_stiffness_N),
           "colon_pleat_stiffness_N", p.colon_pleat_stiffness_N,
           "must be in [0, colon_tension_stiffness_N]");
@@ -135,6 +136,7 @@ ModelState MakeInitialState(const ModelParams& params) {
   s.colon_reference_m.resize(N);
   for (int i = 0; i < N; ++i) s.colon_reference_m[i] = params.colon.points[i].rest_position_m;
   s.colon_velocity_m_per_s.assign(N, Eigen::Vector3d::Zero());
+  s.ring_onset.assign(N, 0.0);
   s.p_WColon.resize(N);
   s.colon_tangent.resize(N);
   for (int i = 0; i < N; ++i) {
@@ -166,6 +168,7 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.sample_normal_slope_N_per_m.assign(samples, 0.0);
   sc.sample_delta_m.assign(samples, Eigen::Vector3d::Zero());
   sc.ring_contacts.assign(params.colon.points.size(), RingContact{});
+  sc.ring_held.assign(params.colon.points.size(), 0);
   const size_t N = params.colon.points.size();
   sc.colon_diag.assign(N, Eigen::Matrix3d::Zero());
   sc.colon_upper.assign(N, Eigen::Matrix3d::Zero());

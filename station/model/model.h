@@ -86,6 +86,14 @@ struct ModelParams {
   // the shaft, and held a withdrawing scope like a barb (docs/model.md,
   // "Contact"). false: along the offset, as before 2026-12-02.
   bool contacts_across_scope{true};
+  // A ring contact (a colon point held round the scope piece between two
+  // samples) takes its load over this time once it appears, linearly. The
+  // tracking hands a point from a sample's segment to a ring in one step,
+  // and where the colon folds sharply the point is then millimetres inside:
+  // at once, a 5-11 N one-step jump the hand felt as a roll torque spike of
+  // up to 2.2 N m. 10 ms: the resolution of the hand force (docs/model.md,
+  // "Ring contacts"). 0: at once.
+  double ring_onset_s{0.01};
   bool operator==(const ModelParams&) const = default;
 };
 
@@ -171,6 +179,9 @@ struct ModelState {
   // plane at r_i for the contacts and the views.
   std::vector<Eigen::Vector3d> colon_tangent;
   std::vector<double> wall_deformation_m;    // largest radial l at each point
+  // How far each colon point's ring contact has come on (0..1;
+  // ModelParams::ring_onset_s); 0 where the point is not held as a ring.
+  std::vector<double> ring_onset;
 
   // Tip position along the colon's material (rest arc of the tracked point
   // of the wall): where in the colon the tip is, however the colon pleats.
@@ -227,6 +238,7 @@ struct RingContact {
   double force_N{0.0};
   double slope_N_per_m{0.0};
   double stiffness_N_per_m{0.0};  // slope + D_d / dt
+  double onset{1.0};              // share of the load taken (ModelParams::ring_onset_s)
 };
 
 // Work arrays for Step, sized once.
@@ -250,6 +262,7 @@ struct Scratch {
   std::vector<Eigen::Vector3d> sample_delta_m;
   std::vector<RingContact> ring_contacts;  // first ring_contact_count valid, by sample
   int ring_contact_count{0};
+  std::vector<std::uint8_t> ring_held;    // [point]: held as a ring this step
   // The colon's block-tridiagonal system (3x3 blocks), points 0..N-1.
   std::vector<Eigen::Matrix3d> colon_diag;
   std::vector<Eigen::Matrix3d> colon_upper;  // block (i, i+1)

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -172,25 +174,20 @@ TEST(Fig10, ConstantPushLiftsTheMobileSigmoidIntoALoopThatStretchesItsMesentery)
   EXPECT_LT(stiff.peak_stretch_m, 0.5 * soft.peak_stretch_m);
 }
 
-// A loop formed and then withdrawn, tip hooked, pleats the sigmoid onto the
-// scope (docs/model.md, "Ring contacts"). However the colon folds, it stays
-// around the scope: every colon point the scope has passed lies within its
-// lumen (plus the wall's give under load) of the scope, so no fold can hang
-// off the scope with the scope cutting across its neck (the model before ring
-// contacts let the junction fold away by 5 cm and the scope cut across it).
-TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
+// Position-driven insertion into standard-adult with the simple steering
+// rule to 0.6 m, then 0.25 m withdrawn with the knobs held (the tip hooked)
+// and the shaft turned clockwise: a loop formed and withdrawn. `each_step`
+// sees the simulation after every step.
+void FormAndWithdrawALoop(const ModelParams& params, const std::function<void(const Sim&)>& each_step) {
   constexpr double kSpeed_m_per_s = 0.02;
   constexpr double kSteerGain_per_s = 8.0;
   constexpr double kWithdrawAt_m = 0.60;
   constexpr double kWithdraw_m = 0.25;
-  constexpr double kWallGive_m = 0.01;  // penetration under a wall force of ~10 N
-  Sim sim(LoadParams("standard-adult"));
+  Sim sim(params);
   StepInput in;
   in.thrust_mode = ThrustMode::kPosition;
   double command_m = 0.0;
   bool withdrawing = false;
-  double farthest_m = 0.0;  // a passed colon point's distance from the scope, beyond its lumen
-  double smallest_pleat = 1.0;
   while (sim.state.time_s < 45.0) {
     if (!withdrawing) {  // steer in; withdrawing, the knobs hold the tip hooked
       const auto p = training::Perceive(sim.params, sim.state, sim.out);
@@ -213,7 +210,22 @@ TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
     in.insertion_m = command_m;
     sim.StepOnce(in);
     ASSERT_TRUE(sim.out.finite) << "t=" << sim.state.time_s;
-    if (sim.state.step_count % 100 != 0) continue;
+    each_step(sim);
+  }
+}
+
+// A loop formed and then withdrawn, tip hooked, pleats the sigmoid onto the
+// scope (docs/model.md, "Ring contacts"). However the colon folds, it stays
+// around the scope: every colon point the scope has passed lies within its
+// lumen (plus the wall's give under load) of the scope, so no fold can hang
+// off the scope with the scope cutting across its neck (the model before ring
+// contacts let the junction fold away by 5 cm and the scope cut across it).
+TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
+  constexpr double kWallGive_m = 0.01;  // penetration under a wall force of ~10 N
+  double farthest_m = 0.0;  // a passed colon point's distance from the scope, beyond its lumen
+  double smallest_pleat = 1.0;
+  FormAndWithdrawALoop(LoadParams("standard-adult"), [&](const Sim& sim) {
+    if (sim.state.step_count % 100 != 0) return;
     const auto& st = sim.state;
     const int first = st.first_inside_sample;
     const int samples = static_cast<int>(st.samples.size());
@@ -228,11 +240,40 @@ TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
       farthest_m = std::max(farthest_m, nearest_m - sim.params.colon.points[m].radius_m);
     }
     for (const double r : sim.out.pleat_ratio) smallest_pleat = std::min(smallest_pleat, r);
-  }
+  });
   std::printf("Tracking: a passed colon point lies at most %.4f m beyond its lumen from the "
               "scope; smallest pleat ratio %.2f\n", farthest_m, smallest_pleat);
   EXPECT_LT(smallest_pleat, 0.9);  // the withdrawal did pleat the colon
   EXPECT_LT(farthest_m, kWallGive_m);
+}
+
+// The largest rise of any colon point's wall force from one step to the next.
+double LargestOneStepWallForceRise(const ModelParams& params) {
+  double largest_N = 0.0;
+  std::vector<double> before;
+  FormAndWithdrawALoop(params, [&](const Sim& sim) {
+    const auto& now = sim.out.wall_force_N;
+    if (before.size() == now.size()) {
+      for (size_t m = 0; m < now.size(); ++m) largest_N = std::max(largest_N, now[m] - before[m]);
+    }
+    before = now;
+  });
+  return largest_N;
+}
+
+// A colon point handed from a sample's segment to the piece between two
+// samples (a ring contact) takes its load over ModelParams::ring_onset_s:
+// where the colon folds sharply it arrives millimetres inside the ring, and
+// taken at once its load was a one-step jump the hand felt as a spike of the
+// roll torque (docs/model.md, "Ring contacts").
+TEST(Tracking, ARingContactTakesItsLoadGradually) {
+  ModelParams at_once = LoadParams("standard-adult");
+  at_once.ring_onset_s = 0.0;
+  const double gradual_N = LargestOneStepWallForceRise(LoadParams("standard-adult"));
+  const double at_once_N = LargestOneStepWallForceRise(at_once);
+  std::printf("Tracking: largest one-step rise of a wall force: %.2f N with the ring onset, "
+              "%.2f N at once\n", gradual_N, at_once_N);
+  EXPECT_LT(gradual_N, 0.5 * at_once_N);
 }
 
 // The wall's toe can be confined to some regions (ModelParams::
