@@ -280,7 +280,7 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
       rc.penetration_m = penetration_m;
       // A point handed from a sample's segment to the piece between two
       // samples takes its ring load over ring_onset_s: where the colon folds
-      // sharply it arrives centimetres inside (docs/model.md, "Ring contacts").
+      // sharply it arrives millimetres inside (docs/model.md, "Ring contacts").
       const double onset = std::min(1.0, s->ring_onset[m] + onset_rate);
       s->ring_onset[m] = onset;
       sc->ring_held[m] = 1;

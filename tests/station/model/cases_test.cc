@@ -174,13 +174,25 @@ TEST(Fig10, ConstantPushLiftsTheMobileSigmoidIntoALoopThatStretchesItsMesentery)
   EXPECT_LT(stiff.peak_stretch_m, 0.5 * soft.peak_stretch_m);
 }
 
+// The simple steering rule: the knobs turn toward the lumen ahead of the tip.
+void SteerTowardTheLumen(const Sim& sim, StepInput* in) {
+  constexpr double kSteerGain_per_s = 8.0;
+  const auto p = training::Perceive(sim.params, sim.state, sim.out);
+  const double dt = sim.params.dt_s;
+  in->knob_up_rad =
+      std::clamp(in->knob_up_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) * dt,
+                 -p.angulation_up_rad, p.angulation_up_rad);
+  in->knob_right_rad =
+      std::clamp(in->knob_right_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) * dt,
+                 -p.angulation_right_rad, p.angulation_right_rad);
+}
+
 // Position-driven insertion into standard-adult with the simple steering
 // rule to 0.6 m, then 0.25 m withdrawn with the knobs held (the tip hooked)
 // and the shaft turned clockwise: a loop formed and withdrawn. `each_step`
 // sees the simulation after every step.
 void FormAndWithdrawALoop(const ModelParams& params, const std::function<void(const Sim&)>& each_step) {
   constexpr double kSpeed_m_per_s = 0.02;
-  constexpr double kSteerGain_per_s = 8.0;
   constexpr double kWithdrawAt_m = 0.60;
   constexpr double kWithdraw_m = 0.25;
   Sim sim(params);
@@ -189,17 +201,7 @@ void FormAndWithdrawALoop(const ModelParams& params, const std::function<void(co
   double command_m = 0.0;
   bool withdrawing = false;
   while (sim.state.time_s < 45.0) {
-    if (!withdrawing) {  // steer in; withdrawing, the knobs hold the tip hooked
-      const auto p = training::Perceive(sim.params, sim.state, sim.out);
-      in.knob_up_rad = std::clamp(in.knob_up_rad + kSteerGain_per_s *
-                                                       std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) *
-                                                       sim.params.dt_s,
-                                  -p.angulation_up_rad, p.angulation_up_rad);
-      in.knob_right_rad = std::clamp(
-          in.knob_right_rad +
-              kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) * sim.params.dt_s,
-          -p.angulation_right_rad, p.angulation_right_rad);
-    }
+    if (!withdrawing) SteerTowardTheLumen(sim, &in);  // withdrawing, the knobs hold the tip hooked
     if (command_m >= kWithdrawAt_m) withdrawing = true;
     if (withdrawing && command_m > kWithdrawAt_m - kWithdraw_m) {
       command_m -= kSpeed_m_per_s * sim.params.dt_s;
@@ -276,12 +278,7 @@ TEST(Tracking, ARingContactTakesItsLoadGradually) {
   EXPECT_LT(gradual_N, 0.5 * at_once_N);
 }
 
-// The wall's toe can be confined to some regions (ModelParams::
-// colon_toe_regions): inserted 0.4 m with the simple steering rule into
-// standard-adult, a toe in the sigmoid alone (10 N to 20 %, the variant of
-// docs/model-shortening-notes.md, "A sigmoid that stretches") lets the
-// sigmoid lengthen while the rectum, without it, keeps the wall's modulus;
-// with no toe anywhere the sigmoid does not lengthen either.
+// The largest strain of a gap between two points of `region`.
 double LargestStrainIn(const Sim& sim, Region region) {
   double largest = 0.0;
   const auto& pts = sim.params.colon.points;
@@ -299,9 +296,10 @@ struct RegionStrains {
   double rectum{0.0};
 };
 
+// 0.4 m inserted with the simple steering rule into standard-adult, with a
+// soft toe (10 N to 20 %) in the regions of the mask.
 RegionStrains InsertWithToeIn(std::uint32_t toe_regions) {
   constexpr double kSpeed_m_per_s = 0.02;
-  constexpr double kSteerGain_per_s = 8.0;
   ModelParams params = LoadParams("standard-adult");
   params.colon_toe_stiffness_N = 10.0;
   params.colon_toe_strain = 0.2;
@@ -311,13 +309,7 @@ RegionStrains InsertWithToeIn(std::uint32_t toe_regions) {
   in.thrust_mode = ThrustMode::kPosition;
   RegionStrains strains;
   while (sim.state.time_s < 20.0) {
-    const auto p = training::Perceive(sim.params, sim.state, sim.out);
-    in.knob_up_rad = std::clamp(
-        in.knob_up_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) * sim.params.dt_s,
-        -p.angulation_up_rad, p.angulation_up_rad);
-    in.knob_right_rad = std::clamp(
-        in.knob_right_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) * sim.params.dt_s,
-        -p.angulation_right_rad, p.angulation_right_rad);
+    SteerTowardTheLumen(sim, &in);
     in.insertion_m += kSpeed_m_per_s * sim.params.dt_s;
     sim.StepOnce(in);
     EXPECT_TRUE(sim.out.finite);
@@ -328,6 +320,11 @@ RegionStrains InsertWithToeIn(std::uint32_t toe_regions) {
   return strains;
 }
 
+// The wall's toe can be confined to some regions (ModelParams::
+// colon_toe_regions): a toe in the sigmoid alone (10 N to 20 %, the variant of
+// docs/model-shortening-notes.md, "A sigmoid that stretches") lets the
+// sigmoid lengthen while the rectum, without it, keeps the wall's modulus;
+// with no toe anywhere the sigmoid does not lengthen either.
 TEST(WallToe, ConfinedToTheSigmoidLengthensOnlyTheSigmoid) {
   const RegionStrains sigmoid_toe = InsertWithToeIn(1u << static_cast<unsigned>(Region::kSigmoid));
   const RegionStrains no_toe = InsertWithToeIn(0u);
