@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
   double next_dump_s = 0.0, next_forces_s = 0.0;
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
-  const double gain_per_s = 8.0;
+  const double gain_per_s = ves::training::ExpertOperator::kSteerGain_per_s;  // the simple rule
   double command_m = 0.0;
   int phase = 0;  // position rule: 0 inserting, 1 withdrawing, 2 holding
   // PROBE_REINSERT=1: after the withdrawal, insert again (reductions repeat
@@ -174,12 +174,8 @@ int main(int argc, char** argv) {
       was_pulling = pulling;
     } else {
       if (phase == 0) {  // steer; withdrawing, the knobs hold the tip hooked
-        const double up_err = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
-        const double right_err = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
-        in.knob_up_rad = std::clamp(in.knob_up_rad + gain_per_s * up_err * params.dt_s,
-                                    -p.angulation_up_rad, p.angulation_up_rad);
-        in.knob_right_rad = std::clamp(in.knob_right_rad + gain_per_s * right_err * params.dt_s,
-                                       -p.angulation_right_rad, p.angulation_right_rad);
+        ves::training::SteerTowardTheLumen(p, gain_per_s, params.dt_s, &in.knob_up_rad,
+                                           &in.knob_right_rad);
         // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
         const double knob_max = EnvOr("PROBE_KNOB_MAX", 10.0);
         const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);

@@ -37,6 +37,17 @@ Perception Perceive(const model::ModelParams& params, const model::ModelState& s
   return p;
 }
 
+void SteerTowardTheLumen(const Perception& perception, double gain_per_s, double dt_s,
+                         double* knob_up_rad, double* knob_right_rad) {
+  const Eigen::Vector3d& lumen = perception.lumen_Tip;
+  const double up_error_rad = std::atan2(lumen.y(), lumen.z());
+  const double right_error_rad = std::atan2(lumen.x(), lumen.z());
+  *knob_up_rad = std::clamp(*knob_up_rad + gain_per_s * up_error_rad * dt_s,
+                            -perception.angulation_up_rad, perception.angulation_up_rad);
+  *knob_right_rad = std::clamp(*knob_right_rad + gain_per_s * right_error_rad * dt_s,
+                               -perception.angulation_right_rad, perception.angulation_right_rad);
+}
+
 InputSample NoviceOperator::Act(const Perception&) {
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
@@ -117,12 +128,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
   } else {
     // Steer: turn the knobs so the lumen moves to the image centre, never
     // past kKnobMax_rad (a tip bent further only hooks the wall).
-    const double up_error_rad = std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z());
-    const double right_error_rad = std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z());
-    knob_up_rad_ = std::clamp(knob_up_rad_ + kSteerGain_per_s * up_error_rad * dt_s_,
-                              -p.angulation_up_rad, p.angulation_up_rad);
-    knob_right_rad_ = std::clamp(knob_right_rad_ + kSteerGain_per_s * right_error_rad * dt_s_,
-                                 -p.angulation_right_rad, p.angulation_right_rad);
+    SteerTowardTheLumen(p, kSteerGain_per_s, dt_s_, &knob_up_rad_, &knob_right_rad_);
     const double bend_rad = std::hypot(knob_up_rad_, knob_right_rad_);
     if (bend_rad > kKnobMax_rad) {
       knob_up_rad_ *= kKnobMax_rad / bend_rad;

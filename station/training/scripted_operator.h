@@ -40,6 +40,13 @@ inline constexpr double kLumenLookahead_m = 0.04;
 Perception Perceive(const model::ModelParams& params, const model::ModelState& state,
                     const model::StepOutput& output, double lumen_lookahead_m = kLumenLookahead_m);
 
+// The simple steering rule: each knob turns toward the lumen at gain_per_s
+// (rad/s) per radian of the lumen's offset from the image centre, within the
+// scope's angulation. The expert steers with it, and so do the model tests'
+// and insertion_probe's position-driven insertions.
+void SteerTowardTheLumen(const Perception& perception, double gain_per_s, double dt_s,
+                         double* knob_up_rad, double* knob_right_rad);
+
 // A scripted trainee: produces the same InputSample a person's hands produce
 // (for tests, demos and calibration, docs/scoring.md). Deterministic.
 class ScriptedOperator {

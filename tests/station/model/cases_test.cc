@@ -174,17 +174,12 @@ TEST(Fig10, ConstantPushLiftsTheMobileSigmoidIntoALoopThatStretchesItsMesentery)
   EXPECT_LT(stiff.peak_stretch_m, 0.5 * soft.peak_stretch_m);
 }
 
-// The simple steering rule: the knobs turn toward the lumen ahead of the tip.
+// The simple steering rule (the expert's gain): the knobs turn toward the
+// lumen ahead of the tip.
 void SteerTowardTheLumen(const Sim& sim, StepInput* in) {
-  constexpr double kSteerGain_per_s = 8.0;
-  const auto p = training::Perceive(sim.params, sim.state, sim.out);
-  const double dt = sim.params.dt_s;
-  in->knob_up_rad =
-      std::clamp(in->knob_up_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.y(), p.lumen_Tip.z()) * dt,
-                 -p.angulation_up_rad, p.angulation_up_rad);
-  in->knob_right_rad =
-      std::clamp(in->knob_right_rad + kSteerGain_per_s * std::atan2(p.lumen_Tip.x(), p.lumen_Tip.z()) * dt,
-                 -p.angulation_right_rad, p.angulation_right_rad);
+  training::SteerTowardTheLumen(training::Perceive(sim.params, sim.state, sim.out),
+                                training::ExpertOperator::kSteerGain_per_s, sim.params.dt_s,
+                                &in->knob_up_rad, &in->knob_right_rad);
 }
 
 // Position-driven insertion into standard-adult with the simple steering
