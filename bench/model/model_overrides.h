@@ -17,7 +17,7 @@
 //   mobile points: soft_k (suspension, N/m^2), mobile_kc_scale (suspension x),
 //     relax_s, meso_k, meso_m, pleat (limit), tension
 //   colon: shear, anchor_arc (0/1), reach_gathers (0/1), abdomen (m),
-//     across (0/1), ring_onset_s
+//     across (0/1), ring_onset_s, window (contact search, segments), arc_ratio
 //   scope: ei (insertion tube EI x), bend_ei, links, growth, passive_m, passive_ei
 //   step: dt_ms, pleat_k, toe_k, toe_strain, toe_regions (bit 1 << Region),
 //     pleat_set_s, pleat_release_s, press_k, press_slack
@@ -48,6 +48,9 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   params->contacts_across_scope =
       get("across", params->contacts_across_scope ? 1.0 : 0.0) != 0.0;
   params->ring_onset_s = get("ring_onset_s", params->ring_onset_s);
+  params->contact_search_window =
+      static_cast<int>(get("window", params->contact_search_window));
+  params->tracking_arc_ratio = get("arc_ratio", params->tracking_arc_ratio);
   model::CalcMesenteryAnchors(&colon);
   auto& scope = params->scope;
   scope.flexural_rigidity_N_m2 *= get("ei", 1.0);
