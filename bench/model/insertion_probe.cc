@@ -22,6 +22,7 @@
 //   PROBE_FORCES=S                 every S s: what holds the scope along its axis
 //                                  (friction, wall normals, rings; the largest)
 //   PROBE_JOINTS=1                 at the end: the inserted links' lengths and bends
+//   PROBE_TIP_RESIST=F             an axial F newtons on the tip against its advance
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -268,6 +269,12 @@ int main(int argc, char** argv) {
       in.insertion_m = command_m;
     }
     if (spike_detail) before_previous = previous, previous = state;
+    if (const double f = EnvOr("PROBE_TIP_RESIST", 0.0); f > 0.0) {
+      // An axial force on the tip against its advance (StepInput::tip_force_W_N;
+      // the colon does not feel it), full once it moves in at 5 mm/s.
+      const Eigen::Vector3d axis = state.X_WTip.linear().col(2);
+      in.tip_force_W_N = -(f * std::clamp(state.insertion_rate_m_per_s / 0.005, -1.0, 1.0)) * axis;
+    }
     ves::model::Step(params, in, &state, &scratch, &out);
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);
