@@ -120,6 +120,9 @@ int main(int argc, char** argv) {
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = ves::training::ExpertOperator::kSteerGain_per_s;  // the simple rule
+  // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
+  const double knob_max = EnvOr("PROBE_KNOB_MAX", 10.0);
+  const double tip_resist_N = EnvOr("PROBE_TIP_RESIST", 0.0);
   double command_m = 0.0;
   int phase = 0;  // position rule: 0 inserting, 1 withdrawing, 2 holding
   // PROBE_REINSERT=1: after the withdrawal, insert again (reductions repeat
@@ -177,8 +180,6 @@ int main(int argc, char** argv) {
       if (phase == 0) {  // steer; withdrawing, the knobs hold the tip hooked
         ves::training::SteerTowardTheLumen(p, gain_per_s, params.dt_s, &in.knob_up_rad,
                                            &in.knob_right_rad);
-        // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
-        const double knob_max = EnvOr("PROBE_KNOB_MAX", 10.0);
         const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
         if (bend > knob_max) {
           in.knob_up_rad *= knob_max / bend;
@@ -269,11 +270,12 @@ int main(int argc, char** argv) {
       in.insertion_m = command_m;
     }
     if (spike_detail) before_previous = previous, previous = state;
-    if (const double f = EnvOr("PROBE_TIP_RESIST", 0.0); f > 0.0) {
+    if (tip_resist_N > 0.0) {
       // An axial force on the tip against its advance (StepInput::tip_force_W_N;
       // the colon does not feel it), full once it moves in at 5 mm/s.
       const Eigen::Vector3d axis = state.X_WTip.linear().col(2);
-      in.tip_force_W_N = -(f * std::clamp(state.insertion_rate_m_per_s / 0.005, -1.0, 1.0)) * axis;
+      const double share = std::clamp(state.insertion_rate_m_per_s / 0.005, -1.0, 1.0);
+      in.tip_force_W_N = -(tip_resist_N * share) * axis;
     }
     ves::model::Step(params, in, &state, &scratch, &out);
     if (!out.finite) {
