@@ -23,6 +23,8 @@
 //                                  (friction, wall normals, rings; the largest)
 //   PROBE_JOINTS=1                 at the end: the inserted links' lengths and bends
 //   PROBE_TIP_RESIST=F             an axial F newtons on the tip against its advance
+//   PROBE_PLEAT_PROFILE=M          each second: the pleat ratio in 2 cm bins of the
+//                                  first M metres of colon
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -180,11 +182,7 @@ int main(int argc, char** argv) {
       if (phase == 0) {  // steer; withdrawing, the knobs hold the tip hooked
         ves::training::SteerTowardTheLumen(p, gain_per_s, params.dt_s, &in.knob_up_rad,
                                            &in.knob_right_rad);
-        const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
-        if (bend > knob_max) {
-          in.knob_up_rad *= knob_max / bend;
-          in.knob_right_rad *= knob_max / bend;
-        }
+        ves::training::LimitKnobBend(knob_max, &in.knob_up_rad, &in.knob_right_rad);
       }
       if (reduce_rule) {
         // Loop reduction by the loop index (as the expert does it, by position).
@@ -513,6 +511,27 @@ int main(int argc, char** argv) {
           std::printf(" %s %.2f/%.2f/%.2f/%.2f", names[r], scope_m[r], path_m[r], rest_m[r],
                       (state.p_WColon[last[r]] - state.p_WColon[first[r] - 1]).norm());
         }
+        std::printf("\n");
+      }
+      if (const double extent_m = EnvOr("PROBE_PLEAT_PROFILE", 0.0); extent_m > 0.0) {
+        // Where the colon gathers: the mean pleat ratio of each 2 cm of rest
+        // arc over the first extent_m (1 = natural length, < 1 pleated).
+        constexpr double kBin_m = 0.02;
+        std::printf("    pleat per %.0f cm:", kBin_m * 100.0);
+        const auto& pts = params.colon.points;
+        double sum = 0.0, bin_end_m = kBin_m;
+        int count = 0;
+        for (size_t i = 0; i < pts.size() && pts[i].arc_m < extent_m; ++i) {
+          if (pts[i].arc_m > bin_end_m && count > 0) {
+            std::printf(" %.2f", sum / count);
+            sum = 0.0;
+            count = 0;
+            bin_end_m += kBin_m;
+          }
+          sum += out.pleat_ratio[i];
+          ++count;
+        }
+        if (count > 0) std::printf(" %.2f", sum / count);
         std::printf("\n");
       }
       if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples

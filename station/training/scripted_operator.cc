@@ -48,6 +48,14 @@ void SteerTowardTheLumen(const Perception& perception, double gain_per_s, double
                                -perception.angulation_right_rad, perception.angulation_right_rad);
 }
 
+void LimitKnobBend(double max_bend_rad, double* knob_up_rad, double* knob_right_rad) {
+  const double bend_rad = std::hypot(*knob_up_rad, *knob_right_rad);
+  if (bend_rad > max_bend_rad) {
+    *knob_up_rad *= max_bend_rad / bend_rad;
+    *knob_right_rad *= max_bend_rad / bend_rad;
+  }
+}
+
 InputSample NoviceOperator::Act(const Perception&) {
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
@@ -129,11 +137,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // Steer: turn the knobs so the lumen moves to the image centre, never
     // past kKnobMax_rad (a tip bent further only hooks the wall).
     SteerTowardTheLumen(p, kSteerGain_per_s, dt_s_, &knob_up_rad_, &knob_right_rad_);
-    const double bend_rad = std::hypot(knob_up_rad_, knob_right_rad_);
-    if (bend_rad > kKnobMax_rad) {
-      knob_up_rad_ *= kKnobMax_rad / bend_rad;
-      knob_right_rad_ *= kKnobMax_rad / bend_rad;
-    }
+    LimitKnobBend(kKnobMax_rad, &knob_up_rad_, &knob_right_rad_);
     if (p.t_s < settle_until_s_) {
       target_speed_m_per_s = 0.0;  // settling: hold still, the shaft kept turned
     } else {

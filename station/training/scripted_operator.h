@@ -47,6 +47,11 @@ Perception Perceive(const model::ModelParams& params, const model::ModelState& s
 void SteerTowardTheLumen(const Perception& perception, double gain_per_s, double dt_s,
                          double* knob_up_rad, double* knob_right_rad);
 
+// A hand that turns the knobs no further than max_bend_rad in all: a larger
+// bend is scaled back along its own direction (the expert's kKnobMax_rad;
+// insertion_probe's PROBE_KNOB_MAX).
+void LimitKnobBend(double max_bend_rad, double* knob_up_rad, double* knob_right_rad);
+
 // A scripted trainee: produces the same InputSample a person's hands produce
 // (for tests, demos and calibration, docs/scoring.md). Deterministic.
 class ScriptedOperator {
