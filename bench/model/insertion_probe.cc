@@ -25,6 +25,10 @@
 //   PROBE_TIP_RESIST=F             an axial F newtons on the tip against its advance
 //   PROBE_PLEAT_PROFILE=M          each second: the pleat ratio in 2 cm bins of the
 //                                  first M metres of colon
+//   PROBE_TIP_AIM=1                each second: the tip's place and axis, and its
+//                                  angle off the lumen ahead
+//   PROBE_REGION_MOVE=R            each second: how far region R's points (a Region
+//                                  number, 2 = sigmoid) have moved from rest
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -40,6 +44,7 @@
 #include "station/model/model.h"
 #include "station/training/case_model.h"
 #include "station/training/metrics.h"
+#include "station/training/observer.h"
 #include "station/training/scripted_operator.h"
 #include "station/training/session_runner.h"
 
@@ -533,6 +538,38 @@ int main(int argc, char** argv) {
         }
         if (count > 0) std::printf(" %.2f", sum / count);
         std::printf("\n");
+      }
+      if (std::getenv("PROBE_TIP_AIM")) {
+        // Whether the tip moves in space and where it points: its position and
+        // axis, how far it is from its tracked colon point, and the angle
+        // between its axis and the lumen 4 cm ahead (what the steering sees).
+        const Eigen::Vector3d tip = state.X_WTip.translation();
+        const Eigen::Vector3d axis = state.X_WTip.rotation().col(2);
+        const Eigen::Vector3d tracked =
+            ves::training::ColonPointAhead(params, state, state.tip_arc_m, 0.0);
+        const Eigen::Vector3d ahead = ves::training::ColonPointAhead(
+            params, state, state.tip_arc_m, ves::training::kLumenLookahead_m);
+        const double aim_deg =
+            std::acos(std::clamp(axis.dot((ahead - tip).normalized()), -1.0, 1.0)) * 180.0 /
+            ves::model::kPi;
+        std::printf("    tip at (%.3f %.3f %.3f) axis (%.2f %.2f %.2f), %.3f m from its tracked "
+                    "point, %.0f deg off the lumen ahead\n",
+                    tip.x(), tip.y(), tip.z(), axis.x(), axis.y(), axis.z(), (tip - tracked).norm(),
+                    aim_deg);
+      }
+      if (const char* which = std::getenv("PROBE_REGION_MOVE")) {
+        // How far one region's points (a Region number: 2 sigmoid) have moved
+        // from rest, per axis of W (+x right, +y anterior, +z cranial).
+        const int region = std::atoi(which);
+        Eigen::Vector3d low = Eigen::Vector3d::Constant(1e9), high = -low;
+        for (size_t i = 0; i < params.colon.points.size(); ++i) {
+          if (static_cast<int>(params.colon.points[i].region) != region) continue;
+          const Eigen::Vector3d d = state.p_WColon[i] - params.colon.points[i].rest_position_m;
+          low = low.cwiseMin(d);
+          high = high.cwiseMax(d);
+        }
+        std::printf("    region %d moved: x %.3f..%.3f y %.3f..%.3f z %.3f..%.3f m\n", region,
+                    low.x(), high.x(), low.y(), high.y(), low.z(), high.z());
       }
       if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples
         std::printf("    track");
