@@ -11,6 +11,8 @@
 //   PROBE_WITHDRAW_AT=M            position rule: at M metres inserted, withdraw
 //   PROBE_WITHDRAW_M=W             ... by W metres (default 0.25)
 //   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
+//   PROBE_PIN_TIP=1                ... with the tip held where the withdrawal began
+//                                  (a perfect hook; also for PROBE_REDUCE)
 //   PROBE_REINSERT=1               ... then insert again; PROBE_WITHDRAW_EVERY=E
 //                                  repeats the withdrawal every E metres
 //   PROBE_<KEY>=V                  a model setting, KEY one of the keys of
@@ -249,6 +251,14 @@ int main(int argc, char** argv) {
       } else if (phase == 0 && command_m >= withdraw_at_m_next) {
         phase = 1;
         withdraw_at_reached_m = command_m;
+        pinned_tip_W = state.X_WTip.translation();
+      }
+      if (!reduce_rule) {
+        // PROBE_PIN_TIP=1 here too: the tip held where the withdrawal began
+        // (a perfect hook), to see how far the reduction could go.
+        const bool pin = phase == 1 && std::getenv("PROBE_PIN_TIP") != nullptr;
+        in.tip_force_W_N = pin ? Eigen::Vector3d(2000.0 * (pinned_tip_W - state.X_WTip.translation()))
+                               : Eigen::Vector3d::Zero();
       }
       if (!reduce_rule && phase == 1 && command_m <= withdraw_at_reached_m - withdraw_m) {
         phase = reinsert ? 0 : 2;
