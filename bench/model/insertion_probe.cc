@@ -25,6 +25,8 @@
 //                                  (friction, wall normals, rings; the largest)
 //   PROBE_JOINTS=1                 at the end: the inserted links' lengths and bends
 //   PROBE_TIP_RESIST=F             an axial F newtons on the tip against its advance
+//   PROBE_SLACK=1                  at the end: the extremes of the inserted length
+//                                  less the colon's path behind the tip
 //   PROBE_PLEAT_PROFILE=M          each second: the pleat ratio in 2 cm bins of the
 //                                  first M metres of colon
 //   PROBE_TIP_AIM=1                each second: the tip's place and axis, and its
@@ -57,6 +59,23 @@ using ves::model::StepInput;
 double EnvOr(const char* name, double fallback) {
   const char* v = std::getenv(name);
   return v != nullptr ? std::atof(v) : fallback;
+}
+
+// The colon's current path length from the anus to the tip's place in its
+// material (pleats count their zigzag, a stretched wall its stretch).
+double ColonPathBehindTheTip(const ves::model::ModelParams& params,
+                             const ves::model::ModelState& state) {
+  const auto& pts = params.colon.points;
+  double path_m = 0.0;
+  size_t i = 0;
+  for (; i + 1 < pts.size() && pts[i + 1].arc_m <= state.tip_arc_m; ++i) {
+    path_m += (state.p_WColon[i + 1] - state.p_WColon[i]).norm();
+  }
+  if (i + 1 < pts.size()) {
+    const double t = (state.tip_arc_m - pts[i].arc_m) / (pts[i + 1].arc_m - pts[i].arc_m);
+    path_m += t * (state.p_WColon[i + 1] - state.p_WColon[i]).norm();
+  }
+  return path_m;
 }
 
 // AP (x, z) and lateral (y, z) projections: rest centerline grey, deformed
@@ -168,6 +187,10 @@ int main(int argc, char** argv) {
   ves::bench::TenStepMean base_10ms_N;
   long over_10N_mean_steps = 0;
   ves::model::ModelState previous = state, before_previous = state;
+  // PROBE_SLACK: the scope inside less the colon's current path behind the
+  // tip (what the lumen holds beyond the colon's length), its extremes.
+  const bool track_slack = std::getenv("PROBE_SLACK") != nullptr;
+  double slack_min_m = 1e9, slack_max_m = -1e9, slack_min_s = 0.0, slack_max_s = 0.0;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     if (const char* push = std::getenv("PROBE_PUSH_FORCE")) {
@@ -291,6 +314,11 @@ int main(int argc, char** argv) {
       in.tip_force_W_N = -(tip_resist_N * share) * axis;
     }
     ves::model::Step(params, in, &state, &scratch, &out);
+    if (track_slack && state.inserted_m > 0.05) {
+      const double slack_m = state.inserted_m - ColonPathBehindTheTip(params, state);
+      if (slack_m < slack_min_m) slack_min_m = slack_m, slack_min_s = state.time_s;
+      if (slack_m > slack_max_m) slack_max_m = slack_m, slack_max_s = state.time_s;
+    }
     if (!out.finite) {
       std::printf("diverged at t=%.3f\n", state.time_s);
       return 1;
@@ -626,6 +654,10 @@ int main(int argc, char** argv) {
                   state.link_length_m[k], state.bend_rad[k].norm(),
                   state.joint_stiffness_N_m_per_rad[k], first_sample);
     }
+  }
+  if (track_slack) {
+    std::printf("slack (inserted less the colon path behind the tip): min %.3f m at %.2f s, "
+                "max %.3f m at %.2f s\n", slack_min_m, slack_min_s, slack_max_m, slack_max_s);
   }
   std::printf("summary: max tip arc %.3f m, inserted %.3f m, stretch peak %.3f m, wall peak %.1f "
               "N, base peak %.1f N (over 10 N %.1f %% of steps), roll peak %.2f N m, fixed moved "
