@@ -167,6 +167,8 @@ int main(int argc, char** argv) {
   ves::training::LoopIndex loop_index;
   double reduce_tip_max_m = 0.0;
   Eigen::Vector3d pinned_tip_W = Eigen::Vector3d::Zero();
+  const bool pin_tip = std::getenv("PROBE_PIN_TIP") != nullptr;
+  constexpr double kPinStiffness_N_per_m = 2000.0;
   bool stiffened = false;
   bool was_pulling = false;
   double last_reduce_tip_m = -1.0;
@@ -209,6 +211,12 @@ int main(int argc, char** argv) {
       }
       was_pulling = pulling;
     } else {
+      // PROBE_PIN_TIP: while withdrawing (either rule) the tip is held where
+      // the withdrawal began, a perfect hook, to see how far a reduction goes.
+      in.tip_force_W_N = pin_tip && phase == 1
+                             ? Eigen::Vector3d(kPinStiffness_N_per_m *
+                                               (pinned_tip_W - state.X_WTip.translation()))
+                             : Eigen::Vector3d::Zero();
       if (phase == 0) {  // steer; withdrawing, the knobs hold the tip hooked
         ves::training::SteerTowardTheLumen(p, gain_per_s, params.dt_s, &in.knob_up_rad,
                                            &in.knob_right_rad);
@@ -218,12 +226,6 @@ int main(int argc, char** argv) {
         // Loop reduction by the loop index (as the expert does it, by position).
         const double loop_m = loop_index.Update(state.inserted_m, state.tip_arc_m);
         const double limit_m = p.tip_into_fixed_colon_m >= 0.08 ? fixed_limit_m : mobile_limit_m;
-        if (phase == 1 && std::getenv("PROBE_PIN_TIP")) {
-          // Experiment: hold the tip where the reduction started (a perfect hook).
-          in.tip_force_W_N = 2000.0 * (pinned_tip_W - state.X_WTip.translation());
-        } else {
-          in.tip_force_W_N.setZero();
-        }
         // After a reduction, the next one waits until the tip has gone
         // PROBE_REDUCE_AGAIN_M (default 0.10 m) deeper: a loop re-formed by
         // pushing on is taut before the tip moves.
@@ -275,13 +277,6 @@ int main(int argc, char** argv) {
         phase = 1;
         withdraw_at_reached_m = command_m;
         pinned_tip_W = state.X_WTip.translation();
-      }
-      if (!reduce_rule) {
-        // PROBE_PIN_TIP=1 here too: the tip held where the withdrawal began
-        // (a perfect hook), to see how far the reduction could go.
-        const bool pin = phase == 1 && std::getenv("PROBE_PIN_TIP") != nullptr;
-        in.tip_force_W_N = pin ? Eigen::Vector3d(2000.0 * (pinned_tip_W - state.X_WTip.translation()))
-                               : Eigen::Vector3d::Zero();
       }
       if (!reduce_rule && phase == 1 && command_m <= withdraw_at_reached_m - withdraw_m) {
         phase = reinsert ? 0 : 2;
