@@ -146,6 +146,19 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
                                : 0.0;
 }
 
+void UpdateColonDerived(const ModelParams& params, int from, int to, ModelState* s) {
+  const auto& pts = params.colon.points;
+  const int N = static_cast<int>(pts.size());
+  const double shear_ratio = params.colon.mesentery_shear_ratio;
+  for (int i = std::max(from, 0); i <= std::min(to, N - 1); ++i) {
+    s->colon_tether_distance_m[i] = CalcTetherDistance(
+        s->p_WColon[i] - pts[i].tether_anchor_m, pts[i].tether_root_direction, shear_ratio);
+  }
+  for (int i = std::max(from - 1, 0); i <= std::min(to, N - 2); ++i) {
+    s->colon_gap_m[i] = (s->p_WColon[i + 1] - s->p_WColon[i]).norm();
+  }
+}
+
 void UpdateColonTangents(int from, int to, ModelState* s) {
   const int N = static_cast<int>(s->p_WColon.size());
   for (int i = std::max(from, 0); i <= std::min(to, N - 1); ++i) {
@@ -188,10 +201,10 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
     // k (rho - L) G r / rho; its stiffness is k [g g^T + (1 - L/rho)(G - g g^T)]
     // with g = G r / rho (positive semidefinite: G is).
     const Eigen::Vector3d r = x[i] - p.tether_anchor_m;
-    const double rho = CalcTetherDistance(r, p.tether_root_direction, shear_ratio);
+    const double rho = s->colon_tether_distance_m[i];
     double reach_m = p.tether_length_m;
     if (params.mesentery_reach_gathers && p.tissue.mobile && i > 0 && i < N - 1) {
-      const double now = (x[i + 1] - x[i]).norm() + (x[i] - x[i - 1]).norm();
+      const double now = s->colon_gap_m[i] + s->colon_gap_m[i - 1];
       const double natural = sc->colon_pair_gap_m[i] + sc->colon_pair_gap_m[i - 1];
       const double ratio = natural > 1e-12 ? std::min(1.0, now / natural) : 1.0;
       reach_m = std::max(p.tissue.mesentery_length_m, p.tether_length_m * ratio);
@@ -240,7 +253,7 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   // Neighbour pairs (i, i+1): the axial link and the kink tension.
   for (int i = 0; i < end; ++i) {
     const Eigen::Vector3d seg = x[i + 1] - x[i];
-    const double g = seg.norm();
+    const double g = s->colon_gap_m[i];
     const double inv_g = g > 1e-12 ? 1.0 / g : 0.0;
     // Strain against the gap's rest length (shorter where folds have set);
     // the folds pack at pleat_limit of the natural gap.
@@ -392,12 +405,13 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
     const double relax = sc->colon_relax_factor[i];
     if (relax > 0.0) s->colon_reference_m[i] += relax * (s->p_WColon[i] - s->colon_reference_m[i]);
   }
+  UpdateColonDerived(params, 1, last, s);
   // Folds set where a gap is held shortened, and release slowly elsewhere.
   if (params.colon_pleat_set_s > 0.0) {
     const double set = dt / (params.colon_pleat_set_s + dt);
     const double release = dt / (params.colon_pleat_release_s + dt);
     for (int i = 0; i < std::min(last + 1, N - 1); ++i) {
-      const double g = (s->p_WColon[i + 1] - s->p_WColon[i]).norm();
+      const double g = s->colon_gap_m[i];
       double& rest_m = s->colon_pair_rest_gap_m[i];
       const double natural_m = sc->colon_pair_gap_m[i];
       if (g < rest_m) {

@@ -60,6 +60,11 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);
 
+// After points from..to have moved: recomputes their tether distances and
+// the lengths of the gaps on either side of them (ModelState::colon_gap_m,
+// colon_tether_distance_m).
+void UpdateColonDerived(const ModelParams& params, int from, int to, ModelState* state);
+
 // Axial force of a neighbour pair (+ pulls the pair together) for the strain
 // of its gap, and its slope per unit strain: the wall's toe (toe_N per unit
 // strain up to colon_toe_strain; the tension stiffness where the gap has no

@@ -143,6 +143,9 @@ ModelState MakeInitialState(const ModelParams& params) {
     s.p_WColon[i] = params.colon.points[i].rest_position_m;
     s.colon_tangent[i] = params.colon.points[i].rest_tangent;
   }
+  s.colon_gap_m.assign(N, 0.0);
+  s.colon_tether_distance_m.resize(N);
+  internal::UpdateColonDerived(params, 0, N - 1, &s);
   s.wall_deformation_m.assign(N, 0.0);
   internal::UpdateScopeKinematics(params, &s);
   return s;

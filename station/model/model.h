@@ -178,6 +178,12 @@ struct ModelState {
   // neighbours, as of the end of the last step): the normal of the lumen's
   // plane at r_i for the contacts and the views.
   std::vector<Eigen::Vector3d> colon_tangent;
+  // Derived from p_WColon as of the end of the last step, kept so that each
+  // is taken once per step (SolveColon and the outputs read them): the
+  // length of the gap between points i and i+1, and each point's distance
+  // from its tether anchor in the tether's metric (CalcTetherDistance).
+  std::vector<double> colon_gap_m;
+  std::vector<double> colon_tether_distance_m;
   std::vector<double> wall_deformation_m;    // largest radial l at each point
   // How far each colon point's ring contact has come on (0..1;
   // ModelParams::ring_onset_s); 0 where the point is not held as a ring.

@@ -28,9 +28,10 @@ void SetKnobRestAngles(const ModelParams& params, const StepInput& input, ModelS
   }
 }
 
-// colon_sum_m: the sum of the colon points' displacement norms, which is not
-// finite if any displacement is not (the output loop computes the norms anyway).
-bool AllFinite(const ModelState& s, const StepOutput& out, double colon_sum_m) {
+// colon_sum_m2: the sum of the colon points' squared displacements, which is
+// not finite if any displacement is not (the output loop takes them anyway;
+// it overflows only past 1e154 m, a model long diverged).
+bool AllFinite(const ModelState& s, const StepOutput& out, double colon_sum_m2) {
   if (!std::isfinite(s.inserted_m) || !std::isfinite(out.base_force_N) ||
       !std::isfinite(out.roll_torque_Nm) || !s.X_WTip.matrix().allFinite()) {
     return false;
@@ -38,7 +39,7 @@ bool AllFinite(const ModelState& s, const StepOutput& out, double colon_sum_m) {
   for (const Eigen::Vector2d& q : s.bend_rad) {
     if (!q.allFinite()) return false;
   }
-  return std::isfinite(colon_sum_m);
+  return std::isfinite(colon_sum_m2);
 }
 
 }  // namespace
@@ -122,37 +123,34 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->peak_stretch_m = 0.0;
   out->peak_stretch_arc_m = 0.0;
   out->peak_wall_force_N = 0.0;
-  out->peak_fixed_displacement_m = 0.0;
-  double colon_sum_m = 0.0;
-  // Gap lengths |r_(i+1) - r_i|, each taken once: the one behind point i
-  // and the one ahead of it (0 past the ends, where the point's own is used).
+  double peak_fixed_moved2_m2 = 0.0;  // squared: one square root for the peak
+  double colon_sum_m2 = 0.0;
+  // The gap behind point i and the one ahead of it (0 past the ends, where
+  // the point's own is used).
   double gap_behind_m = 0.0;
   for (int i = 0; i < N; ++i) {
     const ColonPoint& p = pts[i];
-    const double moved_m = s->colon_displacement_m[i].norm();
-    colon_sum_m += moved_m;
+    const double moved2_m2 = s->colon_displacement_m[i].squaredNorm();
+    colon_sum_m2 += moved2_m2;
     speed2 += s->colon_velocity_m_per_s[i].squaredNorm();
     // Mesentery stretch: how far the tether is pulled beyond its reach.
-    const double stretch =
-        std::max(0.0, CalcTetherDistance(s->p_WColon[i] - p.tether_anchor_m,
-                                         p.tether_root_direction,
-                                         params.colon.mesentery_shear_ratio) -
-                          p.tether_length_m);
+    const double stretch = std::max(0.0, s->colon_tether_distance_m[i] - p.tether_length_m);
     out->stretch_m[i] = stretch;
     if (stretch > out->peak_stretch_m) {
       out->peak_stretch_m = stretch;
       out->peak_stretch_arc_m = p.arc_m;
     }
     if (!p.tissue.mobile) {
-      out->peak_fixed_displacement_m = std::max(out->peak_fixed_displacement_m, moved_m);
+      peak_fixed_moved2_m2 = std::max(peak_fixed_moved2_m2, moved2_m2);
     }
     out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
     // Pleat ratio: the tube's current length over its rest length around r_i.
-    const double gap_ahead_m = i + 1 < N ? (s->p_WColon[i + 1] - s->p_WColon[i]).norm() : 0.0;
+    const double gap_ahead_m = i + 1 < N ? s->colon_gap_m[i] : 0.0;
     const double rest_m = p.length_m;  // half of each neighbouring gap at rest
     out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
     gap_behind_m = gap_ahead_m;
   }
+  out->peak_fixed_displacement_m = std::sqrt(peak_fixed_moved2_m2);
   SampleContact tip = s->contact[samples - 1];
   if (tip.inside) {
     // Where the tip is now, along the colon's material (a copy: the contact
@@ -172,7 +170,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->tip_arc_m = s->tip_arc_m;
   out->inserted_m = s->inserted_m;
   out->velocity_norm_m_per_s = std::sqrt(speed2);
-  out->finite = AllFinite(*s, *out, colon_sum_m);
+  out->finite = AllFinite(*s, *out, colon_sum_m2);
 }
 
 }  // namespace ves::model

@@ -244,6 +244,36 @@ TEST(Tracking, ThePleatedColonStaysAroundTheScope) {
   EXPECT_LT(farthest_m, kWallGive_m);
 }
 
+// ModelState keeps each gap's length and each point's tether distance from
+// the step that moved the colon (colon_gap_m, colon_tether_distance_m); they
+// must equal what the current points give, for every point, at every step,
+// also where the colon has not moved for a while.
+TEST(ColonDerived, KeptGapsAndTetherDistancesMatchTheCurrentPoints) {
+  double largest_gap_error_m = 0.0, largest_tether_error_m = 0.0, moved_most_m = 0.0;
+  FormAndWithdrawALoop(LoadParams("standard-adult"), [&](const Sim& sim) {
+    if (sim.state.step_count % 25 != 0) return;
+    const auto& st = sim.state;
+    const auto& pts = sim.params.colon.points;
+    const int N = static_cast<int>(pts.size());
+    for (int i = 0; i < N; ++i) {
+      moved_most_m = std::max(moved_most_m, st.colon_displacement_m[i].norm());
+      const double tether_m =
+          CalcTetherDistance(st.p_WColon[i] - pts[i].tether_anchor_m, pts[i].tether_root_direction,
+                             sim.params.colon.mesentery_shear_ratio);
+      largest_tether_error_m =
+          std::max(largest_tether_error_m, std::abs(st.colon_tether_distance_m[i] - tether_m));
+      EXPECT_EQ(sim.out.stretch_m[i], std::max(0.0, tether_m - pts[i].tether_length_m));
+      if (i + 1 < N) {
+        const double gap_m = (st.p_WColon[i + 1] - st.p_WColon[i]).norm();
+        largest_gap_error_m = std::max(largest_gap_error_m, std::abs(st.colon_gap_m[i] - gap_m));
+      }
+    }
+  });
+  EXPECT_GT(moved_most_m, 0.02);  // the loop did move the colon
+  EXPECT_EQ(largest_gap_error_m, 0.0);
+  EXPECT_EQ(largest_tether_error_m, 0.0);
+}
+
 // The largest rise of any colon point's wall force from one step to the next.
 double LargestOneStepWallForceRise(const ModelParams& params) {
   double largest_N = 0.0;
