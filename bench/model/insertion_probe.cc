@@ -33,6 +33,25 @@
 //                                  angle off the lumen ahead
 //   PROBE_REGION_MOVE=R            each second: how far region R's points (a Region
 //                                  number, 2 = sigmoid) have moved from rest
+//   PROBE_REGIONS=S                every S s: each region's path, chord and pleats
+//   PROBE_PHASES=1                 a scripted operator's hand reversing (push / pull)
+//   PROBE_INPUT=1                  ... with its push and roll
+//   PROBE_PUSH_FORCE=F             a constant push of F newtons, knobs neutral (Fig. 10)
+//   PROBE_STIFF_COLON=1            the case as --stiff-colon loads it
+//   PROBE_KNOB_MAX=A               position rule: the knobs turned at most A rad in all
+//   PROBE_REDUCE=1                 position rule: reduce by the loop index, over
+//                                  PROBE_FIXED_LIMIT (0.06 m) with the tip in fixed
+//                                  colon or PROBE_MOBILE_LIMIT (0.25 m) in mobile
+//                                  colon, until the tip comes back 1.5 cm; with
+//                                  PROBE_REDUCE_AGAIN_M, PROBE_STALL_S, PROBE_HOLD_S,
+//                                  PROBE_UNHOOK, PROBE_STIFFEN=X (the insertion tube
+//                                  X times stiffer after the first reduction),
+//                                  PROBE_HOOK=A (the tip bent at least A rad while
+//                                  withdrawing)
+//   PROBE_SPIKE_DETAIL=1, PROBE_LOST=1, PROBE_SIDE=1, PROBE_TRACK=1,
+//   PROBE_TRACK_DETAIL=1           more detail on force spikes, lost tracking, the
+//                                  mesentery's side and the tracked arcs
+// Each variable is read once, before the run.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -193,9 +212,31 @@ int main(int argc, char** argv) {
   // tip (what the lumen holds beyond the colon's length), its extremes.
   const bool track_slack = std::getenv("PROBE_SLACK") != nullptr;
   double slack_min_m = 1e9, slack_max_m = -1e9, slack_min_s = 0.0, slack_max_s = 0.0;
+  // The rest of the PROBE_ variables, read once (header comment and
+  // docs/model-shortening-notes.md, "How to reproduce").
+  const char* const push_force = std::getenv("PROBE_PUSH_FORCE");
+  const bool print_phases = std::getenv("PROBE_PHASES") != nullptr;
+  const double reduce_again_m = EnvOr("PROBE_REDUCE_AGAIN_M", 0.10);
+  const double stall_s = EnvOr("PROBE_STALL_S", 1e9);
+  const double hold_s = EnvOr("PROBE_HOLD_S", 0.0);
+  const bool unhook = std::getenv("PROBE_UNHOOK") != nullptr;
+  const double stiffen = EnvOr("PROBE_STIFFEN", 1.0);
+  const double hook_rad = EnvOr("PROBE_HOOK", 0.0);
+  const double wall_over_N = EnvOr("PROBE_WALL", 0.0);
+  const double forces_every_s = EnvOr("PROBE_FORCES", 0.0);
+  const bool print_lost = std::getenv("PROBE_LOST") != nullptr;
+  const bool print_side = std::getenv("PROBE_SIDE") != nullptr;
+  const bool print_regions = std::getenv("PROBE_REGIONS") != nullptr;
+  const long regions_every_s = std::max(1L, static_cast<long>(EnvOr("PROBE_REGIONS", 10)));
+  const double pleat_profile_m = EnvOr("PROBE_PLEAT_PROFILE", 0.0);
+  const bool print_tip_aim = std::getenv("PROBE_TIP_AIM") != nullptr;
+  const char* const region_move = std::getenv("PROBE_REGION_MOVE");
+  const bool print_track = std::getenv("PROBE_TRACK") != nullptr;
+  const bool print_track_detail = std::getenv("PROBE_TRACK_DETAIL") != nullptr;
+  const bool print_input = std::getenv("PROBE_INPUT") != nullptr;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
-    if (const char* push = std::getenv("PROBE_PUSH_FORCE")) {
+    if (const char* push = push_force) {
       // Fig. 10: a constant push, knobs neutral.
       in = StepInput{};
       in.thrust_mode = ves::model::ThrustMode::kForce;
@@ -205,7 +246,7 @@ int main(int argc, char** argv) {
       in = ves::training::ToStepInput(sample);
       // Phase changes of the scripted operator (its hand reverses).
       const bool pulling = sample.push_force_N < 0.0;
-      if (pulling != was_pulling && std::getenv("PROBE_PHASES")) {
+      if (pulling != was_pulling && print_phases) {
         std::printf("  %s at t=%.2f: tip %.3f m, inserted %.3f m\n", pulling ? "pull" : "push",
                     state.time_s, state.tip_arc_m, state.inserted_m);
       }
@@ -229,14 +270,14 @@ int main(int argc, char** argv) {
         // After a reduction, the next one waits until the tip has gone
         // PROBE_REDUCE_AGAIN_M (default 0.10 m) deeper: a loop re-formed by
         // pushing on is taut before the tip moves.
-        const bool deeper = state.tip_arc_m > last_reduce_tip_m + EnvOr("PROBE_REDUCE_AGAIN_M", 0.10);
+        const bool deeper = state.tip_arc_m > last_reduce_tip_m + reduce_again_m;
         const bool full = state.inserted_m > params.scope.working_length_m - 0.08;
         // A stall with the scope all in: the tip has not advanced for a while.
         if (state.tip_arc_m > stall_tip_m + 0.005) {
           stall_tip_m = state.tip_arc_m;
           stall_since_s = state.time_s;
         }
-        const bool stalled = state.time_s - stall_since_s > EnvOr("PROBE_STALL_S", 1e9);
+        const bool stalled = state.time_s - stall_since_s > stall_s;
         if (phase == 0 && ((loop_m > limit_m && deeper) || (full && (deeper || stalled)))) {
           stall_since_s = state.time_s;
           last_reduce_tip_m = state.tip_arc_m;
@@ -255,18 +296,18 @@ int main(int argc, char** argv) {
             std::printf("  advance at t=%.2f: tip %.3f m, inserted %.3f m\n", state.time_s,
                         state.tip_arc_m, state.inserted_m);
             phase = 0;
-            hold_until_s = state.time_s + EnvOr("PROBE_HOLD_S", 0.0);
-            if (std::getenv("PROBE_UNHOOK")) in.knob_up_rad = in.knob_right_rad = 0.0;
+            hold_until_s = state.time_s + hold_s;
+            if (unhook) in.knob_up_rad = in.knob_right_rad = 0.0;
             // Experiment: PROBE_STIFFEN=R stiffens the insertion tube R times
             // after the first reduction (a variable-stiffness colonoscope).
-            if (!stiffened && EnvOr("PROBE_STIFFEN", 1.0) != 1.0) {
+            if (!stiffened && stiffen != 1.0) {
               stiffened = true;
               for (int k = 1; k < state.first_bending_link; ++k) {
                 if (params.scope.flexural_rigidity_N_m2 / state.joint_stiffness_N_m_per_rad[k] > 0.0 &&
                     std::abs(state.joint_stiffness_N_m_per_rad[k] * 0.5 *
                                  (state.link_length_m[k - 1] + state.link_length_m[k]) -
                              params.scope.flexural_rigidity_N_m2) < 1e-9) {
-                  state.joint_stiffness_N_m_per_rad[k] *= EnvOr("PROBE_STIFFEN", 1.0);
+                  state.joint_stiffness_N_m_per_rad[k] *= stiffen;
                 }
               }
               std::printf("  stiffened the insertion tube\n");
@@ -289,7 +330,6 @@ int main(int argc, char** argv) {
         in.roll_rad += roll_rate * params.dt_s;
         // PROBE_HOOK=A: while withdrawing, angulate the tip to at least A rad
         // in the direction it is bent (hook the flexure).
-        const double hook_rad = EnvOr("PROBE_HOOK", 0.0);
         const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
         if (hook_rad > 0.0 && bend > 1e-3 && bend < hook_rad) {
           const double grow = std::min(hook_rad / bend, 1.0 + 2.0 * params.dt_s);
@@ -322,7 +362,7 @@ int main(int argc, char** argv) {
     max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
     max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
     // PROBE_WALL=F: where and when the wall force first rises over F N.
-    if (const double wall_over = EnvOr("PROBE_WALL", 0.0); wall_over > 0.0) {
+    if (const double wall_over = wall_over_N; wall_over > 0.0) {
       const bool over = out.peak_wall_force_N > wall_over;
       if (over && !wall_was_over) {
         const int at = ves::bench::LargestWallForcePoint(out);
@@ -415,7 +455,7 @@ int main(int argc, char** argv) {
     }
     // PROBE_FORCES=S: every S s, what holds the scope along its own axis:
     // friction and the axial part of the wall normals, and the largest ones.
-    if (const double every = EnvOr("PROBE_FORCES", 0.0);
+    if (const double every = forces_every_s;
         every > 0.0 && state.time_s + 1e-9 >= next_forces_s) {
       next_forces_s += every;
       double friction_N = 0.0, wedge_N = 0.0, normal_sum_N = 0.0;
@@ -500,12 +540,12 @@ int main(int argc, char** argv) {
         const auto& c = state.contact[k];
         if (!c.inside || c.penetration_m < 0.02) continue;
         ++lost;
-        if (std::getenv("PROBE_LOST") && lost <= 3) {
+        if (print_lost && lost <= 3) {
           std::printf("    lost sample %zu seg %d pen %.3f\n", k, c.segment, c.penetration_m);
         }
       }
       if (lost > 0) std::printf("    %d samples beyond 2 cm of their lumen\n", lost);
-      if (std::getenv("PROBE_SIDE")) {  // the mobile point farthest through its root
+      if (print_side) {  // the mobile point farthest through its root
         double worst = 1e9;
         int at = -1;
         for (size_t i = 0; i < params.colon.points.size(); ++i) {
@@ -522,7 +562,7 @@ int main(int argc, char** argv) {
                       pt.tether_anchor_m.y(), pt.tether_anchor_m.z());
         }
       }
-      if (std::getenv("PROBE_REGIONS") && static_cast<long>(state.time_s) % static_cast<long>(EnvOr("PROBE_REGIONS", 10)) == 0) {
+      if (print_regions && static_cast<long>(state.time_s) % regions_every_s == 0) {
         // Where the scope lies: per region, the scope length tracked to it,
         // the colon's current path length, its rest length and its chord.
         double scope_m[9] = {0}, path_m[9] = {0}, rest_m[9] = {0};
@@ -551,7 +591,7 @@ int main(int argc, char** argv) {
         }
         std::printf("\n");
       }
-      if (const double extent_m = EnvOr("PROBE_PLEAT_PROFILE", 0.0); extent_m > 0.0) {
+      if (const double extent_m = pleat_profile_m; extent_m > 0.0) {
         // Where the colon gathers: the mean pleat ratio of each 2 cm of rest
         // arc over the first extent_m (1 = natural length, < 1 pleated).
         constexpr double kBin_m = 0.02;
@@ -572,7 +612,7 @@ int main(int argc, char** argv) {
         if (count > 0) std::printf(" %.2f", sum / count);
         std::printf("\n");
       }
-      if (std::getenv("PROBE_TIP_AIM")) {
+      if (print_tip_aim) {
         // Whether the tip moves in space and where it points: its position and
         // axis, how far it is from its tracked colon point, and the angle
         // between its axis and the lumen 4 cm ahead (what the steering sees).
@@ -590,7 +630,7 @@ int main(int argc, char** argv) {
                     tip.x(), tip.y(), tip.z(), axis.x(), axis.y(), axis.z(), (tip - tracked).norm(),
                     aim_deg);
       }
-      if (const char* which = std::getenv("PROBE_REGION_MOVE")) {
+      if (const char* which = region_move) {
         // How far one region's points (a Region number: 2 sigmoid) have moved
         // from rest, per axis of W (+x right, +y anterior, +z cranial).
         const int region = std::atoi(which);
@@ -604,14 +644,14 @@ int main(int argc, char** argv) {
         std::printf("    region %d moved: x %.3f..%.3f y %.3f..%.3f z %.3f..%.3f m\n", region,
                     low.x(), high.x(), low.y(), high.y(), low.z(), high.z());
       }
-      if (std::getenv("PROBE_TRACK")) {  // tracked colon arc of the inside samples
+      if (print_track) {  // tracked colon arc of the inside samples
         std::printf("    track");
         for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); k += 3) {
           const auto& c = state.contact[k];
           std::printf(" %.3f", params.colon.points[c.segment].arc_m);
         }
         std::printf("\n");
-        if (std::getenv("PROBE_TRACK_DETAIL")) {
+        if (print_track_detail) {
           for (int k = state.first_inside_sample; k < static_cast<int>(state.contact.size()); ++k) {
             const auto& c = state.contact[k];
             const Eigen::Vector3d& q = state.p_WSample[k];
@@ -633,7 +673,7 @@ int main(int argc, char** argv) {
                   out.roll_torque_Nm, out.peak_stretch_m, out.peak_stretch_arc_m,
                   out.peak_wall_force_N, 1e3 * out.peak_fixed_displacement_m, min_pleat,
                   in.knob_up_rad, in.knob_right_rad);
-      if (std::getenv("PROBE_INPUT")) {
+      if (print_input) {
         std::printf("    push %.2f roll %.2f\n", in.push_force_N, in.roll_rad);
       }
     }
