@@ -20,7 +20,8 @@
 //     across (0/1), ring_onset_s, window (contact search, segments), arc_ratio
 //   scope: ei (insertion tube EI x), bend_ei, links, growth, passive_m, passive_ei
 //   step: dt_ms, pleat_k, toe_k, toe_strain, toe_regions (bit 1 << Region),
-//     pleat_set_s, pleat_release_s, press_k, press_slack
+//     pleat_set_s, pleat_release_s, press_k, press_slack, gather (the set pleat
+//     ratio at which the lumen hugs the scope, 0 off), gather_clear (m)
 namespace ves::bench {
 
 using OverrideGetter = std::function<double(const char* key, double fallback)>;
@@ -67,13 +68,16 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
       static_cast<std::uint32_t>(get("toe_regions", params->colon_toe_regions));
   params->colon_pleat_set_s = get("pleat_set_s", params->colon_pleat_set_s);
   params->colon_pleat_release_s = get("pleat_release_s", params->colon_pleat_release_s);
+  params->lumen_gather_pleat = get("gather", params->lumen_gather_pleat);
+  params->lumen_gather_clearance_m = get("gather_clear", params->lumen_gather_clearance_m);
   params->abdominal_pressure_stiffness_N_per_m2 =
       get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
   params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
 }
 
 // The scripted expert's settings by key: advance, withdraw, push, pull,
-// loop_limit, roll_rate, settle (ExpertOperator::Settings).
+// loop_limit, roll_rate, settle, max_withdraw, max_reduce_s
+// (ExpertOperator::Settings).
 inline training::ExpertOperator::Settings ExpertSettingsWithOverrides(const OverrideGetter& get) {
   training::ExpertOperator::Settings expert;
   expert.advance_speed_m_per_s = get("advance", expert.advance_speed_m_per_s);
@@ -83,6 +87,8 @@ inline training::ExpertOperator::Settings ExpertSettingsWithOverrides(const Over
   expert.loop_limit_m = get("loop_limit", expert.loop_limit_m);
   expert.roll_rate_rad_per_s = get("roll_rate", expert.roll_rate_rad_per_s);
   expert.settle_s = get("settle", expert.settle_s);
+  expert.max_withdraw_m = get("max_withdraw", expert.max_withdraw_m);
+  expert.max_reduce_s = get("max_reduce_s", expert.max_reduce_s);
   return expert;
 }
 

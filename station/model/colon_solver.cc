@@ -422,6 +422,21 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
       }
     }
   }
+  // Where folds have set, the lumen gathers onto the scope (off by default;
+  // ModelParams::lumen_gather_pleat). It follows the set folds, which change
+  // over colon_pleat_set_s, so the wall closes in gradually.
+  if (params.lumen_gather_pleat > 0.0) {
+    const double hug_m = 0.5 * params.scope.outer_diameter_m + params.lumen_gather_clearance_m;
+    const double g = params.lumen_gather_pleat;
+    for (int i = 0; i <= std::min(last + 1, N - 1); ++i) {
+      const int a = std::max(i - 1, 0), b = std::min(i, N - 2);
+      const double set_ratio = (s->colon_pair_rest_gap_m[a] + s->colon_pair_rest_gap_m[b]) /
+                               (sc->colon_pair_gap_m[a] + sc->colon_pair_gap_m[b]);
+      const double open = std::clamp((set_ratio - g) / (1.0 - g), 0.0, 1.0);
+      const double R = pts[i].radius_m;
+      s->colon_lumen_radius_m[i] = R > hug_m ? hug_m + open * (R - hug_m) : R;
+    }
+  }
   rhs[0].setZero();
   for (int i = last + 1; i < N; ++i) {
     rhs[i].setZero();

@@ -52,8 +52,6 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   // that bracket it and blend by its axial position between them.
   const auto& pts = params.colon.points;
   const int last = static_cast<int>(pts.size()) - 1;
-  const ColonPoint& A = pts[k];
-  const ColonPoint& B = pts[k + 1];
   const Eigen::Vector3d pa = p - s.p_WColon[k];
   const Eigen::Vector3d pb = p - s.p_WColon[k + 1];
   const Eigen::Vector3d ta = LumenNormal(s, k);
@@ -73,7 +71,8 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
   const double w_norm = w.norm();
   const double rho = w_norm;
   hit.normal = w_norm > 1e-12 ? Eigen::Vector3d(w * (1.0 / w_norm)) : ta.unitOrthogonal();
-  hit.radius_m = A.radius_m + hit.t * (B.radius_m - A.radius_m);
+  const double radius_a_m = s.colon_lumen_radius_m[k], radius_b_m = s.colon_lumen_radius_m[k + 1];
+  hit.radius_m = radius_a_m + hit.t * (radius_b_m - radius_a_m);
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
   hit.penetration_m = rho + scope_radius_m - hit.radius_m;
   if (k + 1 == last && db > 0.0) {
@@ -267,7 +266,7 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
       const Eigen::Vector3d q = a + t * ab;
       const Eigen::Vector3d w = q - x;
       const double d = w.norm();
-      const double penetration_m = d + scope_radius_m - ring.radius_m;
+      const double penetration_m = d + scope_radius_m - s->colon_lumen_radius_m[m];
       if (!(penetration_m > 0.0) || d < 1e-12) continue;
       const WallResponse r =
           CalcWallResponse(ring.tissue, params.wall_hardening_ratio, penetration_m);

@@ -68,6 +68,10 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, 1e6] s (0: never)");
   Require(InRange(p.colon_pleat_release_s, 0.0, 1e6), "colon_pleat_release_s",
           p.colon_pleat_release_s, "must be in [0, 1e6] s (0: at once)");
+  Require(InRange(p.lumen_gather_pleat, 0.0, 0.99), "lumen_gather_pleat", p.lumen_gather_pleat,
+          "must be in [0, 0.99] (0: off)");
+  Require(InRange(p.lumen_gather_clearance_m, 0.0, 0.05), "lumen_gather_clearance_m",
+          p.lumen_gather_clearance_m, "must be in [0, 0.05] m");
   Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 25.0),
           "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 25]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
@@ -143,6 +147,8 @@ ModelState MakeInitialState(const ModelParams& params) {
     s.p_WColon[i] = params.colon.points[i].rest_position_m;
     s.colon_tangent[i] = params.colon.points[i].rest_tangent;
   }
+  s.colon_lumen_radius_m.resize(N);
+  for (int i = 0; i < N; ++i) s.colon_lumen_radius_m[i] = params.colon.points[i].radius_m;
   s.colon_gap_m.assign(N, 0.0);
   s.colon_tether_distance_m.resize(N);
   internal::UpdateColonDerived(params, 0, N - 1, &s);

@@ -70,6 +70,13 @@ struct ModelParams {
   // stays gathered while the scope re-advances (docs/model.md).
   double colon_pleat_set_s{0.5};
   double colon_pleat_release_s{600.0};
+  // Off by default (0): a colon whose folds have set hugs the scope. Where the
+  // set pleat ratio (rest gap over natural gap) falls from 1 to this value,
+  // the lumen's radius falls linearly from the case's to the scope's plus
+  // lumen_gather_clearance_m. Measured, not kept: docs/model-shortening-notes.md,
+  // "A lumen that gathers onto the scope".
+  double lumen_gather_pleat{0.0};
+  double lumen_gather_clearance_m{1e-3};
   // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
   // full pressure a pressed region's points are held within the slack of
   // their mesentery root with this stiffness per metre of colon.
@@ -184,6 +191,9 @@ struct ModelState {
   // from its tether anchor in the tether's metric (CalcTetherDistance).
   std::vector<double> colon_gap_m;
   std::vector<double> colon_tether_distance_m;
+  // The lumen's radius at each point (the case's, or less where the folds
+  // have set: ModelParams::lumen_gather_pleat).
+  std::vector<double> colon_lumen_radius_m;
   std::vector<double> wall_deformation_m;    // largest radial l at each point
   // How far each colon point's ring contact has come on (0..1;
   // ModelParams::ring_onset_s); 0 where the point is not held as a ring.

@@ -114,8 +114,8 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // image move one to one again); also stop after a long pull or a while.
     reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
     if (p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m ||
-        reduce_start_inserted_m_ - p.inserted_m > (backing_off_ ? kBackOff_m : kMaxWithdraw_m) ||
-        p.t_s - reduce_start_s_ > kMaxReduce_s) {
+        reduce_start_inserted_m_ - p.inserted_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
+        p.t_s - reduce_start_s_ > k.max_reduce_s) {
       reducing_ = false;
       settle_until_s_ = p.t_s + k.settle_s;
     }

@@ -97,6 +97,12 @@ class ExpertOperator final : public ScriptedOperator {
     // After a reduction it holds still this long, the shaft turned, so the
     // colon settles onto the straightened scope before it pushes on.
     double settle_s{0.0};
+    // A reduction ends after this much withdrawal or this long at most (the
+    // loop is out sooner once the tip comes back). Not among the main
+    // settings: docs/model-shortening-notes.md, "A lumen that gathers onto
+    // the scope", measures longer ones.
+    double max_withdraw_m{0.30};
+    double max_reduce_s{40.0};
     bool operator==(const Settings&) const = default;
   };
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
@@ -114,11 +120,9 @@ class ExpertOperator final : public ScriptedOperator {
   static constexpr double kStall_s = 15.0;
   static constexpr double kStallAdvance_m = 0.005;
   static constexpr double kTipBack_m = 0.015;     // the tip coming back this far: loop out
-  static constexpr double kMaxWithdraw_m = 0.30;  // longest single pull-back
   // Stalled again where it has already pulled back, it only backs the tip
   // off the wall this far (no roll) and steers on.
   static constexpr double kBackOff_m = 0.03;
-  static constexpr double kMaxReduce_s = 40.0;
   static constexpr double kMaxRoll_rad = 1.5;      // the hand turns the shaft at most this far
   static constexpr double kRollRelax_per_s = 0.3;  // and lets it untwist while advancing
 

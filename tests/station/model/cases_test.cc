@@ -274,6 +274,46 @@ TEST(ColonDerived, KeptGapsAndTetherDistancesMatchTheCurrentPoints) {
   EXPECT_EQ(largest_tether_error_m, 0.0);
 }
 
+// ModelParams::lumen_gather_pleat: off, the lumen keeps the case's radius; on,
+// it closes onto the scope where folds have set (a withdrawn loop sets them),
+// never tighter than the scope plus the clearance, and stays open elsewhere.
+TEST(LumenGather, TheLumenClosesOntoTheScopeOnlyWhereFoldsHaveSet) {
+  const auto narrowest = [](const ModelParams& params, double* open_where_unset_m) {
+    double narrowest_ratio = 1.0;
+    *open_where_unset_m = 0.0;
+    FormAndWithdrawALoop(params, [&](const Sim& sim) {
+      if (sim.state.step_count % 50 != 0) return;
+      const auto& pts = sim.params.colon.points;
+      const auto& rest_gap_m = sim.state.colon_pair_rest_gap_m;
+      const auto& natural_gap_m = sim.scratch.colon_pair_gap_m;
+      const auto& lumen_m = sim.state.colon_lumen_radius_m;
+      const double tightest_m =
+          0.5 * sim.params.scope.outer_diameter_m + sim.params.lumen_gather_clearance_m;
+      const int N = static_cast<int>(pts.size());
+      for (int i = 1; i + 1 < N; ++i) {
+        narrowest_ratio = std::min(narrowest_ratio, lumen_m[i] / pts[i].radius_m);
+        const bool unset =
+            rest_gap_m[i - 1] == natural_gap_m[i - 1] && rest_gap_m[i] == natural_gap_m[i];
+        if (unset) {
+          *open_where_unset_m =
+              std::max(*open_where_unset_m, std::abs(lumen_m[i] - pts[i].radius_m));
+        }
+        EXPECT_GE(lumen_m[i], tightest_m - 1e-12);
+      }
+    });
+    return narrowest_ratio;
+  };
+  double unset_error_m = 0.0;
+  ModelParams params = LoadParams("standard-adult");
+  EXPECT_EQ(narrowest(params, &unset_error_m), 1.0);
+  params.lumen_gather_pleat = 0.7;
+  params.lumen_gather_clearance_m = 0.005;
+  const double gathered = narrowest(params, &unset_error_m);
+  std::printf("LumenGather: the narrowest lumen is %.2f of the case's radius\n", gathered);
+  EXPECT_LT(gathered, 0.8);
+  EXPECT_EQ(unset_error_m, 0.0);
+}
+
 // The largest rise of any colon point's wall force from one step to the next.
 double LargestOneStepWallForceRise(const ModelParams& params) {
   double largest_N = 0.0;
