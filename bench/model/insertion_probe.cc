@@ -236,11 +236,11 @@ int main(int argc, char** argv) {
   const bool print_input = std::getenv("PROBE_INPUT") != nullptr;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
-    if (const char* push = push_force) {
+    if (push_force != nullptr) {
       // Fig. 10: a constant push, knobs neutral.
       in = StepInput{};
       in.thrust_mode = ves::model::ThrustMode::kForce;
-      in.push_force_N = std::atof(push);
+      in.push_force_N = std::atof(push_force);
     } else if (scripted) {
       const auto sample = scripted->Act(p);
       in = ves::training::ToStepInput(sample);
@@ -362,8 +362,8 @@ int main(int argc, char** argv) {
     max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
     max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
     // PROBE_WALL=F: where and when the wall force first rises over F N.
-    if (const double wall_over = wall_over_N; wall_over > 0.0) {
-      const bool over = out.peak_wall_force_N > wall_over;
+    if (wall_over_N > 0.0) {
+      const bool over = out.peak_wall_force_N > wall_over_N;
       if (over && !wall_was_over) {
         const int at = ves::bench::LargestWallForcePoint(out);
         std::printf("  wall t=%.3f %.1f N at arc %.3f (region %d), tip %.3f, inserted %.3f, "
@@ -455,9 +455,8 @@ int main(int argc, char** argv) {
     }
     // PROBE_FORCES=S: every S s, what holds the scope along its own axis:
     // friction and the axial part of the wall normals, and the largest ones.
-    if (const double every = forces_every_s;
-        every > 0.0 && state.time_s + 1e-9 >= next_forces_s) {
-      next_forces_s += every;
+    if (forces_every_s > 0.0 && state.time_s + 1e-9 >= next_forces_s) {
+      next_forces_s += forces_every_s;
       double friction_N = 0.0, wedge_N = 0.0, normal_sum_N = 0.0;
       struct Part { double along_N; double arc_m; int region; double f_n; };
       std::vector<Part> parts;
@@ -591,15 +590,15 @@ int main(int argc, char** argv) {
         }
         std::printf("\n");
       }
-      if (const double extent_m = pleat_profile_m; extent_m > 0.0) {
+      if (pleat_profile_m > 0.0) {
         // Where the colon gathers: the mean pleat ratio of each 2 cm of rest
-        // arc over the first extent_m (1 = natural length, < 1 pleated).
+        // arc over the first pleat_profile_m (1 = natural length, < 1 pleated).
         constexpr double kBin_m = 0.02;
         std::printf("    pleat per %.0f cm:", kBin_m * 100.0);
         const auto& pts = params.colon.points;
         double sum = 0.0, bin_end_m = kBin_m;
         int count = 0;
-        for (size_t i = 0; i < pts.size() && pts[i].arc_m < extent_m; ++i) {
+        for (size_t i = 0; i < pts.size() && pts[i].arc_m < pleat_profile_m; ++i) {
           if (pts[i].arc_m > bin_end_m && count > 0) {
             std::printf(" %.2f", sum / count);
             sum = 0.0;
@@ -630,10 +629,10 @@ int main(int argc, char** argv) {
                     tip.x(), tip.y(), tip.z(), axis.x(), axis.y(), axis.z(), (tip - tracked).norm(),
                     aim_deg);
       }
-      if (const char* which = region_move) {
+      if (region_move != nullptr) {
         // How far one region's points (a Region number: 2 sigmoid) have moved
         // from rest, per axis of W (+x right, +y anterior, +z cranial).
-        const int region = std::atoi(which);
+        const int region = std::atoi(region_move);
         Eigen::Vector3d low = Eigen::Vector3d::Constant(1e9), high = -low;
         for (size_t i = 0; i < params.colon.points.size(); ++i) {
           if (static_cast<int>(params.colon.points[i].region) != region) continue;
