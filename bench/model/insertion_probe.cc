@@ -73,12 +73,8 @@
 
 namespace {
 
+using ves::bench::ProbeEnv;
 using ves::model::StepInput;
-
-double EnvOr(const char* name, double fallback) {
-  const char* v = std::getenv(name);
-  return v != nullptr ? std::atof(v) : fallback;
-}
 
 // The colon's current path length from the anus to the tip's place in its
 // material (pleats count their zigzag, a stretched wall its stretch).
@@ -159,17 +155,17 @@ int main(int argc, char** argv) {
     scripted = ves::training::MakeScriptedOperator(
         kind, params.dt_s, ves::bench::ExpertSettingsWithOverrides(ves::bench::ProbeEnv));
   }
-  const double withdraw_at_m = EnvOr("PROBE_WITHDRAW_AT", 1e9);
-  const double withdraw_m = EnvOr("PROBE_WITHDRAW_M", 0.25);
-  const double roll_rate = EnvOr("PROBE_ROLL", 0.0);
-  const double dump_every_s = EnvOr("PROBE_DUMP_EVERY", 0.0);
+  const double withdraw_at_m = ProbeEnv("withdraw_at", 1e9);
+  const double withdraw_m = ProbeEnv("withdraw_m", 0.25);
+  const double roll_rate = ProbeEnv("roll", 0.0);
+  const double dump_every_s = ProbeEnv("dump_every", 0.0);
   double next_dump_s = 0.0, next_forces_s = 0.0;
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = ves::training::ExpertOperator::kSteerGain_per_s;  // the simple rule
   // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
-  const double knob_max = EnvOr("PROBE_KNOB_MAX", 10.0);
-  const double tip_resist_N = EnvOr("PROBE_TIP_RESIST", 0.0);
+  const double knob_max = ProbeEnv("knob_max", 10.0);
+  const double tip_resist_N = ProbeEnv("tip_resist", 0.0);
   double command_m = 0.0;
   int phase = 0;  // position rule: 0 inserting, 1 withdrawing, 2 holding
   // PROBE_REINSERT=1: after the withdrawal, insert again (reductions repeat
@@ -177,12 +173,12 @@ int main(int argc, char** argv) {
   const bool reinsert = std::getenv("PROBE_REINSERT") != nullptr;
   double withdraw_at_m_next = withdraw_at_m;
   double withdraw_at_reached_m = 0.0;
-  const double withdraw_every_m = EnvOr("PROBE_WITHDRAW_EVERY", 0.0);
+  const double withdraw_every_m = ProbeEnv("withdraw_every", 0.0);
   // PROBE_REDUCE=1: reduce by the loop index (limits PROBE_FIXED_LIMIT and
   // PROBE_MOBILE_LIMIT, m) until the tip comes back 1.5 cm.
   const bool reduce_rule = std::getenv("PROBE_REDUCE") != nullptr;
-  const double fixed_limit_m = EnvOr("PROBE_FIXED_LIMIT", 0.06);
-  const double mobile_limit_m = EnvOr("PROBE_MOBILE_LIMIT", 0.25);
+  const double fixed_limit_m = ProbeEnv("fixed_limit", 0.06);
+  const double mobile_limit_m = ProbeEnv("mobile_limit", 0.25);
   ves::training::LoopIndex loop_index;
   double reduce_tip_max_m = 0.0;
   Eigen::Vector3d pinned_tip_W = Eigen::Vector3d::Zero();
@@ -216,19 +212,19 @@ int main(int argc, char** argv) {
   // docs/model-shortening-notes.md, "How to reproduce").
   const char* const push_force = std::getenv("PROBE_PUSH_FORCE");
   const bool print_phases = std::getenv("PROBE_PHASES") != nullptr;
-  const double reduce_again_m = EnvOr("PROBE_REDUCE_AGAIN_M", 0.10);
-  const double stall_s = EnvOr("PROBE_STALL_S", 1e9);
-  const double hold_s = EnvOr("PROBE_HOLD_S", 0.0);
+  const double reduce_again_m = ProbeEnv("reduce_again_m", 0.10);
+  const double stall_s = ProbeEnv("stall_s", 1e9);
+  const double hold_s = ProbeEnv("hold_s", 0.0);
   const bool unhook = std::getenv("PROBE_UNHOOK") != nullptr;
-  const double stiffen = EnvOr("PROBE_STIFFEN", 1.0);
-  const double hook_rad = EnvOr("PROBE_HOOK", 0.0);
-  const double wall_over_N = EnvOr("PROBE_WALL", 0.0);
-  const double forces_every_s = EnvOr("PROBE_FORCES", 0.0);
+  const double stiffen = ProbeEnv("stiffen", 1.0);
+  const double hook_rad = ProbeEnv("hook", 0.0);
+  const double wall_over_N = ProbeEnv("wall", 0.0);
+  const double forces_every_s = ProbeEnv("forces", 0.0);
   const bool print_lost = std::getenv("PROBE_LOST") != nullptr;
   const bool print_side = std::getenv("PROBE_SIDE") != nullptr;
   const bool print_regions = std::getenv("PROBE_REGIONS") != nullptr;
-  const long regions_every_s = std::max(1L, static_cast<long>(EnvOr("PROBE_REGIONS", 10)));
-  const double pleat_profile_m = EnvOr("PROBE_PLEAT_PROFILE", 0.0);
+  const long regions_every_s = std::max(1L, static_cast<long>(ProbeEnv("regions", 10)));
+  const double pleat_profile_m = ProbeEnv("pleat_profile", 0.0);
   const bool print_tip_aim = std::getenv("PROBE_TIP_AIM") != nullptr;
   const char* const region_move = std::getenv("PROBE_REGION_MOVE");
   const bool print_track = std::getenv("PROBE_TRACK") != nullptr;

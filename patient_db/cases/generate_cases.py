@@ -72,7 +72,8 @@ REDUNDANT_SIGMOID = [(0.005, -0.040, 0.125), (-0.010, -0.026, 0.158), (-0.032, -
                      (0.104, 0.042, 0.175), (0.112, 0.010, 0.195), (0.114, -0.018, 0.208),
                      (0.112, -0.035, 0.225)]
 
-# Long sigmoid (~0.5 m) and long, low transverse (~0.55 m) for the case whose
+# Longer sigmoid (0.462 m against the standard 0.396 m) and a longer, low
+# transverse (0.465 m against 0.448 m; --print-lengths) for the case whose
 # descending colon keeps a mesentery (a persistent descending mesocolon).
 LONG_SIGMOID = [(0.005, -0.040, 0.125), (-0.012, -0.020, 0.150), (-0.035, 0.002, 0.166),
                 (-0.055, 0.030, 0.178), (-0.064, 0.062, 0.194), (-0.054, 0.090, 0.214),
