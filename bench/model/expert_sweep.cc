@@ -13,7 +13,9 @@
 // metric's resolution) and roll_over1, the share of steps over 1 N·m;
 // damage counts episodes of the largest wall force's 10 ms mean over the
 // damage level (as the session's metrics do), damage_1ms those of single
-// steps (show_damage=1 prints these).
+// steps (show_damage=1 prints these). ring_hold is the peak 10 ms mean of
+// the ring contacts' push along the shaft toward the anus (N), ring_hold_s
+// the time they hold more than half of a push of 4 N or more.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -129,6 +131,12 @@ int main(int argc, char** argv) {
   // The roll torque likewise: its peak, its 10 ms mean's peak, steps over 1 N·m.
   ves::bench::TenStepMean roll_10ms;
   double peak_roll_10ms = 0.0;
+  // Ring contacts holding the shaft along its length, toward the anus (a
+  // ring beyond its piece's end acts as a barb: docs/model-shortening-notes.md,
+  // "Rings that hold the scope along its length"): the 10 ms mean's peak, and
+  // the time they hold more than half of a push of 4 N or more.
+  ves::bench::TenStepMean ring_hold_10ms;
+  double peak_ring_hold_N = 0.0, ring_hold_s = 0.0;
   long roll_over1 = 0;
   double pull_s = 0.0, reduced_to_m = 0.0;
   // press_gate > 0: the assistant presses a region (from then on) once its
@@ -206,6 +214,17 @@ int main(int argc, char** argv) {
       }
     }
     peak_roll_10ms = std::max(peak_roll_10ms, roll_10ms.Add(std::abs(out.roll_torque_Nm)));
+    double ring_hold_N = 0.0;
+    for (int j = 0; j < scratch.ring_contact_count; ++j) {
+      const auto& rc = scratch.ring_contacts[j];
+      const Eigen::Vector3d piece = state.p_WSample[rc.sample + 1] - state.p_WSample[rc.sample];
+      const double length = piece.norm();
+      if (length > 1e-9) ring_hold_N += rc.force_N * rc.normal_W.dot(piece) / length;
+    }
+    peak_ring_hold_N = std::max(peak_ring_hold_N, ring_hold_10ms.Add(ring_hold_N));
+    if (sample.push_force_N >= 4.0 && ring_hold_N > 0.5 * sample.push_force_N) {
+      ring_hold_s += params.dt_s;
+    }
     peak_wall_N = std::max(peak_wall_N, out.peak_wall_force_N);
     if (out.peak_wall_force_N > thresholds.damage_wall_force_N) {
       if (state.time_s - last_damage_s > thresholds.episode_merge_gap_s) {
@@ -239,11 +258,12 @@ int main(int argc, char** argv) {
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
               "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_roll_10ms=%.2f roll_over1=%.2f%% peak_wall=%.1f damage=%d damage_1ms=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
-              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f %s\n",
+              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f ring_hold=%.1f ring_hold_s=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
               100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_roll_10ms,
               100.0 * roll_over1 / std::max(1L, steps), peak_wall_N, damage10_events, damage_events,
               1e3 * peak_fixed,
-              pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], tag.c_str());
+              pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], peak_ring_hold_N,
+              ring_hold_s, tag.c_str());
   return 0;
 }
