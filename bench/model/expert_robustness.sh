@@ -34,15 +34,15 @@ printf '%s\n' "${runs[@]}" |
   awk '{ delete v; setting = ""
          for (i = 1; i <= NF; ++i) {
            split($i, a, "="); v[a[1]] = a[2]
-           if (a[1] == "press_trans_from") setting = $(i + 1)  # the first key=value given
+           if (a[1] == "ring_hold_s") setting = $(i + 1)  # the first key=value given
          }
          if (setting == "defaults=1") setting = "(defaults)"
          if (!("peak_roll_10ms" in v)) v["peak_roll_10ms"] = "-"
          sub(/\.textproto$/, "", v["case"]); runs++
          if (v["cecum_s"] + 0 >= 0) { reached++; if (v["inserted_at_cecum"] + 0 <= 1.30) short++ }
          if (v["damage"] + 0 == 0) clean++
-         printf "%-18s %-18s cecum_s %6s  in_at_cecum %6s  damage %2s  base>10N %6s  roll %5s (10 ms %4s)  fixed_mm %4s  pain_s %4s\n",
+         printf "%-18s %-18s cecum_s %6s  in_at_cecum %6s  damage %2s  base>10N %6s  roll %5s (10 ms %4s)  fixed_mm %4s  pain_s %4s  ring_hold_s %4s\n",
                 v["case"], setting, v["cecum_s"], v["inserted_at_cecum"], v["damage"], v["over10"],
-                v["peak_roll"], v["peak_roll_10ms"], v["fixed_mm"], v["pain"] }
+                v["peak_roll"], v["peak_roll_10ms"], v["fixed_mm"], v["pain"], v["ring_hold_s"] }
        END { printf "the cecum reached in %d of %d runs (%s s each), %d of them with <= 1.30 m in; %d runs without damage\n",
                    reached, runs, '"$seconds"', short, clean }'
