@@ -214,12 +214,9 @@ int main(int argc, char** argv) {
       }
     }
     peak_roll_10ms = std::max(peak_roll_10ms, roll_10ms.Add(std::abs(out.roll_torque_Nm)));
-    double ring_hold_N = 0.0;
+    double ring_hold_N = 0.0;  // toward the anus
     for (int j = 0; j < scratch.ring_contact_count; ++j) {
-      const auto& rc = scratch.ring_contacts[j];
-      const Eigen::Vector3d piece = state.p_WSample[rc.sample + 1] - state.p_WSample[rc.sample];
-      const double length = piece.norm();
-      if (length > 1e-9) ring_hold_N += rc.force_N * rc.normal_W.dot(piece) / length;
+      ring_hold_N -= ves::bench::RingPushAlongScope_N(state, scratch, j);
     }
     peak_ring_hold_N = std::max(peak_ring_hold_N, ring_hold_10ms.Add(ring_hold_N));
     if (sample.push_force_N >= 4.0 && ring_hold_N > 0.5 * sample.push_force_N) {

@@ -475,11 +475,7 @@ int main(int argc, char** argv) {
       double ring_N = 0.0;
       for (int j = 0; j < scratch.ring_contact_count; ++j) {
         const auto& rc = scratch.ring_contacts[j];
-        const int i = rc.sample;
-        const Eigen::Vector3d t =
-            (state.p_WSample[std::min(i + 1, last)] - state.p_WSample[std::max(i - 1, 0)])
-                .normalized();
-        const double along = (-rc.force_N * rc.normal_W).dot(t);
+        const double along = ves::bench::RingPushAlongScope_N(state, scratch, j);
         ring_N += along;
         parts.push_back({along, params.colon.points[rc.point].arc_m,
                          100 + static_cast<int>(params.colon.points[rc.point].region), rc.force_N});

@@ -117,6 +117,21 @@ class TenStepMean {
   int next_{0};
 };
 
+// The push ring contact j (Scratch::ring_contacts) gives the scope along its
+// axis at the ring's sample, the chord through the neighbouring samples;
+// + toward the tip. A ring whose point lies past its piece's end pushes
+// along the shaft like a barb (docs/model-shortening-notes.md, "Rings that
+// hold the scope along its length").
+inline double RingPushAlongScope_N(const model::ModelState& state, const model::Scratch& scratch,
+                                   int j) {
+  const auto& rc = scratch.ring_contacts[j];
+  const int last = static_cast<int>(state.p_WSample.size()) - 1;
+  const Eigen::Vector3d axis = (state.p_WSample[std::min(rc.sample + 1, last)] -
+                                state.p_WSample[std::max(rc.sample - 1, 0)])
+                                   .normalized();
+  return (-rc.force_N * rc.normal_W).dot(axis);
+}
+
 // The colon point that carries the largest wall force this step.
 inline int LargestWallForcePoint(const model::StepOutput& out) {
   const auto& wall = out.wall_force_N;
