@@ -33,26 +33,26 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
   void OnReadDone(bool ok) override {
     if (!ok) {  // the station closed its side (or went away)
       summary_->set_frames_received(received_);
-      Finish(Status::OK);
+      Close(Status::OK);
       return;
     }
     const std::string why = CheckLiveFrame(frame_, !begun_);
     if (!why.empty()) {
       if (!begun_) Audit("?", Status(StatusCode::INVALID_ARGUMENT, why));
-      Finish(Status(StatusCode::INVALID_ARGUMENT, why));
+      Close(Status(StatusCode::INVALID_ARGUMENT, why));
       return;
     }
     if (!begun_) {
       const Status s = Begin();
       Audit(frame_.session_uuid(), s);
       if (!s.ok()) {
-        Finish(s);
+        Close(s);
         return;
       }
     } else if (!frame_.session_uuid().empty() && frame_.session_uuid() != uuid_) {
-      Finish(Status(StatusCode::INVALID_ARGUMENT,
-                    "frame.session_uuid = '" + patient_db::PrintableExcerpt(frame_.session_uuid()) +
-                        "': a stream carries one session (" + uuid_ + ")"));
+      Close(Status(StatusCode::INVALID_ARGUMENT,
+                   "frame.session_uuid = '" + patient_db::PrintableExcerpt(frame_.session_uuid()) +
+                       "': a stream carries one session (" + uuid_ + ")"));
       return;
     }
     deps_.live->Publish(uuid_, frame_);
@@ -60,11 +60,21 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
     StartRead(&frame_);
   }
   void OnDone() override {
-    if (begun_) deps_.live->End(uuid_);
+    if (begun_) deps_.live->End(uuid_);  // a stream cancelled before any Close
     delete this;
   }
 
  private:
+  // The hub forgets the session before the station hears the stream's end:
+  // OnDone runs only after the status has reached the client, so a viewer's
+  // live list could still show a stream that was already refused or closed.
+  void Close(const Status& status) {
+    if (begun_) {
+      deps_.live->End(uuid_);
+      begun_ = false;
+    }
+    Finish(status);
+  }
   Status Begin() {
     auto trainee = deps_.store->GetTrainee(frame_.trainee_id());
     if (!trainee.ok() && trainee.status.code != StoreCode::kNotFound) {
