@@ -94,7 +94,14 @@ InputSample ExpertOperator::Act(const Perception& p) {
     const bool stall_reduce =
         stalled_in_fixed && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
     if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
-    const bool reduce = (deeper && hooked && loop_m > k.loop_limit_m) ||
+    // Hooked with more scope in than a straight route needs: a loop the
+    // loop index has not seen (it counts from the shortest insertion for this
+    // depth, and a reduction that slipped resets that).
+    const bool looped_by_length =
+        hooked && p.inserted_m > kLoopedLength_m &&
+        p.tip_arc_m > last_reduce_tip_m_ + kLengthReduceAgainDepth_m;
+    const bool loop_reading = deeper && hooked && loop_m > k.loop_limit_m;
+    const bool reduce = loop_reading || looped_by_length ||
                         (scope_used_up && (deeper || stalled)) || stall_reduce;
     // Stalled again in fixed colon where it already pulled back: it backs the
     // tip off a little and steers again ("pull back to find the lumen"); a
@@ -105,17 +112,20 @@ InputSample ExpertOperator::Act(const Perception& p) {
       backing_off_ = back_off;
       stall_since_s_ = p.t_s;
       if (reduce) last_reduce_tip_m_ = p.tip_arc_m;
+      length_reduce_ = reduce && looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
       reduce_start_s_ = p.t_s;
       reduce_start_inserted_m_ = p.inserted_m;
       reduce_tip_max_m_ = p.tip_arc_m;
     }
   } else {
     // The loop is out once the tip comes back with the scope (insertion and
-    // image move one to one again); also stop after a long pull or a while.
+    // image move one to one again); also stop after a long pull or a while,
+    // and a reduction for the length alone once the length is well under it.
     reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
     if (p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m ||
         reduce_start_inserted_m_ - p.inserted_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
-        p.t_s - reduce_start_s_ > k.max_reduce_s) {
+        p.t_s - reduce_start_s_ > k.max_reduce_s ||
+        (length_reduce_ && p.inserted_m < kLoopedLength_m - kLoopedLengthMargin_m)) {
       reducing_ = false;
       settle_until_s_ = p.t_s + k.settle_s;
     }

@@ -76,7 +76,8 @@ class NoviceOperator final : public ScriptedOperator {
 // (knobs held), pulls back and turns the shaft clockwise: the loop comes out
 // and the colon pleats onto the scope while the tip holds or even advances.
 // It stops pulling once the tip starts to come back with the scope (the loop
-// is out), and advances again. When little scope is left, or the tip has
+// is out), and advances again. When more scope is in than a straight route
+// needs (kLoopedLength_m), when little scope is left, or when the tip has
 // stalled in fixed colon, it takes the loops out too. Fluoroscopy off,
 // textured view.
 class ExpertOperator final : public ScriptedOperator {
@@ -123,6 +124,15 @@ class ExpertOperator final : public ScriptedOperator {
   // Stalled again where it has already pulled back, it only backs the tip
   // off the wall this far (no roll) and steers on.
   static constexpr double kBackOff_m = 0.03;
+  // More scope in than this with the tip hooked short of the cecum means a
+  // loop, whatever the loop index says (a straight scope reaches the cecum
+  // with 0.7-0.8 m in, the mean with loops is 1.08 m; docs/scoring.md): it
+  // reduces again once the tip is kLengthReduceAgainDepth_m deeper than at
+  // the last reduction, and stops that reduction once the scope is
+  // kLoopedLengthMargin_m under the limit (pulling on loses the hook).
+  static constexpr double kLoopedLength_m = 1.25;
+  static constexpr double kLoopedLengthMargin_m = 0.10;
+  static constexpr double kLengthReduceAgainDepth_m = 0.03;
   static constexpr double kMaxRoll_rad = 1.5;      // the hand turns the shaft at most this far
   static constexpr double kRollRelax_per_s = 0.3;  // and lets it untwist while advancing
 
@@ -135,6 +145,7 @@ class ExpertOperator final : public ScriptedOperator {
   Settings settings_;
   bool reducing_{false};
   bool backing_off_{false};  // the pull-back is a short back-off, not a reduction
+  bool length_reduce_{false};  // the reduction was started by the scope's length alone
   bool started_{false};
   LoopIndex loop_index_;
   double last_reduce_tip_m_{-1.0};
