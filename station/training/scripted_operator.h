@@ -129,7 +129,9 @@ class ExpertOperator final : public ScriptedOperator {
   // with 0.7-0.8 m in, the mean with loops is 1.08 m; docs/scoring.md): it
   // reduces again once the tip is kLengthReduceAgainDepth_m deeper than at
   // the last reduction, and stops that reduction once the scope is
-  // kLoopedLengthMargin_m under the limit (pulling on loses the hook).
+  // kLoopedLengthMargin_m under the limit: pulled much shorter, the model's
+  // straightened scope stalls short of the cecum (docs/model-shortening-
+  // notes.md, "The scope's length as a loop sign").
   static constexpr double kLoopedLength_m = 1.25;
   static constexpr double kLoopedLengthMargin_m = 0.10;
   static constexpr double kLengthReduceAgainDepth_m = 0.03;
