@@ -112,7 +112,7 @@ InputSample ExpertOperator::Act(const Perception& p) {
       backing_off_ = back_off;
       stall_since_s_ = p.t_s;
       if (reduce) last_reduce_tip_m_ = p.tip_arc_m;
-      length_reduce_ = reduce && looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
+      length_reduce_ = looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
       reduce_start_s_ = p.t_s;
       reduce_start_inserted_m_ = p.inserted_m;
       reduce_tip_max_m_ = p.tip_arc_m;
