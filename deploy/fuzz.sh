@@ -4,10 +4,11 @@
 #   Builds the targets with clang-14 (-DVES_FUZZ=ON: ASan + UBSan) into DIR
 #   (default build-fuzz), seeds each corpus from the project's data
 #   (ves_fuzz_seeds) and from tests/fuzz/regressions/<target>, and runs each
-#   target for S seconds (default 60), one after the other. A crash leaves its
-#   input in DIR/crashes/<target>/ and makes the script exit 1; copy it into
-#   tests/fuzz/regressions/<target>/ once fixed. Targets: csv markups textproto
-#   bundle session_file input_log can_frame (default: all).
+#   target for S seconds (default 60), VES_JOBS of them at a time (default 1).
+#   A crash leaves its input in DIR/crashes/<target>/ and makes the script
+#   exit 1; copy it into tests/fuzz/regressions/<target>/ once fixed.
+#   Targets: csv markups textproto bundle session_file input_log can_frame
+#   (default: all).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds=60
@@ -41,13 +42,14 @@ fi
 cmake --build "$build" -j "${VES_JOBS:-2}" --target ves_fuzz_seeds \
   $(printf 'fuzz_%s ' "${targets[@]}") >/dev/null
 
-failed=0
-for t in "${targets[@]}"; do
-  corpus="$corpus_root/$t"
-  crashes="$build/crashes/$t"
+# One target's run; its report goes to $build/fuzz-$t.result (read back in
+# the targets' order below, so reports do not interleave).
+run_target() {
+  local t="$1" corpus="$corpus_root/$1" crashes="$build/crashes/$1"
+  local result="$build/fuzz-$1.result"
   mkdir -p "$corpus" "$crashes"
   "$build/tests/fuzz/ves_fuzz_seeds" "$t" "$corpus"
-  seed_dirs=("$corpus")
+  local seed_dirs=("$corpus")
   [ -d "$root/tests/fuzz/regressions/$t" ] && seed_dirs+=("$root/tests/fuzz/regressions/$t")
   echo "fuzz.sh: $t for ${seconds}s (corpus $corpus)"
   # -max_len bounds one input (and so what a decoder may allocate for it);
@@ -55,13 +57,46 @@ for t in "${targets[@]}"; do
   if ! "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 \
        -timeout=10 -print_final_stats=1 -artifact_prefix="$crashes/" "${seed_dirs[@]}" \
        >"$build/fuzz-$t.log" 2>&1; then
-    echo "fuzz.sh: $t FAILED: $(grep -m1 -E 'ERROR|Sanitizer|deadly|property broken' \
-      "$build/fuzz-$t.log" || tail -n 1 "$build/fuzz-$t.log")" >&2
-    echo "fuzz.sh:   input: $(ls -t "$crashes" | head -n 1), log: $build/fuzz-$t.log" >&2
-    failed=1
+    { echo "FAILED"
+      echo "fuzz.sh: $t FAILED: $(grep -m1 -E 'ERROR|Sanitizer|deadly|property broken' \
+        "$build/fuzz-$t.log" || tail -n 1 "$build/fuzz-$t.log")"
+      echo "fuzz.sh:   input: $(ls -t "$crashes" | head -n 1), log: $build/fuzz-$t.log"
+    } >"$result"
   else
-    echo "fuzz.sh: $t ok: $(grep -E '^stat::number_of_executed_units' "$build/fuzz-$t.log" \
-      | awk '{print $2}') runs, corpus $(ls "$corpus" | wc -l) inputs"
+    { echo "ok"
+      echo "fuzz.sh: $t ok: $(grep -E '^stat::number_of_executed_units' "$build/fuzz-$t.log" \
+        | awk '{print $2}') runs, corpus $(ls "$corpus" | wc -l) inputs"
+    } >"$result"
+  fi
+}
+
+# VES_JOBS targets at a time (each libFuzzer run is one process on one core):
+# on CI's two cores the seven targets take four rounds of S seconds, not seven.
+jobs="${VES_JOBS:-1}"
+[[ "$jobs" =~ ^[0-9]+$ ]] && [ "$jobs" -ge 1 ] || jobs=1
+running=0
+for t in "${targets[@]}"; do
+  rm -f "$build/fuzz-$t.result"
+  if [ "$running" -ge "$jobs" ]; then
+    wait -n || true
+    running=$((running - 1))
+  fi
+  run_target "$t" &
+  running=$((running + 1))
+done
+wait || true
+
+failed=0
+for t in "${targets[@]}"; do
+  result="$build/fuzz-$t.result"
+  if [ ! -f "$result" ]; then
+    echo "fuzz.sh: $t FAILED: the run left no report (log: $build/fuzz-$t.log)" >&2
+    failed=1
+  elif [ "$(head -n 1 "$result")" = ok ]; then
+    tail -n +2 "$result"
+  else
+    tail -n +2 "$result" >&2
+    failed=1
   fi
 done
 exit $failed
