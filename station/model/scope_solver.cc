@@ -205,13 +205,21 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   Eigen::Vector2d dq_pivot = Eigen::Vector2d::Zero();
   const Vec6 U_thrust = IA[root] * S_thrust;
   const double D_thrust = params.thrust_damping_N_s_per_m + S_thrust.dot(U_thrust);
+  // Driven by force, the scope can meet its ends: all of it in (the control
+  // body against the anus) or all out. There the thrust is held, not free:
+  // the step is solved again with the insertion prescribed at that end, so
+  // the hand's push does not act on the rest of the scope through the slide.
+  bool thrust_at_end = false;
+  double thrust_end_m = 0.0;
+  double free_insertion_m = 0.0;  // the force-driven solve's insertion, unclamped
   auto solve_down = [&](double scale) {
     // Condense the thrust into the pivot's child.
     Mat6 IA_slide = IA[root];
     Vec6 b_slide = scale * bA[root];
     double u_thrust = 0.0;
-    if (input.thrust_mode == ThrustMode::kPosition) {
-      d_insert = std::clamp(target_insertion_m, 0.0, max_insert) - s->inserted_m;
+    if (input.thrust_mode == ThrustMode::kPosition || thrust_at_end) {
+      const double target_m = thrust_at_end ? thrust_end_m : target_insertion_m;
+      d_insert = std::clamp(target_m, 0.0, max_insert) - s->inserted_m;
       b_slide.noalias() -= U_thrust * d_insert;
     } else {
       u_thrust = scale * (dt * input.push_force_N + S_thrust.dot(bA[root]));
@@ -227,9 +235,10 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
         S_pivot.transpose() * b_slide;
     dq_pivot = D_pivot.inverse() * u_pivot;
     const Vec6 delta_slide = S_pivot * dq_pivot;
-    if (input.thrust_mode == ThrustMode::kForce) {
+    if (input.thrust_mode == ThrustMode::kForce && !thrust_at_end) {
       d_insert = (u_thrust - U_thrust.dot(delta_slide)) / D_thrust;
-      d_insert = std::clamp(s->inserted_m + d_insert, 0.0, max_insert) - s->inserted_m;
+      free_insertion_m = s->inserted_m + d_insert;
+      d_insert = std::clamp(free_insertion_m, 0.0, max_insert) - s->inserted_m;
     }
     delta[root] = delta_slide + S_thrust * d_insert;
     double largest_turn = dq_pivot.norm();
@@ -245,7 +254,13 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   // joint further (a loop snapping, a jammed chain buckling) is shortened as a
   // whole (a line search along the linearised solution), so the chain keeps
   // that solution's shape rather than one with a few joints cut short.
-  const double largest_turn = solve_down(1.0);
+  double largest_turn = solve_down(1.0);
+  if (input.thrust_mode == ThrustMode::kForce &&
+      (free_insertion_m > max_insert || free_insertion_m < 0.0)) {
+    thrust_at_end = true;
+    thrust_end_m = free_insertion_m > max_insert ? max_insert : 0.0;
+    largest_turn = solve_down(1.0);
+  }
   if (largest_turn > kMaxJointTurnPerStep_rad) {
     solve_down(kMaxJointTurnPerStep_rad / largest_turn);
   }

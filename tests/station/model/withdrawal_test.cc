@@ -73,5 +73,36 @@ TEST(Withdrawal, InsertedPartKeepsItsShapeAsBentJointsLeaveTheAnus) {
   EXPECT_LT(largest_motion_m, allowed_motion_m);
 }
 
+// All of the scope in, the control body rests against the anus: a hand that
+// pushes harder moves nothing more. The thrust is held at its end, so the push
+// reaches no joint (the pivot at the anus included) through the slide.
+TEST(ScopeAtItsEnd, PushingHarderOnAFullyInsertedScopeMovesNothing) {
+  ModelParams params;
+  params.colon = MakeBendTube(0.005, M_PI / 2.0, 0.05, 0.4, 0.01, 0.012, RigidTissue(0.2, 0.15));
+  params.scope.working_length_m = 0.3;
+  const auto push = [](double force_N) {
+    return [force_N](const Sim&) {
+      StepInput in;
+      in.thrust_mode = ThrustMode::kForce;
+      in.push_force_N = force_N;
+      return in;
+    };
+  };
+  Sim sim(params);
+  ASSERT_TRUE(sim.RunUntil(20.0, push(20.0)));
+  ASSERT_NEAR(sim.state.inserted_m, 0.3, 1e-12) << "the scope must be all in for this test";
+  Sim firm = sim;
+  Sim hard = sim;
+  ASSERT_TRUE(firm.RunUntil(21.0, push(20.0)));
+  ASSERT_TRUE(hard.RunUntil(21.0, push(40.0)));
+  double largest_difference_m = 0.0;
+  for (size_t i = 0; i < firm.state.p_WSample.size(); ++i) {
+    largest_difference_m = std::max(
+        largest_difference_m, (firm.state.p_WSample[i] - hard.state.p_WSample[i]).norm());
+  }
+  EXPECT_LT(largest_difference_m, 1e-9);
+  EXPECT_NEAR(hard.state.inserted_m, 0.3, 1e-12);
+}
+
 }  // namespace
 }  // namespace ves::model
