@@ -207,10 +207,10 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   const double D_thrust = params.thrust_damping_N_s_per_m + S_thrust.dot(U_thrust);
   // Driven by force, the scope can meet its ends: all of it in (the control
   // body against the anus) or all out. There the thrust is held, not free:
-  // the step is solved again with the insertion prescribed at that end, so
-  // the hand's push does not act on the rest of the scope through the slide.
+  // the step is solved again with the insertion prescribed at that end (the
+  // free solve's insertion, clamped), so the hand's push does not act on the
+  // rest of the scope through the slide.
   bool thrust_at_end = false;
-  double thrust_end_m = 0.0;
   double free_insertion_m = 0.0;  // the force-driven solve's insertion, unclamped
   auto solve_down = [&](double scale) {
     // Condense the thrust into the pivot's child.
@@ -218,7 +218,7 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
     Vec6 b_slide = scale * bA[root];
     double u_thrust = 0.0;
     if (input.thrust_mode == ThrustMode::kPosition || thrust_at_end) {
-      const double target_m = thrust_at_end ? thrust_end_m : target_insertion_m;
+      const double target_m = thrust_at_end ? free_insertion_m : target_insertion_m;
       d_insert = std::clamp(target_m, 0.0, max_insert) - s->inserted_m;
       b_slide.noalias() -= U_thrust * d_insert;
     } else {
@@ -258,7 +258,6 @@ void SolveScope(const ModelParams& params, const StepInput& input, double target
   if (input.thrust_mode == ThrustMode::kForce &&
       (free_insertion_m > max_insert || free_insertion_m < 0.0)) {
     thrust_at_end = true;
-    thrust_end_m = free_insertion_m > max_insert ? max_insert : 0.0;
     largest_turn = solve_down(1.0);
   }
   if (largest_turn > kMaxJointTurnPerStep_rad) {
