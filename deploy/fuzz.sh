@@ -72,12 +72,12 @@ run_target() {
 
 # VES_JOBS targets at a time (each libFuzzer run is one process on one core):
 # on CI's two cores the seven targets take four rounds of S seconds, not seven.
-jobs="${VES_JOBS:-1}"
-[[ "$jobs" =~ ^[0-9]+$ ]] && [ "$jobs" -ge 1 ] || jobs=1
+at_once="${VES_JOBS:-1}"
+[[ "$at_once" =~ ^[0-9]+$ ]] && [ "$at_once" -ge 1 ] || at_once=1
 running=0
 for t in "${targets[@]}"; do
   rm -f "$build/fuzz-$t.result"
-  if [ "$running" -ge "$jobs" ]; then
+  if [ "$running" -ge "$at_once" ]; then
     wait -n || true
     running=$((running - 1))
   fi

@@ -1,6 +1,7 @@
 // Withdrawing a scope that is bent right at the anus: each joint that leaves
 // the anus is straightened by the guide, and the inserted part must keep its
-// shape while that happens (docs/model.md, "Withdrawal past a joint").
+// shape while that happens (docs/model.md, "Withdrawal past a joint"). And a
+// scope pushed to the end of its travel is held there.
 #include <gtest/gtest.h>
 
 #include <algorithm>
