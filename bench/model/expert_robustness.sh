@@ -16,7 +16,7 @@ extra="$*"
 sweep="${EXPERT_SWEEP:-$build/bench/model/expert_sweep}"
 [[ -x "$sweep" ]] || { echo "expert_sweep not built: cmake --build $build --target expert_sweep" >&2; exit 2; }
 # The expert's defaults (ExpertOperator::Settings); settle_s is 0, so it has no ±20 %.
-declare -A base=([advance]=0.01 [withdraw]=0.01 [push]=8 [pull]=8 [loop_limit]=0.10 [roll_rate]=0.5)
+declare -A base=([advance]=0.01 [withdraw]=0.01 [push]=10 [pull]=8 [loop_limit]=0.10 [roll_rate]=0.5)
 runs=()
 for c in ${VES_CASES:-standard-adult mobile-descending}; do
   runs+=("$root/patient_db/cases/$c.textproto defaults=1 $seconds")
