@@ -5,7 +5,8 @@
 // Keys: the model's (bench/model/model_overrides.h: mu, soft_k, meso_k,
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
-// press_past, press_gate; show_damage=1 prints each damage episode,
+// press_past, press_gate, press_on_stretch, press_release (the assistant
+// presses a region while the patient complains of it); show_damage=1 prints each damage episode,
 // show_over10=1 the base force over 10 N, show_roll=1 each step with the
 // roll torque over 1 N·m, trace_from=T 12 steps from T (samples near the
 // largest wall force, ring contacts).
@@ -142,6 +143,8 @@ int main(int argc, char** argv) {
   // press_gate > 0: the assistant presses a region (from then on) once its
   // path is within press_gate times its chord (it has been straightened).
   const double press_gate = get("press_gate", 0.0);
+  const double press_on_stretch_m = get("press_on_stretch", 0.0);
+  const double press_release_m = get("press_release", 0.0);
   int region_first[9], region_last[9];
   for (int r = 0; r < 9; ++r) region_first[r] = region_last[r] = -1;
   for (int i = 0; i < static_cast<int>(params.colon.points.size()); ++i) {
@@ -178,6 +181,19 @@ int main(int argc, char** argv) {
           pressing[r] = true;
           press_from_s[r] = state.time_s;
         }
+      }
+      // The patient complains of the region (its mesentery stretched over
+      // press_on_stretch m): the assistant presses it, until the stretch
+      // falls under press_release m (if given).
+      const double arc_m = out.peak_stretch_arc_m;
+      if (press_on_stretch_m > 0.0 && press[r] > 0.0 && !pressing[r] && region_first[r] >= 0 &&
+          out.peak_stretch_m > press_on_stretch_m &&
+          arc_m >= params.colon.points[region_first[r]].arc_m && arc_m <= region_end_m[r]) {
+        pressing[r] = true;
+        if (press_from_s[r] < 0.0) press_from_s[r] = state.time_s;
+      }
+      if (press_release_m > 0.0 && pressing[r] && out.peak_stretch_m < press_release_m) {
+        pressing[r] = false;
       }
       if (pressing[r]) input.abdominal_pressure[r] = press[r];
       if (press_gate == 0.0 && press[r] > 0.0 && reduced_to_m > region_end_m[r] + press_past_m) {
