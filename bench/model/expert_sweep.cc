@@ -5,11 +5,11 @@
 // Keys: the model's (bench/model/model_overrides.h: mu, soft_k, meso_k,
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
-// press_past, press_gate, press_on_stretch, press_release (the assistant
-// presses a region while the patient complains of it); show_damage=1 prints each damage episode,
-// show_over10=1 the base force over 10 N, show_roll=1 each step with the
-// roll torque over 1 N·m, trace_from=T 12 steps from T (samples near the
-// largest wall force, ring contacts).
+// press_past, press_gate, press_on_stretch, press_release (pressing a
+// region while the patient complains of it); show_damage=1 prints each
+// damage episode, show_over10=1 the base force over 10 N, show_roll=1 each
+// step with the roll torque over 1 N·m, trace_from=T 12 steps from T
+// (samples near the largest wall force, ring contacts).
 // The line gives the roll torque's peak, its 10 ms mean's peak (the force
 // metric's resolution) and roll_over1, the share of steps over 1 N·m;
 // damage counts episodes of the largest wall force's 10 ms mean over the

@@ -91,9 +91,9 @@ class ExpertOperator final : public ScriptedOperator {
     double withdraw_speed_m_per_s{0.01};  // while reducing a loop
     // Most the hand pushes: 10 N, the level real endoscopists' hands stay
     // under 95 % of the time (peak push about 43 N; Appleyard et al., GIE
-    // 2000). It was 8 N; the sigmoid-descending junction of standard-adult
-    // needs 6.6 N, so 8 N at -20 % stalled there (docs/model-shortening-
-    // notes.md, "The hand's push limit").
+    // 2000). It was 8 N, and 8 N at -20 % stalled at the sigmoid-descending
+    // junction of standard-adult, which takes between 6.4 and 6.6 N
+    // (docs/model-shortening-notes.md, "The hand's push limit").
     double push_limit_N{10.0};
     double pull_limit_N{8.0};             // most the hand pulls
     // Loop index (scope in beyond the shortest it has been for this depth,
