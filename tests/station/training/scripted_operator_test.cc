@@ -2,6 +2,8 @@
 // "Scripted operators"); the whole-colon runs are in scripted_session_test.cc.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "station/training/scripted_operator.h"
 
 namespace ves::training {
@@ -65,6 +67,33 @@ TEST(ExpertOperator, ReducesWhenTheScopesLengthShowsALoop) {
 TEST(ExpertOperator, DoesNotReduceForTheLengthUnhooked) {
   const LengthRun run = AdvanceWithTheTip(0.0);
   EXPECT_LT(run.reduce_started_at_m, 0.0) << "reduced at " << run.reduce_started_at_m << " m in";
+}
+
+// A scope that does not move however hard it is pushed (the tip in mobile
+// colon, so no stall in fixed colon calls for a pull-back): the hand's force
+// rises toward the speed it wants until its limit, 10 N by default (the level
+// real hands stay under 95 % of the time, docs/scoring.md), and no further.
+TEST(ExpertOperator, PushesAStuckScopeUpToItsLimitAndNoFurther) {
+  for (const double limit_N : {ExpertOperator::Settings{}.push_limit_N, 6.4}) {
+    ExpertOperator::Settings settings;
+    settings.push_limit_N = limit_N;
+    ExpertOperator expert(kDt_s, settings);
+    Perception p;
+    p.working_length_m = 1.68;
+    p.inserted_m = 0.50;
+    p.tip_arc_m = 0.45;
+    double peak_N = 0.0, last_N = 0.0;
+    for (int step = 0; step < 20000; ++step) {
+      p.t_s = step * kDt_s;
+      const InputSample in = expert.Act(p);
+      ASSERT_GE(in.push_force_N, 0.0) << "pulled at " << p.t_s << " s";
+      peak_N = std::max(peak_N, in.push_force_N);
+      last_N = in.push_force_N;
+    }
+    EXPECT_DOUBLE_EQ(peak_N, limit_N);
+    EXPECT_DOUBLE_EQ(last_N, limit_N);
+  }
+  EXPECT_DOUBLE_EQ(ExpertOperator::Settings{}.push_limit_N, 10.0);
 }
 
 }  // namespace
