@@ -2,7 +2,7 @@
 # The scripted expert with each of its main settings moved by -20 % and +20 %,
 # one at a time, on the full colons it reaches (issue #17: "no single tuned
 # point"). One row per run: did it reach the cecum, when, with how much scope
-# in, and what it cost the patient.
+# in, the peak force at the hand, and what it cost the patient.
 #   bench/model/expert_robustness.sh [BUILD_DIR] [SECONDS] [key=value ...]
 # Further key=value pairs (expert_sweep's keys) go to every run.
 # VES_JOBS runs that many at once (default 1). About 15-40 s of CPU per run.
@@ -41,8 +41,8 @@ printf '%s\n' "${runs[@]}" |
          sub(/\.textproto$/, "", v["case"]); runs++
          if (v["cecum_s"] + 0 >= 0) { reached++; if (v["inserted_at_cecum"] + 0 <= 1.30) short++ }
          if (v["damage"] + 0 == 0) clean++
-         printf "%-18s %-18s cecum_s %6s  in_at_cecum %6s  damage %2s  base>10N %6s  roll %5s (10 ms %4s)  fixed_mm %4s  pain_s %4s  ring_hold_s %4s\n",
+         printf "%-18s %-18s cecum_s %6s  in_at_cecum %6s  damage %2s  base>10N %6s  peak_N %5s  roll %5s (10 ms %4s)  fixed_mm %4s  pain_s %4s  ring_hold_s %4s\n",
                 v["case"], setting, v["cecum_s"], v["inserted_at_cecum"], v["damage"], v["over10"],
-                v["peak_roll"], v["peak_roll_10ms"], v["fixed_mm"], v["pain"], v["ring_hold_s"] }
+                v["peak_force"], v["peak_roll"], v["peak_roll_10ms"], v["fixed_mm"], v["pain"], v["ring_hold_s"] }
        END { printf "the cecum reached in %d of %d runs (%s s each), %d of them with <= 1.30 m in; %d runs without damage\n",
                    reached, runs, '"$seconds"', short, clean }'
