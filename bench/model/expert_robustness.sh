@@ -15,8 +15,13 @@ shift $(( $# < 2 ? $# : 2 ))
 extra="$*"
 sweep="${EXPERT_SWEEP:-$build/bench/model/expert_sweep}"
 [[ -x "$sweep" ]] || { echo "expert_sweep not built: cmake --build $build --target expert_sweep" >&2; exit 2; }
-# The expert's defaults (ExpertOperator::Settings); settle_s is 0, so it has no ±20 %.
-declare -A base=([advance]=0.01 [withdraw]=0.01 [push]=10 [pull]=8 [loop_limit]=0.10 [roll_rate]=0.5)
+# The expert's defaults, from ExpertOperator::Settings as built (settle_s is
+# 0, so it has no ±20 % and is not among them).
+declare -A base=()
+for kv in $("$sweep" --expert-defaults); do base[${kv%%=*}]=${kv#*=}; done
+for k in advance withdraw push pull loop_limit roll_rate; do
+  [[ -n "${base[$k]:-}" ]] || { echo "expert_sweep --expert-defaults gave no $k" >&2; exit 2; }
+done
 runs=()
 for c in ${VES_CASES:-standard-adult mobile-descending}; do
   runs+=("$root/patient_db/cases/$c.textproto defaults=1 $seconds")

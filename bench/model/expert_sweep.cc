@@ -2,6 +2,7 @@
 // operator settings overridden from the command line, and prints one line of
 // results, for parameter sweeps (docs/model-shortening-notes.md).
 //   expert_sweep CASE_FILE OPERATOR SECONDS [key=value ...]
+//   expert_sweep --expert-defaults   (the expert's main settings, key=value)
 // Keys: the model's (bench/model/model_overrides.h: mu, soft_k, meso_k,
 // links, ...); the expert's advance, withdraw, push, pull, loop_limit,
 // roll_rate, settle; the assistant's press_sig, press_desc, press_trans,
@@ -72,6 +73,15 @@ void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::Mod
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The expert's main settings as they are compiled in, for the ±20 % sweep
+  // (bench/model/expert_robustness.sh), so it keeps no copy of them.
+  if (argc == 2 && std::string(argv[1]) == "--expert-defaults") {
+    const ves::training::ExpertOperator::Settings d;
+    std::printf("advance=%g withdraw=%g push=%g pull=%g loop_limit=%g roll_rate=%g\n",
+                d.advance_speed_m_per_s, d.withdraw_speed_m_per_s, d.push_limit_N,
+                d.pull_limit_N, d.loop_limit_m, d.roll_rate_rad_per_s);
+    return 0;
+  }
   if (argc < 4) {
     std::fprintf(stderr, "usage: expert_sweep CASE_FILE novice|expert SECONDS [key=value ...]\n");
     return 2;
