@@ -72,14 +72,17 @@ REDUNDANT_SIGMOID = [(0.005, -0.040, 0.125), (-0.010, -0.026, 0.158), (-0.032, -
                      (0.104, 0.042, 0.175), (0.112, 0.010, 0.195), (0.114, -0.018, 0.208),
                      (0.112, -0.035, 0.225)]
 
-# Longer sigmoid (0.462 m against the standard 0.396 m) and a longer, low
+# A long sigmoid (0.537 m against the standard 0.396 m; its loop drawn 1.2 times
+# as far from its chord as in version 1, which had 0.462 m) and a longer, low
 # transverse (0.465 m against 0.448 m; --print-lengths) for the case whose
-# descending colon keeps a mesentery (a persistent descending mesocolon).
-LONG_SIGMOID = [(0.005, -0.040, 0.125), (-0.012, -0.020, 0.150), (-0.035, 0.002, 0.166),
-                (-0.055, 0.030, 0.178), (-0.064, 0.062, 0.194), (-0.054, 0.090, 0.214),
-                (-0.026, 0.106, 0.230), (0.010, 0.110, 0.238), (0.046, 0.102, 0.236),
-                (0.076, 0.082, 0.228), (0.096, 0.055, 0.218), (0.107, 0.025, 0.210),
-                (0.111, -0.005, 0.208), (0.112, -0.035, 0.225)]
+# descending colon keeps a mesentery (a persistent descending mesocolon). With
+# them the cecum lies 1.70 m along the colon, beyond the 1.68 m scope, so a push
+# without reductions cannot reach it (docs/case-format.md).
+LONG_SIGMOID = [(0.005, -0.040, 0.125), (-0.016, -0.016, 0.154), (-0.043, 0.010, 0.174),
+                (-0.066, 0.044, 0.189), (-0.078, 0.082, 0.208), (-0.069, 0.116, 0.229),
+                (-0.040, 0.135, 0.244), (-0.002, 0.139, 0.249), (0.038, 0.130, 0.243),
+                (0.072, 0.106, 0.231), (0.095, 0.073, 0.218), (0.108, 0.037, 0.209),
+                (0.112, 0.001, 0.206), (0.112, -0.035, 0.225)]
 LONG_TRANSVERSE = [(0.097, 0.016, 0.488), (0.090, 0.042, 0.458), (0.079, 0.066, 0.420),
                    (0.064, 0.088, 0.380), (0.044, 0.105, 0.342), (0.020, 0.116, 0.312),
                    (-0.006, 0.120, 0.298), (-0.032, 0.116, 0.302), (-0.056, 0.107, 0.320),
@@ -238,7 +241,8 @@ def case_text(spec, points, arcs, spans, profile):
              "# Synthetic case; units metres, patient frame W (docs/case-format.md).",
              "# Region lengths (m): " + ", ".join(f"{n} {e - s:.3f}" for n, s, e in spans)
              + f"; total {arcs[-1]:.3f}.", "",
-             f'id: "{spec["id"]}"', f'title: "{spec["title"]}"', "version: 1",
+             f'id: "{spec["id"]}"', f'title: "{spec["title"]}"',
+             f"version: {spec.get('version', 1)}",
              f"difficulty: {spec['difficulty']}",
              f'description: "{spec["description"]}"',
              "provenance {", '  source: "synthetic"', "  year: 2026",
@@ -292,6 +296,7 @@ CASES = {
         regions=[STANDARD[0], ("sigmoid", LONG_SIGMOID)] + STANDARD[2:4] +
                 [("transverse", LONG_TRANSVERSE)] + STANDARD[5:],
         id="mobile-descending", title="Long colon with a mobile descending colon",
+        version=2,
         difficulty="DIFFICULTY_HARD",
         mobility=lambda n: "mobile!" if n == "descending" else standard_mobility(n),
         description="A long sigmoid and a long, low transverse colon, and a descending colon "

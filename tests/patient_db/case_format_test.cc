@@ -94,6 +94,26 @@ TEST(ShippedCases, RedundantSigmoidIsLongAndVeryMobile) {
   EXPECT_EQ(c.difficulty(), ves::v1::DIFFICULTY_HARD);
 }
 
+// Its cecum lies beyond the default scope's 1.68 m working length
+// (station/training), so a push that does not shorten the colon cannot reach
+// it (issue #17's novice; version 1, 1.62 m to the cecum, let it arrive).
+TEST(ShippedCases, MobileDescendingIsLongWithItsCecumBeyondTheScope) {
+  const auto c = Shipped("mobile-descending");
+  EXPECT_GE(c.version(), 2u);
+  EXPECT_NEAR(RegionLength_m(c, ves::v1::REGION_SIGMOID), 0.54, 0.03);
+  bool descending_mobile = false;
+  double cecum_start_m = 0.0;
+  for (const auto& span : c.regions()) {
+    if (span.region() == ves::v1::REGION_DESCENDING) {
+      descending_mobile = span.tissue().mobility() == ves::v1::MOBILITY_MOBILE;
+    }
+    if (span.region() == ves::v1::REGION_CECUM) cecum_start_m = span.start_arc_m();
+  }
+  EXPECT_TRUE(descending_mobile);
+  EXPECT_GT(cecum_start_m, 1.68);
+  EXPECT_EQ(c.difficulty(), ves::v1::DIFFICULTY_HARD);
+}
+
 TEST(ShippedCases, FixedTubeIsStandardAdultWithEverySuspensionStiff) {
   const auto fixed = Shipped("fixed-tube");
   const auto standard = Shipped("standard-adult");

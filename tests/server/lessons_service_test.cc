@@ -374,12 +374,12 @@ TEST_F(Lessons, ExpertPassesTheCecumLessonsOfThePaperSigmoidAndProgressMovesOn) 
 }
 
 // The full-colon lessons (issue #17): the expert reaches the cecum of
-// standard-adult and of mobile-descending within the lessons' 480 s (at
-// about 229 s and 275 s), with no damage and under 30 s of pain, and the
-// server's judge, replaying each session (minutes of simulated time, so the
-// verdict may take a while), passes both, and progress shows them completed.
-// (The novice reaches neither cecum in 600 s:
-// CecumReached.ExpertReachesTheCecumAndTheNoviceDoesNot.)
+// standard-adult and of mobile-descending within the lessons' 480 s and
+// 600 s (at about 185 s and 354 s), with no damage and under 30 s of pain,
+// and the server's judge, replaying each session (minutes of simulated time,
+// so the verdict may take a while), passes both, and progress shows them
+// completed. (The novice reaches neither cecum in 600 s: CecumReached and
+// CecumReachedOnTheMobileDescendingColon.)
 TEST_F(Lessons, ExpertPassesTheFullColonLessons) {
   ves::v1::CreateCurriculumResponse created;
   ASSERT_TRUE(Create(supervisor_, ShippedCurriculum(), &created).ok());
