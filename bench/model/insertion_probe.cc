@@ -11,6 +11,7 @@
 //   PROBE_WITHDRAW_AT=M            position rule: at M metres inserted, withdraw
 //   PROBE_WITHDRAW_M=W             ... by W metres (default 0.25)
 //   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
+//   PROBE_ROLL_MAX=A               ... up to A rad at most (default: no limit)
 //   PROBE_PIN_TIP=1                ... with the tip held where the withdrawal began
 //                                  (a perfect hook; also for PROBE_REDUCE)
 //   PROBE_REINSERT=1               ... then insert again; PROBE_WITHDRAW_EVERY=E
@@ -158,6 +159,7 @@ int main(int argc, char** argv) {
   const double withdraw_at_m = ProbeEnv("withdraw_at", 1e9);
   const double withdraw_m = ProbeEnv("withdraw_m", 0.25);
   const double roll_rate = ProbeEnv("roll", 0.0);
+  const double roll_max_rad = ProbeEnv("roll_max", 0.0);
   const double dump_every_s = ProbeEnv("dump_every", 0.0);
   double next_dump_s = 0.0, next_forces_s = 0.0;
   StepInput in;
@@ -324,6 +326,7 @@ int main(int argc, char** argv) {
       if (phase == 1) {
         command_m -= speed_m_per_s * params.dt_s;
         in.roll_rad += roll_rate * params.dt_s;
+        if (roll_max_rad > 0.0) in.roll_rad = std::clamp(in.roll_rad, -roll_max_rad, roll_max_rad);
         // PROBE_HOOK=A: while withdrawing, angulate the tip to at least A rad
         // in the direction it is bent (hook the flexure).
         const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
