@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -184,32 +185,49 @@ void SteerTowardTheLumen(const Sim& sim, StepInput* in) {
 }
 
 // Position-driven insertion into standard-adult with the simple steering
-// rule to 0.6 m, then 0.25 m withdrawn with the knobs held (the tip hooked)
-// and the shaft turned clockwise: a loop formed and withdrawn. `each_step`
-// sees the simulation after every step.
-void FormAndWithdrawALoop(const ModelParams& params, const std::function<void(const Sim&)>& each_step) {
-  constexpr double kSpeed_m_per_s = 0.02;
+// rule to 0.6 m, then `withdraw_m` withdrawn at the same speed with the knobs
+// held (the tip hooked) and the shaft turned clockwise at 0.5 rad/s, up to
+// `roll_max_rad`: a loop formed and withdrawn. The run ends at `end_s`, or
+// as the withdrawal ends when `end_s` is 0.
+struct LoopDrive {
+  double speed_m_per_s{0.02};
+  double withdraw_m{0.25};
+  double roll_max_rad{std::numeric_limits<double>::infinity()};
+  double end_s{45.0};
+};
+
+// `each_step` sees the simulation after every step, and whether that step
+// withdrew the scope.
+void FormAndWithdrawALoop(const ModelParams& params, const LoopDrive& drive,
+                          const std::function<void(const Sim&, bool withdrew)>& each_step) {
   constexpr double kWithdrawAt_m = 0.60;
-  constexpr double kWithdraw_m = 0.25;
   Sim sim(params);
   StepInput in;
   in.thrust_mode = ThrustMode::kPosition;
   double command_m = 0.0;
   bool withdrawing = false;
-  while (sim.state.time_s < 45.0) {
+  const auto withdrawn = [&] { return withdrawing && command_m <= kWithdrawAt_m - drive.withdraw_m; };
+  while (drive.end_s > 0.0 ? sim.state.time_s < drive.end_s : !withdrawn()) {
     if (!withdrawing) SteerTowardTheLumen(sim, &in);  // withdrawing, the knobs hold the tip hooked
     if (command_m >= kWithdrawAt_m) withdrawing = true;
-    if (withdrawing && command_m > kWithdrawAt_m - kWithdraw_m) {
-      command_m -= kSpeed_m_per_s * sim.params.dt_s;
-      in.roll_rad += 0.5 * sim.params.dt_s;
+    const bool withdraw = withdrawing && !withdrawn();
+    if (withdraw) {
+      command_m -= drive.speed_m_per_s * sim.params.dt_s;
+      in.roll_rad = std::min(drive.roll_max_rad, in.roll_rad + 0.5 * sim.params.dt_s);
     } else if (!withdrawing) {
-      command_m += kSpeed_m_per_s * sim.params.dt_s;
+      command_m += drive.speed_m_per_s * sim.params.dt_s;
     }
     in.insertion_m = command_m;
     sim.StepOnce(in);
     ASSERT_TRUE(sim.out.finite) << "t=" << sim.state.time_s;
-    each_step(sim);
+    each_step(sim, withdraw);
   }
+}
+
+// The same with the defaults: 0.25 m withdrawn, the shaft turned on and on,
+// then held until 45 s.
+void FormAndWithdrawALoop(const ModelParams& params, const std::function<void(const Sim&)>& each_step) {
+  FormAndWithdrawALoop(params, LoopDrive{}, [&](const Sim& sim, bool) { each_step(sim); });
 }
 
 // Issue #17's reduction, as a hand does it: position-driven insertion into
@@ -238,44 +256,37 @@ class LoopReduction : public ::testing::TestWithParam<Reduction> {};
 // "The hook and the reduction").
 TEST_P(LoopReduction, WithdrawingWithTheTipHookedAndTheShaftTurnedKeepsTheTip) {
   const Reduction r = GetParam();
-  constexpr double kWithdrawAt_m = 0.60;
-  constexpr double kWithdraw_m = 0.30;
-  Sim sim(LoadParams("standard-adult"));
-  StepInput in;
-  in.thrust_mode = ThrustMode::kPosition;
-  double command_m = 0.0;
+  LoopDrive drive;
+  drive.speed_m_per_s = r.speed_m_per_s;
+  drive.withdraw_m = 0.30;
+  drive.roll_max_rad = r.roll_max_rad;
+  drive.end_s = 0.0;  // stop as the withdrawal ends
   // Scope in when the tip first reached each centimetre of arc on the way in.
   std::vector<double> in_for_tip_cm;
-  while (command_m < kWithdrawAt_m) {
-    SteerTowardTheLumen(sim, &in);
-    command_m += r.speed_m_per_s * sim.params.dt_s;
-    in.insertion_m = command_m;
-    sim.StepOnce(in);
-    ASSERT_TRUE(sim.out.finite) << "t=" << sim.state.time_s;
-    while (static_cast<double>(in_for_tip_cm.size()) <= 100.0 * sim.out.tip_arc_m) {
-      in_for_tip_cm.push_back(sim.out.inserted_m);
+  double start_tip_m = 0.0, lowest_tip_m = 1e9, tip_at_02_m = -1.0, end_tip_m = 0.0, end_in_m = 0.0;
+  FormAndWithdrawALoop(LoadParams("standard-adult"), drive, [&](const Sim& sim, bool withdrew) {
+    const double tip_m = sim.out.tip_arc_m;
+    if (!withdrew) {
+      start_tip_m = tip_m;
+      while (static_cast<double>(in_for_tip_cm.size()) <= 100.0 * tip_m) {
+        in_for_tip_cm.push_back(sim.out.inserted_m);
+      }
+      return;
     }
-  }
-  const double start_tip_m = sim.out.tip_arc_m;
-  double lowest_tip_m = start_tip_m, tip_at_02_m = -1.0;
-  while (command_m > kWithdrawAt_m - kWithdraw_m) {
-    command_m -= r.speed_m_per_s * sim.params.dt_s;
-    in.roll_rad = std::min(r.roll_max_rad, in.roll_rad + 0.5 * sim.params.dt_s);
-    in.insertion_m = command_m;
-    sim.StepOnce(in);
-    ASSERT_TRUE(sim.out.finite) << "t=" << sim.state.time_s;
-    lowest_tip_m = std::min(lowest_tip_m, sim.out.tip_arc_m);
-    if (tip_at_02_m < 0.0 && command_m <= kWithdrawAt_m - 0.2) tip_at_02_m = sim.out.tip_arc_m;
-  }
-  const double end_tip_m = sim.out.tip_arc_m;
+    lowest_tip_m = std::min(lowest_tip_m, tip_m);
+    if (tip_at_02_m < 0.0 && sim.out.inserted_m <= 0.4) tip_at_02_m = tip_m;
+    end_tip_m = tip_m;
+    end_in_m = sim.out.inserted_m;
+  });
+  if (HasFatalFailure()) return;
   const int end_cm = static_cast<int>(100.0 * end_tip_m);
   ASSERT_LT(end_cm, static_cast<int>(in_for_tip_cm.size()));
-  const double fall_m = in_for_tip_cm[end_cm] - sim.out.inserted_m;
+  const double fall_m = in_for_tip_cm[end_cm] - end_in_m;
   std::printf("LoopReduction %.0f mm/s, roll up to %.1f rad: tip %.3f m at 0.6 m in; after 0.2 m "
               "out %.3f m, after 0.3 m %.3f m (lowest %.3f m); scope in for that place %.3f -> "
               "%.3f m\n",
               1e3 * r.speed_m_per_s, r.roll_max_rad, start_tip_m, tip_at_02_m, end_tip_m,
-              lowest_tip_m, in_for_tip_cm[end_cm], sim.out.inserted_m);
+              lowest_tip_m, in_for_tip_cm[end_cm], end_in_m);
   EXPECT_GT(lowest_tip_m, start_tip_m - 0.02);
   EXPECT_GE(fall_m, 0.15);
 }
