@@ -1,9 +1,14 @@
 // Cost of one model Step (docs/model.md): the paper's size, the 64-link x
-// 1000-segment target, and the scaling in the number of colon segments.
+// 1000-segment target, and the scaling in the number of colon segments; and
+// the colon's block elimination alone, the floor of any step that solves the
+// 3-D colon directly (docs/model.md, "Speed").
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
+#include "station/model/internal.h"
 #include "station/model/model.h"
 
 namespace {
@@ -67,6 +72,31 @@ BENCHMARK_CAPTURE(BM_Step, default_48links_150seg, 48, 150)->Unit(benchmark::kMi
 BENCHMARK_CAPTURE(BM_Step, target_64links_1000seg, 64, 1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, scaling_64links_250seg, 64, 250)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_Step, scaling_64links_4000seg, 64, 4000)->Unit(benchmark::kMicrosecond);
+
+// The block Thomas elimination of SolveColon over `points` points, on a
+// random symmetric positive definite system (its cost does not depend on the
+// values).
+void BM_ColonElimination(benchmark::State& bench, int points) {
+  std::mt19937 random(1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<Eigen::Matrix3d> diag(points), upper(points), gain(points);
+  std::vector<Eigen::Vector3d> rhs(points), x(points);
+  for (int i = 0; i < points; ++i) {
+    Eigen::Matrix3d a;
+    for (int k = 0; k < 9; ++k) a.data()[k] = unit(random);
+    upper[i] = 0.3 * (a + a.transpose());
+    diag[i] = 5.0 * Eigen::Matrix3d::Identity() + 0.1 * a * a.transpose();
+    rhs[i] = Eigen::Vector3d(unit(random), unit(random), unit(random));
+  }
+  for (auto _ : bench) {
+    x = rhs;
+    internal::SolveBlockTridiagonal(diag, upper, points - 1, &x, &gain);
+    benchmark::DoNotOptimize(x.data());
+  }
+}
+
+BENCHMARK_CAPTURE(BM_ColonElimination, paper_150seg, 150)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_ColonElimination, target_1000seg, 1000)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -168,6 +168,60 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   }
 }
 
+// Block Thomas over points 1..last (point 0 and the points past `last`
+// held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
+// M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1). M_i is
+// symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
+// triangle is formed and it is inverted by its adjugate, in scalars: the
+// generic 3x3 products were most of the step (docs/model.md, "Speed").
+[[gnu::flatten]] void SolveBlockTridiagonal(const std::vector<Eigen::Matrix3d>& diag,
+                                            const std::vector<Eigen::Matrix3d>& upper, int last,
+                                            std::vector<Eigen::Vector3d>* rhs_io,
+                                            std::vector<Eigen::Matrix3d>* gain_io) {
+  auto& rhs = *rhs_io;
+  auto& gain = *gain_io;
+  for (int i = 1; i <= last; ++i) {
+    const Eigen::Matrix3d& D = diag[i];
+    double m00 = D(0, 0), m01 = D(0, 1), m02 = D(0, 2), m11 = D(1, 1), m12 = D(1, 2), m22 = D(2, 2);
+    Eigen::Vector3d y = rhs[i];
+    if (i > 1) {
+      const Eigen::Matrix3d& U = upper[i - 1];
+      const Eigen::Matrix3d& G = gain[i - 1];
+      const Eigen::Vector3d u0 = U.col(0), u1 = U.col(1), u2 = U.col(2);
+      m00 -= u0.dot(G.col(0));
+      m01 -= u0.dot(G.col(1));
+      m02 -= u0.dot(G.col(2));
+      m11 -= u1.dot(G.col(1));
+      m12 -= u1.dot(G.col(2));
+      m22 -= u2.dot(G.col(2));
+      const Eigen::Vector3d& r = rhs[i - 1];
+      y -= Eigen::Vector3d(u0.dot(r), u1.dot(r), u2.dot(r));
+    }
+    // The adjugate of the symmetric M over its determinant.
+    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
+                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
+                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
+    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
+    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det,
+                 i11 = c11 * inv_det, i12 = c12 * inv_det, i22 = c22 * inv_det;
+    auto apply_inverse = [&](const Eigen::Vector3d& v) {
+      return Eigen::Vector3d(i00 * v.x() + i01 * v.y() + i02 * v.z(),
+                             i01 * v.x() + i11 * v.y() + i12 * v.z(),
+                             i02 * v.x() + i12 * v.y() + i22 * v.z());
+    };
+    if (i < last) {
+      const Eigen::Matrix3d& U = upper[i];
+      gain[i].col(0) = apply_inverse(U.col(0));
+      gain[i].col(1) = apply_inverse(U.col(1));
+      gain[i].col(2) = apply_inverse(U.col(2));
+    } else {
+      gain[i].setZero();
+    }
+    rhs[i] = apply_inverse(y);
+  }
+  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
+}
+
 // flatten: at -O2 GCC left Eigen's small products out of line, and their calls
 // were a large part of the solve (docs/model.md, "Speed").
 [[gnu::flatten]] void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s,
@@ -348,53 +402,7 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
     rhs[m] += (dt * force_N) * rc.normal_W;
     diag[m] += a * rc.normal_W * rc.normal_W.transpose();
   }
-  // Block Thomas over points 1..last (point 0 and the points past `last`
-  // held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
-  // M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1). M_i is
-  // symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
-  // triangle is formed and it is inverted by its adjugate, in scalars: the
-  // generic 3x3 products were most of the step (docs/model.md, "Speed").
-  auto& gain = sc->colon_work;
-  for (int i = 1; i <= last; ++i) {
-    const Eigen::Matrix3d& D = diag[i];
-    double m00 = D(0, 0), m01 = D(0, 1), m02 = D(0, 2), m11 = D(1, 1), m12 = D(1, 2), m22 = D(2, 2);
-    Eigen::Vector3d y = rhs[i];
-    if (i > 1) {
-      const Eigen::Matrix3d& U = upper[i - 1];
-      const Eigen::Matrix3d& G = gain[i - 1];
-      const Eigen::Vector3d u0 = U.col(0), u1 = U.col(1), u2 = U.col(2);
-      m00 -= u0.dot(G.col(0));
-      m01 -= u0.dot(G.col(1));
-      m02 -= u0.dot(G.col(2));
-      m11 -= u1.dot(G.col(1));
-      m12 -= u1.dot(G.col(2));
-      m22 -= u2.dot(G.col(2));
-      const Eigen::Vector3d& r = rhs[i - 1];
-      y -= Eigen::Vector3d(u0.dot(r), u1.dot(r), u2.dot(r));
-    }
-    // The adjugate of the symmetric M over its determinant.
-    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
-                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
-                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
-    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det,
-                 i11 = c11 * inv_det, i12 = c12 * inv_det, i22 = c22 * inv_det;
-    auto apply_inverse = [&](const Eigen::Vector3d& v) {
-      return Eigen::Vector3d(i00 * v.x() + i01 * v.y() + i02 * v.z(),
-                             i01 * v.x() + i11 * v.y() + i12 * v.z(),
-                             i02 * v.x() + i12 * v.y() + i22 * v.z());
-    };
-    if (i < last) {
-      const Eigen::Matrix3d& U = upper[i];
-      gain[i].col(0) = apply_inverse(U.col(0));
-      gain[i].col(1) = apply_inverse(U.col(1));
-      gain[i].col(2) = apply_inverse(U.col(2));
-    } else {
-      gain[i].setZero();
-    }
-    rhs[i] = apply_inverse(y);
-  }
-  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
+  SolveBlockTridiagonal(diag, upper, last, &rhs, &sc->colon_work);
 
   const double inv_dt = 1.0 / dt;
   for (int i = 1; i <= last; ++i) {

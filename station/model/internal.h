@@ -3,6 +3,7 @@
 // Internal pieces of Step (not part of the public API): each is O(n) or O(N)
 // and allocation-free.
 #include <Eigen/Core>
+#include <vector>
 
 #include "station/model/model.h"
 
@@ -56,6 +57,15 @@ void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
 // scratch->colon_rhs and updates their tangents.
 void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
                 Scratch* scratch);
+
+// Solves the symmetric positive definite block-tridiagonal system of the
+// colon for points 1..last (diagonal blocks diag[i], off-diagonal blocks
+// upper[i] = (i, i+1)) by block Thomas elimination: rhs_io[1..last] in, the
+// solution out; gain_io[1..last] is work space. SolveColon's elimination, on its
+// own so that model_bench can time it.
+void SolveBlockTridiagonal(const std::vector<Eigen::Matrix3d>& diag,
+                           const std::vector<Eigen::Matrix3d>& upper, int last,
+                           std::vector<Eigen::Vector3d>* rhs_io, std::vector<Eigen::Matrix3d>* gain_io);
 
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);
