@@ -40,13 +40,21 @@ MetricThresholds ThresholdsFor(const model::ModelParams& params) {
 RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
                              std::string_view operator_kind, std::int64_t start_unix_ms,
                              v1::SessionRecord* record, const StepCallback& on_step) {
-  auto op = MakeScriptedOperator(operator_kind, params.dt_s);
+  const auto op = MakeScriptedOperator(operator_kind, params.dt_s);
+  return RunScriptedSession(params, std::move(config), *op, operator_kind, start_unix_ms, record,
+                            on_step);
+}
+
+RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
+                             ScriptedOperator& op, std::string_view operator_kind,
+                             std::int64_t start_unix_ms, v1::SessionRecord* record,
+                             const StepCallback& on_step) {
   config.operator_kind = std::string(operator_kind);
   SessionRunner runner(params, std::move(config));
   runner.Start(start_unix_ms);
   Perception perception = Perceive(params, runner.state(), runner.output());
   while (runner.session().state() == SessionState::kRunning) {
-    const InputSample input = op->Act(perception);
+    const InputSample input = op.Act(perception);
     runner.Step(input);
     if (on_step && !runner.diverged()) on_step(runner.session().inputs().back(), runner);
     perception = Perceive(params, runner.state(), runner.output());

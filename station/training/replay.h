@@ -12,6 +12,8 @@
 
 namespace ves::training {
 
+class ScriptedOperator;  // scripted_operator.h
+
 // Thresholds for a model colon: the cecum begins at the first segment point
 // labelled cecum (the deepest point minus 5 cm when no point is); the rest
 // are the documented defaults (docs/scoring.md).
@@ -49,6 +51,12 @@ using StepCallback = std::function<void(const InputSample&, const SessionRunner&
 RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
                              std::string_view operator_kind, std::int64_t start_unix_ms,
                              v1::SessionRecord* record, const StepCallback& on_step = {});
+// The same with an operator of the caller's (`operator_kind` names it in
+// the record), e.g. a novice with another push.
+RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig config,
+                             ScriptedOperator& op, std::string_view operator_kind,
+                             std::int64_t start_unix_ms, v1::SessionRecord* record,
+                             const StepCallback& on_step = {});
 
 // Re-runs the model from a logged input sequence and recomputes every metric.
 // Deterministic: the same build gives bit-identical results. A log that ends

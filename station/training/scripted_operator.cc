@@ -59,7 +59,7 @@ void LimitKnobBend(double max_bend_rad, double* knob_up_rad, double* knob_right_
 InputSample NoviceOperator::Act(const Perception&) {
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
-  in.push_force_N = kPushForce_N;
+  in.push_force_N = push_force_N_;
   in.view_mode = ViewMode::kWireframe;
   in.fluoroscopy_on = true;
   return in;

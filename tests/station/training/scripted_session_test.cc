@@ -11,6 +11,7 @@
 #include "patient_db/case_format.h"
 #include "station/training/case_run.h"
 #include "station/training/lesson_gate.h"
+#include "station/training/scripted_operator.h"
 #include "station/training/session.h"
 #include "station/training/session_file.h"
 
@@ -136,6 +137,33 @@ TEST(CecumReachedOnTheMobileDescendingColon, ExpertReachesTheCecumAndTheNoviceDo
   novice.set_xray_s(0.0);
   const GateResult novice_gate = CheckLessonGate(lesson, novice, p.novice.score, false);
   EXPECT_FALSE(novice_gate.passed) << ::testing::PrintToString(novice_gate.checks);
+}
+
+// A push-only hand that pushes harder than the scripted novice (6 N): on
+// standard-adult (1.54 m to the cecum, within the scope's 1.68 m) 7.2 N
+// (+20 %) or more takes the unsteered tip round every bend, at 8 N and more
+// sooner than the expert, without pain, but with nearly the whole scope in,
+// since a push does not shorten the colon. Lesson 4 (this case) limits the scope in
+// at the cecum, so the hand fails it at any of these pushes; the expert
+// passes it (Lessons.ExpertPassesTheFullColonLessons). docs/scoring.md,
+// "Known gaps", and docs/lessons.md.
+TEST(PushOnly, AHarderPushReachesTheStandardCecumOnlyWithTheScopeAllButUsedUp) {
+  const v1::ColonCase colon_case = LoadCase("standard-adult");
+  CaseModelOptions options;
+  options.segments = kSegments;
+  const v1::Lesson lesson = ShippedLesson("x-ray-free-4-full-colon-with-aids");
+  ASSERT_TRUE(lesson.pass().has_max_inserted_at_cecum_m());
+  for (const double push_N : {7.2, 8.0, 10.0, 12.0}) {
+    CaseRun run = PrepareCaseRun(colon_case, DefaultEndoscopeSpec(), options, lesson.time_limit_s());
+    NoviceOperator hand(push_N);
+    const RunResult result =
+        RunScriptedSession(run.params, std::move(run.config), hand, "novice", 0, nullptr);
+    std::printf("push-only %.1f N: %s\n", push_N, SummaryLine(result).c_str());
+    ASSERT_EQ(result.outcome, Outcome::kCecumReached) << push_N << " N: " << SummaryLine(result);
+    EXPECT_GT(result.metrics.inserted_at_cecum_m, 1.55) << push_N << " N: " << SummaryLine(result);
+    const GateResult gate = CheckLessonGate(lesson, ToProto(result.metrics), result.score, false);
+    EXPECT_FALSE(gate.passed) << push_N << " N: " << ::testing::PrintToString(gate.checks);
+  }
 }
 
 // The redundant sigmoid (1.833 m to the cecum) is longer than the scope
