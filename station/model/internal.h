@@ -60,12 +60,13 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
 
 // Solves the symmetric positive definite block-tridiagonal system of the
 // colon for points 1..last (diagonal blocks diag[i], off-diagonal blocks
-// upper[i] = (i, i+1)) by block Thomas elimination: rhs_io[1..last] in, the
-// solution out; gain_io[1..last] is work space. SolveColon's elimination, on its
-// own so that model_bench can time it.
+// upper[i] = (i, i+1)) by block Thomas elimination: rhs_io[1..last] in,
+// the solution out; gain_io[1..last] is work space. SolveColon's
+// elimination, on its own so that model_bench can time it.
 void SolveBlockTridiagonal(const std::vector<Eigen::Matrix3d>& diag,
                            const std::vector<Eigen::Matrix3d>& upper, int last,
-                           std::vector<Eigen::Vector3d>* rhs_io, std::vector<Eigen::Matrix3d>* gain_io);
+                           std::vector<Eigen::Vector3d>* rhs_io,
+                           std::vector<Eigen::Matrix3d>* gain_io);
 
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);

@@ -55,7 +55,8 @@ TEST(BlockTridiagonal, SolvesTheSystemAndLeavesTheHeldPointsAlone) {
     internal::SolveBlockTridiagonal(s.diag, s.upper, last, &x, &gain);
     for (int i = 1; i <= last; ++i) {
       const Eigen::Vector3d residual = ApplyRow(s, x, i, last) - s.rhs[i];
-      EXPECT_LT(residual.norm(), 1e-12 * s.rhs[i].norm() + 1e-14) << "point " << i << " of " << last;
+      EXPECT_LT(residual.norm(), 1e-12 * s.rhs[i].norm() + 1e-14)
+          << "point " << i << " of " << last;
     }
     // Point 0 and the points past `last` are not part of the solve.
     EXPECT_EQ(x[0], s.rhs[0]);

@@ -143,10 +143,10 @@ TEST(CecumReachedOnTheMobileDescendingColon, ExpertReachesTheCecumAndTheNoviceDo
 // standard-adult (1.54 m to the cecum, within the scope's 1.68 m) 7.2 N
 // (+20 %) or more takes the unsteered tip round every bend, at 8 N and more
 // sooner than the expert, without pain, but with nearly the whole scope in,
-// since a push does not shorten the colon. Lesson 4 (this case) limits the scope in
-// at the cecum, so the hand fails it at any of these pushes; the expert
-// passes it (Lessons.ExpertPassesTheFullColonLessons). docs/scoring.md,
-// "Known gaps", and docs/lessons.md.
+// since a push does not shorten the colon. Lesson 4 (this case) limits the
+// scope in at the cecum, so the hand fails it at any of these pushes; the
+// expert passes it (Lessons.ExpertPassesTheFullColonLessons).
+// docs/scoring.md, "Known gaps", and docs/lessons.md.
 TEST(PushOnly, AHarderPushReachesTheStandardCecumOnlyWithTheScopeAllButUsedUp) {
   const v1::ColonCase colon_case = LoadCase("standard-adult");
   CaseModelOptions options;
@@ -154,7 +154,8 @@ TEST(PushOnly, AHarderPushReachesTheStandardCecumOnlyWithTheScopeAllButUsedUp) {
   const v1::Lesson lesson = ShippedLesson("x-ray-free-4-full-colon-with-aids");
   ASSERT_TRUE(lesson.pass().has_max_inserted_at_cecum_m());
   for (const double push_N : {7.2, 8.0, 10.0, 12.0}) {
-    CaseRun run = PrepareCaseRun(colon_case, DefaultEndoscopeSpec(), options, lesson.time_limit_s());
+    CaseRun run =
+        PrepareCaseRun(colon_case, DefaultEndoscopeSpec(), options, lesson.time_limit_s());
     NoviceOperator hand(push_N);
     const RunResult result =
         RunScriptedSession(run.params, std::move(run.config), hand, "novice", 0, nullptr);
