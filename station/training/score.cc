@@ -36,7 +36,11 @@ ScoreComponents CalcScoreComponents(const Metrics& m, double cecum_arc_m,
   c.pain = Decay(m.pain_s, params.pain_half_s);
   c.loop = Decay(m.loop_s, params.loop_half_s);
   c.force = Decay(m.excessive_force_s, params.excessive_force_half_s);
-  c.xray = m.duration_s > 0.0 ? std::clamp(1.0 - m.xray_s / m.duration_s, 0.0, 1.0) : 1.0;
+  const auto share_without = [&](double seconds) {
+    return m.duration_s > 0.0 ? std::clamp(1.0 - seconds / m.duration_s, 0.0, 1.0) : 1.0;
+  };
+  c.xray = share_without(m.xray_s);
+  c.redout = share_without(m.redout_s);
   c.progress = std::clamp(m.max_tip_arc_m / cecum_arc_m, 0.0, 1.0);
   if (m.completed) c.progress = 1.0;
   return c;
@@ -46,8 +50,9 @@ double CalcScore(const Metrics& m, v1::Difficulty difficulty, double cecum_arc_m
                  const ScoreParams& params) {
   const ScoreComponents c = CalcScoreComponents(m, cecum_arc_m, params);
   const ScoreWeights& w = params.WeightsFor(difficulty);
-  const double others = w.pain * c.pain + w.loop * c.loop + w.force * c.force + w.xray * c.xray;
-  const double other_weight = w.pain + w.loop + w.force + w.xray;
+  const double others = w.pain * c.pain + w.loop * c.loop + w.force * c.force +
+                        w.xray * c.xray + w.redout * c.redout;
+  const double other_weight = w.pain + w.loop + w.force + w.xray + w.redout;
   double score = 0.0;
   if (m.completed) {
     score = 50.0 + 50.0 * (w.time * c.time + others);

@@ -12,6 +12,7 @@ struct ScoreWeights {
   double loop{0.0};
   double force{0.0};
   double xray{0.0};
+  double redout{0.0};
 
   bool operator==(const ScoreWeights&) const = default;
 };
@@ -27,8 +28,10 @@ struct ScoreParams {
   double excessive_force_half_s{5.0};  // excessive-force time at which that component is 1/2
   double damage_penalty_points{10.0};  // subtracted per damage event, on every difficulty
   ScoreWeights easy{.time = 1.0};
-  ScoreWeights medium{.time = 0.40, .pain = 0.20, .loop = 0.15, .force = 0.15, .xray = 0.10};
-  ScoreWeights hard{.time = 0.25, .pain = 0.25, .loop = 0.20, .force = 0.15, .xray = 0.15};
+  ScoreWeights medium{
+      .time = 0.30, .pain = 0.20, .loop = 0.10, .force = 0.10, .xray = 0.10, .redout = 0.20};
+  ScoreWeights hard{
+      .time = 0.20, .pain = 0.25, .loop = 0.15, .force = 0.10, .xray = 0.15, .redout = 0.15};
 
   // Medium's weights for DIFFICULTY_UNSPECIFIED.
   const ScoreWeights& WeightsFor(v1::Difficulty difficulty) const;
@@ -41,6 +44,7 @@ struct ScoreComponents {
   double loop{0.0};
   double force{0.0};
   double xray{0.0};
+  double redout{0.0};    // 1 - redout_s / duration_s: the lumen kept in view
   double progress{0.0};  // max tip arc / cecum arc, capped at 1
 };
 
