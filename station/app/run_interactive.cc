@@ -62,7 +62,7 @@ struct PanelNumbers {
   double pain_s{0.0};
   double loop_s{0.0};
   double xray_s{0.0};
-  double redout_fraction{0.0};
+  double redout_s{0.0};
   // For live proctoring (the UI thread streams them): the session's uuid
   // (the record's) and the figures of its latest step; fixed sizes, so the
   // loop copies them without allocating.
@@ -170,7 +170,7 @@ class LoopSession {
     numbers.pain_s = metrics.pain_s;
     numbers.loop_s = metrics.loop_s;
     numbers.xray_s = metrics.xray_s;
-    numbers.redout_fraction = runner_.observation().redout_fraction;
+    numbers.redout_s = metrics.redout_s;
     std::memset(numbers.session_uuid.data(), 0, numbers.session_uuid.size());
     std::memcpy(numbers.session_uuid.data(), session_uuid_.data(),
                 std::min(session_uuid_.size(), numbers.session_uuid.size() - 1));
@@ -320,7 +320,7 @@ void FillScreenModel(const PanelNumbers& numbers, const haptics::HapticSnapshot&
   screen->pain_s = numbers.pain_s;
   screen->loop_s = numbers.loop_s;
   screen->xray_s = numbers.xray_s;
-  screen->redout_fraction = numbers.redout_fraction;
+  screen->redout_s = numbers.redout_s;
   DescribeDevice(snapshot, device_label, screen);
 }
 

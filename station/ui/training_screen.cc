@@ -288,7 +288,7 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       Format("Pain      %.1f s", model.pain_s),
       Format("Loop      %.1f s", model.loop_s),
       Format("X-ray     %.1f s", model.xray_s),
-      Format("Red-out   %.0f %%", model.redout_fraction * 100.0),
+      Format("Red-out   %.1f s", model.redout_s),
   };
   for (int i = 0; i < 4; ++i) {
     DrawTextFitted(canvas, left[i], {f.x, f.y + i * line, left_width - px(8), line}, 0.62 * s,

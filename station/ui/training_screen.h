@@ -54,7 +54,7 @@ struct ScreenModel {
   double pain_s{0.0};
   double loop_s{0.0};
   double xray_s{0.0};
-  double redout_fraction{0.0};
+  double redout_s{0.0};  // time with the tip against the wall (the score weighs it)
   DeviceStatus device_status{DeviceStatus::kOk};
   std::string device_text;  // "force feedback on", "SAFE STATE: bus-off (r re-arms)", ...
   bool fluoroscopy_allowed{true};
