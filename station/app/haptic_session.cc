@@ -106,20 +106,40 @@ ves::v1::StationHealth MakeStationHealth(const std::string& device,
                                          const haptics::DeviceCounters& counters,
                                          const haptics::SafetyMonitor& safety,
                                          const haptics::LoopStats* loop, double period_s) {
+  return MakeStationHealth(device, TakeHealthFigures(counters, safety, loop), period_s);
+}
+
+HealthFigures TakeHealthFigures(const haptics::DeviceCounters& counters,
+                                const haptics::SafetyMonitor& safety,
+                                const haptics::LoopStats* loop) {
+  HealthFigures f;
+  f.counters = counters;
+  f.hard_faults = safety.hard_faults();
+  f.transient_faults = safety.transient_faults();
+  if (loop != nullptr && loop->cycles > 0) {
+    f.loop_cycles = loop->cycles;
+    f.loop_overruns = loop->overruns;
+    f.loop_cycle_p99_us = static_cast<double>(loop->cycle_end.PercentileNs(0.99)) / 1000.0;
+  }
+  return f;
+}
+
+ves::v1::StationHealth MakeStationHealth(const std::string& device, const HealthFigures& f,
+                                         double period_s) {
   ves::v1::StationHealth h;
   h.set_device(device);
   h.set_loop_budget_us(period_s * 1e6);
-  if (loop != nullptr && loop->cycles > 0) {
-    h.set_loop_cycles(loop->cycles);
-    h.set_loop_cycle_p99_us(static_cast<double>(loop->cycle_end.PercentileNs(0.99)) / 1000.0);
-    h.set_loop_overruns(loop->overruns);
+  if (f.loop_cycles > 0) {
+    h.set_loop_cycles(f.loop_cycles);
+    h.set_loop_cycle_p99_us(f.loop_cycle_p99_us);
+    h.set_loop_overruns(f.loop_overruns);
   }
-  h.set_safe_state_entries(safety.hard_faults());
-  h.set_force_pauses(safety.transient_faults());
-  h.set_can_bus_errors(counters.bus_errors);
-  h.set_can_lost_frames(counters.lost_frames);
-  h.set_can_send_failures(counters.send_failures);
-  h.set_can_malformed_frames(counters.malformed_frames);
+  h.set_safe_state_entries(f.hard_faults);
+  h.set_force_pauses(f.transient_faults);
+  h.set_can_bus_errors(f.counters.bus_errors);
+  h.set_can_lost_frames(f.counters.lost_frames);
+  h.set_can_send_failures(f.counters.send_failures);
+  h.set_can_malformed_frames(f.counters.malformed_frames);
   return h;
 }
 

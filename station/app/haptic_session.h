@@ -116,6 +116,23 @@ ves::v1::StationHealth MakeStationHealth(const std::string& device,
                                          const haptics::SafetyMonitor& safety,
                                          const haptics::LoopStats* loop, double period_s);
 
+// The same figures as plain values taken at one moment: the 1 kHz thread
+// takes them (no allocation; the loop's p99 is read from its histogram) and
+// another thread turns them into a record's StationHealth.
+struct HealthFigures {
+  haptics::DeviceCounters counters;
+  std::uint64_t hard_faults{0};
+  std::uint64_t transient_faults{0};
+  std::uint64_t loop_cycles{0};  // 0: no real-time loop ran
+  std::uint64_t loop_overruns{0};
+  double loop_cycle_p99_us{0.0};
+};
+HealthFigures TakeHealthFigures(const haptics::DeviceCounters& counters,
+                                const haptics::SafetyMonitor& safety,
+                                const haptics::LoopStats* loop);
+ves::v1::StationHealth MakeStationHealth(const std::string& device, const HealthFigures& figures,
+                                         double period_s);
+
 // The simulated hand for a scripted operator's sample (headless): in the
 // force mode the hand pushes the scope with push_force_N; in the position
 // mode it grips and pulls toward insertion_m − model_offset_m (device

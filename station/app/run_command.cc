@@ -275,29 +275,25 @@ class FrameWriter {
   int frames_{0};
 };
 
-// Commits the records, then (with a server) tries to deliver the outbox.
-// Returns false when a commit itself failed.
-bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
-                      const std::vector<ves::v1::SessionRecord>& records) {
+// With a server, tries to deliver the outbox (every pending record, oldest
+// first) and says what became of `uuids`, the sessions this run committed.
+// Returns false when the outbox could not be opened.
+bool DeliverCommitted(const RunOptions& o, const sync::StationPaths& paths,
+                      const std::vector<std::string>& uuids) {
+  if (!o.server) {
+    std::cout << "no --server: the session waits in the outbox (ves-station sync delivers it)\n";
+    return true;
+  }
   try {
     sync::Outbox outbox(paths.outbox_db());
-    for (const auto& record : records) {
-      outbox.Commit(record);
-      std::cout << "session " << record.uuid() << " committed to the outbox\n" << std::flush;
-    }
-    if (std::getenv(kKillAfterCommitEnv) != nullptr) std::raise(SIGKILL);
-    if (!o.server) {
-      std::cout << "no --server: the session waits in the outbox (ves-station sync delivers it)\n";
-      return true;
-    }
     const DeliveryReport report = DeliverOutbox(*o.server, outbox, o.upload_attempts);
     std::cout << "uploaded " << report.acknowledged << " session(s) to " << o.server->address;
     if (report.rejected > 0) std::cout << ", " << report.rejected << " refused by the server";
     std::cout << "; " << report.still_pending << " pending\n";
     for (const auto& pending : outbox.Pending()) {
-      for (const auto& record : records) {
-        if (pending.uuid != record.uuid()) continue;
-        std::cout << "server unreachable (" << report.last_error << "): session " << record.uuid()
+      for (const auto& uuid : uuids) {
+        if (pending.uuid != uuid) continue;
+        std::cout << "server unreachable (" << report.last_error << "): session " << uuid
                   << " stays in the outbox; `ves-station status` lists it, `ves-station sync` "
                      "or a later run delivers it\n";
       }
@@ -307,10 +303,80 @@ bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
     }
     return true;
   } catch (const std::exception& error) {
-    std::cerr << kName << ": cannot commit the session to the outbox: " << error.what() << "\n";
+    std::cerr << kName << ": cannot open the outbox to deliver it: " << error.what() << "\n";
     return false;
   }
 }
+
+// Commits one record to the outbox; false (said on stderr) when that failed.
+bool CommitRecord(const sync::StationPaths& paths, const ves::v1::SessionRecord& record) {
+  try {
+    sync::Outbox outbox(paths.outbox_db());
+    outbox.Commit(record);
+    std::cout << "session " << record.uuid() << " committed to the outbox\n" << std::flush;
+    return true;
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": cannot commit session " << record.uuid()
+              << " to the outbox: " << error.what() << "\n";
+    return false;
+  }
+}
+
+// Commits the records, then (with a server) tries to deliver the outbox.
+// Returns false when a commit itself failed.
+bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
+                      const std::vector<ves::v1::SessionRecord>& records) {
+  std::vector<std::string> uuids;
+  for (const auto& record : records) {
+    if (!CommitRecord(paths, record)) return false;
+    uuids.push_back(record.uuid());
+  }
+  if (std::getenv(kKillAfterCommitEnv) != nullptr) std::raise(SIGKILL);
+  return DeliverCommitted(o, paths, uuids);
+}
+
+// An interactive sitting's records, each committed to the outbox as soon as
+// its session ends (marked as the lesson's attempt first, on a lesson), so
+// that a station that crashes or loses power later loses none of them. A
+// record whose commit fails is held and tried again at the end.
+class SittingRecords {
+ public:
+  SittingRecords(const RunOptions& o, const sync::StationPaths& paths,
+                 sync::LessonCache* lessons)
+      : o_(o), paths_(paths), lessons_(lessons) {}
+
+  void Keep(ves::v1::SessionRecord record) {
+    // Every repeat is an attempt. The aids were enforced: a wireframe-free
+    // lesson cannot have used the wireframe view.
+    if (o_.lesson_plan) {
+      record.set_lesson_id(o_.lesson_plan->lesson.lesson_id());
+      PrintStationVerdict(o_.lesson_plan->lesson, record, /*wireframe_used=*/false, std::cout);
+      lessons_->AddAwaited({record.uuid(), record.lesson_id()});
+    }
+    uuids_.push_back(record.uuid());
+    if (!CommitRecord(paths_, record)) {
+      std::cerr << kName << ": session " << record.uuid()
+                << " is kept in memory and committed again when the run ends\n";
+      held_.push_back(std::move(record));
+    }
+  }
+  // At the end: the held records committed; false when one still fails.
+  bool CommitHeld() {
+    for (const auto& record : held_) {
+      if (!CommitRecord(paths_, record)) return false;
+    }
+    held_.clear();
+    return true;
+  }
+  const std::vector<std::string>& uuids() const { return uuids_; }
+
+ private:
+  const RunOptions& o_;
+  const sync::StationPaths& paths_;
+  sync::LessonCache* lessons_;
+  std::vector<std::string> uuids_;
+  std::vector<ves::v1::SessionRecord> held_;
+};
 
 // Writes `line` and a newline to `path`; false when that fails.
 bool WriteTextFile(const std::filesystem::path& path, const std::string& line) {
@@ -581,22 +647,26 @@ int Run(RunOptions o) {
       return kExitUsage;
     }
   }
+  std::optional<sync::LessonCache> lessons;
+  if (o.lesson_plan) lessons.emplace(paths.lessons());
+  SittingRecords sitting(o, paths, lessons ? &*lessons : nullptr);
   InteractiveResult interactive;
-  std::vector<ves::v1::SessionRecord> records;
   for (;;) {
     try {
       const InteractiveLiveTarget live{o.live ? o.server : std::nullopt, obtained->entry.id,
                                        obtained->entry.version};
-      interactive = RunInteractive(run, obtained->colon_case, o.seconds, std::move(device),
-                                   o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
-                                   o.lesson_plan ? nullptr : &choices, &live);
+      interactive = RunInteractive(
+          run, obtained->colon_case, o.seconds, std::move(device),
+          o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
+          o.lesson_plan ? nullptr : &choices, &live,
+          [&sitting](ves::v1::SessionRecord record) { sitting.Keep(std::move(record)); });
     } catch (const std::exception& error) {  // no display, the device did not come up
       std::cerr << kName << ": " << error.what() << "\n";
-      if (records.empty()) return kExitFailed;
-      break;  // what the earlier runs recorded is still committed below
+      if (sitting.uuids().empty()) return kExitFailed;
+      break;  // what the earlier runs recorded is already committed
     }
     std::cout << interactive.device_report << "\n" << interactive.live_report;
-    for (auto& record : interactive.records) records.push_back(std::move(record));
+    for (auto& record : interactive.records) sitting.Keep(std::move(record));
     if (!interactive.next_case || !interactive.next_scope) break;
     try {
       choices.current_case = *interactive.next_case;
@@ -619,26 +689,16 @@ int Run(RunOptions o) {
       break;
     }
   }
-  interactive.records = std::move(records);
-  if (interactive.records.empty()) {
+  if (sitting.uuids().empty()) {
     std::cout << "quit before the session started: nothing to record\n";
     return kExitOk;
   }
-  std::optional<sync::LessonCache> lessons;
-  // Every repeat is an attempt. The aids were enforced: a wireframe-free lesson
-  // cannot have used the wireframe view.
-  if (o.lesson_plan) {
-    lessons.emplace(paths.lessons());
-    for (auto& record : interactive.records) {
-      record.set_lesson_id(o.lesson_plan->lesson.lesson_id());
-      PrintStationVerdict(o.lesson_plan->lesson, record, /*wireframe_used=*/false, std::cout);
-      lessons->AddAwaited({record.uuid(), record.lesson_id()});
-    }
-  }
-  if (!CommitAndDeliver(o, paths, interactive.records)) return kExitFailed;
+  if (!sitting.CommitHeld()) return kExitFailed;
+  if (std::getenv(kKillAfterCommitEnv) != nullptr) std::raise(SIGKILL);
+  if (!DeliverCommitted(o, paths, sitting.uuids())) return kExitFailed;
   if (lessons && o.server) {
-    CollectServerVerdicts(*o.server, *lessons, interactive.records.back().uuid(),
-                          o.verdict_wait_s, std::cout);
+    CollectServerVerdicts(*o.server, *lessons, sitting.uuids().back(), o.verdict_wait_s,
+                          std::cout);
   }
   std::cout << training::SummaryLine(interactive.result) << "\n";
   if (interactive.result.diverged) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -14,6 +15,8 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "patient_db/case_geometry.h"
 #include "patient_db/case_regions.h"
@@ -106,7 +109,15 @@ class KeyboardHand {
 };
 
 // The session side of the loop thread: repeats asked for by the UI, records
-// of finished sessions, publication of the model state to the UI.
+// of ended sessions, publication of the model state to the UI.
+//
+// Records are handed to the UI thread as soon as a session ends, so that the
+// station can commit each one to its outbox at once instead of holding the
+// sitting's sessions in memory until the trainee quits. A session that ends
+// on its own (cecum, time limit) is built into a record on the UI thread:
+// the loop thread no longer steps its model, so reading it there is safe
+// under record_mutex_, which the loop thread only try_locks. One finished by
+// a repeat is built on the loop thread, as the repeat restarts the model.
 class LoopSession {
  public:
   LoopSession(const training::CaseRun& run, const ves::v1::ColonCase& colon_case,
@@ -119,17 +130,26 @@ class LoopSession {
         published_mutex_(published_mutex),
         published_(published) {
     source_.set_before_update([this](double insertion_m, double roll_rad) {
+      const bool finished = runner_.session().state() == training::SessionState::kFinished;
       // A session that just ended is shown as over (once the UI is not
       // reading: try_lock), though no model step publishes it any more.
-      if (runner_.session().state() == training::SessionState::kFinished && !final_published_) {
-        final_published_ = Publish();
+      if (finished && !final_published_) final_published_ = Publish();
+      if (finished && !ended_.load(std::memory_order_relaxed)) {
+        // Once per session: the station's health as it ended, for the record
+        // the UI thread builds (plain values, no allocation here).
+        ended_health_ = health_source_ ? health_source_() : HealthFigures{};
+        ended_.store(true, std::memory_order_release);
       }
       const std::uint32_t requested = repeat_requests_.load(std::memory_order_acquire);
       if (requested == repeats_done_) return;
+      std::unique_lock<std::mutex> lock(record_mutex_, std::try_to_lock);
+      if (!lock.owns_lock()) return;  // the UI is building a record: repeat next cycle
       repeats_done_ = requested;
-      FinishAndKeep();
+      if (!kept_) KeepRecord(health_source_ ? health_source_() : HealthFigures{});
       runner_.Repeat();
-      session_uuid_ = training::NewUuidV4();  // a one-off, like FinishAndKeep's record
+      kept_ = false;
+      ended_.store(false, std::memory_order_release);
+      session_uuid_ = training::NewUuidV4();  // a one-off, like KeepRecord's record
       final_published_ = false;
       source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
     });
@@ -138,16 +158,42 @@ class LoopSession {
     });
   }
 
+  // Before Start: where the station's health figures come from (called on
+  // the loop thread, and on the UI thread once the loop stopped) and how
+  // they become a record's StationHealth.
+  void SetHealth(std::function<HealthFigures()> source,
+                 std::function<ves::v1::StationHealth(const HealthFigures&)> to_record) {
+    health_source_ = std::move(source);
+    health_to_record_ = std::move(to_record);
+  }
   void Start(double device_insertion_m, double device_roll_rad) {
     source_.Start(start_ms_ = NowUnixMs(), device_insertion_m, device_roll_rad);
     Publish();
   }
   // UI thread: the loop finishes the current session and starts another.
   void RequestRepeat() { repeat_requests_.fetch_add(1, std::memory_order_acq_rel); }
-  // After the loop stopped (its thread joined).
+  // UI thread, each frame: the records of the sessions that ended since the
+  // last call, oldest first (usually none).
+  std::vector<ves::v1::SessionRecord> TakeEndedRecords() {
+    std::vector<ves::v1::SessionRecord> taken;
+    if (!ended_.load(std::memory_order_acquire) && !handed_over_.load(std::memory_order_acquire)) {
+      return taken;
+    }
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    if (ended_.load(std::memory_order_acquire) && !kept_) KeepRecord(ended_health_);
+    taken.swap(ready_);
+    handed_over_.store(false, std::memory_order_release);
+    return taken;
+  }
+  // After the loop stopped (its thread joined): the records not yet taken,
+  // the current session's included.
   InteractiveResult Finish() {
-    FinishAndKeep();
-    return std::move(result_);
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    if (!kept_) KeepRecord(health_source_ ? health_source_() : HealthFigures{});
+    InteractiveResult result;
+    result.records = std::move(ready_);
+    result.result = last_result_;
+    return result;
   }
   SessionModelSource* source() { return &source_; }
 
@@ -179,18 +225,23 @@ class LoopSession {
     return true;
   }
 
-  // A one-off on repeat (loop thread) and at the end (UI thread, loop stopped).
-  void FinishAndKeep() {
+  // The current session's record, with the station's health as it ended,
+  // into ready_ (aborted first if it still runs); once per session. Under
+  // record_mutex_.
+  void KeepRecord(const HealthFigures& health) {
+    kept_ = true;
     training::Session& session = runner_.session();
     if (session.steps() == 0) return;
     if (session.state() == training::SessionState::kRunning) session.Abort();
-    result_.result = training::ResultOf(runner_);
+    last_result_ = training::ResultOf(runner_);
     const auto duration_ms =
-        static_cast<std::int64_t>(std::llround(result_.result.metrics.duration_s * 1e3));
+        static_cast<std::int64_t>(std::llround(last_result_.metrics.duration_s * 1e3));
     // The uuid its live stream used: the server's live view and record agree.
     ves::v1::SessionRecord record = session.ToRecord(session_uuid_, start_ms_ + duration_ms);
     *record.mutable_replay_setup() = training::MakeReplaySetup(colon_case_, {}, time_limit_s_);
-    result_.records.push_back(std::move(record));
+    if (health_to_record_) *record.mutable_station_health() = health_to_record_(health);
+    ready_.push_back(std::move(record));
+    handed_over_.store(true, std::memory_order_release);
   }
 
   static constexpr int kPublishSteps = 16;  // ~60 Hz to the UI at 1 kHz
@@ -206,7 +257,16 @@ class LoopSession {
   bool final_published_{false};
   std::int64_t start_ms_{0};
   std::string session_uuid_{training::NewUuidV4()};
-  InteractiveResult result_;
+  std::function<HealthFigures()> health_source_;
+  std::function<ves::v1::StationHealth(const HealthFigures&)> health_to_record_;
+  // The session has ended (set by the loop thread with ended_health_).
+  std::atomic<bool> ended_{false};
+  HealthFigures ended_health_;
+  std::atomic<bool> handed_over_{false};  // ready_ has records
+  std::mutex record_mutex_;
+  bool kept_{false};  // the current session's record is in ready_ (or it had no step)
+  std::vector<ves::v1::SessionRecord> ready_;
+  training::RunResult last_result_;
 };
 
 // Device bring-up: the bus (SocketCAN to the real VES-IV, or a socketpair to
@@ -355,6 +415,13 @@ class CoupledLoop {
         session_(run, colon_case, time_limit_s, &model_controls_, &published_mutex_, &published_),
         cycle_(rig->device(), session_.source(), CycleOptionsFor(run.params.dt_s)),
         loop_(&cycle_, LoopOptionsFor(run.params.dt_s)) {
+    session_.SetHealth(
+        [this] {
+          return TakeHealthFigures(rig_->device()->counters(), cycle_.safety(), &loop_.stats());
+        },
+        [label = rig->label(), period_s = period_s_](const HealthFigures& figures) {
+          return MakeStationHealth(label, figures, period_s);
+        });
     session_.Start(rig->initial_state().insertion_m, rig->initial_state().roll_rad);
     cycle_.SetInitialDeviceState(rig->initial_state());
     loop_.Start();
@@ -396,13 +463,12 @@ class CoupledLoop {
       loop_.RequestRearm();
     }
   }
+  // UI thread: the records of sessions that ended since the last call.
+  std::vector<ves::v1::SessionRecord> TakeEndedRecords() { return session_.TakeEndedRecords(); }
   // After Stop().
   InteractiveResult Finish() {
     InteractiveResult result = session_.Finish();
     result.device_report = InteractiveReport(*rig_, cycle_, loop_, *session_.source());
-    const ves::v1::StationHealth health = MakeStationHealth(
-        rig_->label(), rig_->device()->counters(), cycle_.safety(), &loop_.stats(), period_s_);
-    for (auto& record : result.records) *record.mutable_station_health() = health;
     return result;
   }
 
@@ -443,7 +509,8 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
                              const ves::v1::LessonAids* lesson_aids,
                              const InteractiveChoices* choices, const std::string& device_label,
                              ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
-                             haptics::SeqLock<HandTarget>* hand, InteractiveLive* live) {
+                             haptics::SeqLock<HandTarget>* hand, InteractiveLive* live,
+                             const std::function<void(ves::v1::SessionRecord)>& keep) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
   auto enforce_aids = [lesson_aids](ui::ControlState* c) {
@@ -472,6 +539,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   while (!controls.quit_requested) {
     const bool fresh =
         loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
+    for (auto& record : loop->TakeEndedRecords()) keep(std::move(record));
     if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
@@ -522,7 +590,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
                                  const InteractiveChoices* choices,
-                                 const InteractiveLiveTarget* live_target) {
+                                 const InteractiveLiveTarget* live_target,
+                                 const SessionEndedCallback& on_session_ended) {
   ui::TrainingWindow window;  // throws first when there is no display
   SessionViews views(run.params, colon_case);
   haptics::SeqLock<HandTarget> hand;
@@ -531,10 +600,22 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                        live_target ? live_target->case_id : colon_case.id(),
                        live_target ? live_target->case_version : 0);
   CoupledLoop loop(run, colon_case, time_limit_s, &rig);
+  // Records of sessions that end while the screen runs: to the caller at
+  // once, or kept for the result.
+  std::vector<ves::v1::SessionRecord> ended;
+  const auto keep = [&](ves::v1::SessionRecord record) {
+    if (on_session_ended) {
+      on_session_ended(std::move(record));
+    } else {
+      ended.push_back(std::move(record));
+    }
+  };
   const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
-                                            &window, &views, &loop, &hand, &live);
+                                            &window, &views, &loop, &hand, &live, keep);
   loop.Stop();
   InteractiveResult result = loop.Finish();
+  result.records.insert(result.records.begin(), std::make_move_iterator(ended.begin()),
+                        std::make_move_iterator(ended.end()));
   std::ostringstream live_report;
   live.Finish(live_report);
   result.live_report = live_report.str();

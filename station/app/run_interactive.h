@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,8 +19,9 @@
 namespace ves::station {
 
 struct InteractiveResult {
-  // Every session that ran at least one step, oldest first: each "repeat"
-  // finishes the current one (aborted if still running) and starts another.
+  // Every session that ran at least one step and was not handed to the
+  // caller's SessionEndedCallback, oldest first: each "repeat" finishes the
+  // current one (aborted if still running) and starts another.
   std::vector<ves::v1::SessionRecord> records;
   training::RunResult result;  // of the last one
   std::string device_report;   // DeviceReportLine of the run
@@ -64,11 +66,17 @@ struct InteractiveLiveTarget {
 // `choices`: the panel's case and scope lists; choosing another entry and
 // pressing "repeat" ends this run with next_case/next_scope set.
 // `live`: where the sessions stream (null: nowhere).
+// Called on the UI thread with each session's record as soon as the session
+// ends (cecum, time limit, or a repeat), with the station's health as it
+// ended, so that the caller can commit it at once.
+using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
+
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
                                  const ves::v1::LessonAids* lesson_aids = nullptr,
                                  const InteractiveChoices* choices = nullptr,
-                                 const InteractiveLiveTarget* live = nullptr);
+                                 const InteractiveLiveTarget* live = nullptr,
+                                 const SessionEndedCallback& on_session_ended = {});
 
 }  // namespace ves::station

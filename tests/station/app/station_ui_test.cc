@@ -410,7 +410,8 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   EXPECT_NE(quit.out.find("hard_faults=0"), std::string::npos) << quit.out;
 
   // The committed record carries the health the real-time loop measured
-  // (docs/station-run.md, "Station health"): the figures of the device line.
+  // (docs/station-run.md, "Station health") as the session ended: the
+  // figures of the device line, which counts on until the trainee quits.
   sync::Outbox outbox(sync::ResolveStationPaths(data.string()).outbox_db());
   const std::optional<ves::v1::SessionRecord> record = outbox.Find(CommittedUuid(quit.out));
   ASSERT_TRUE(record.has_value());
@@ -422,20 +423,24 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
     const size_t from = at + key.size() + 2;
     return quit.out.substr(from, quit.out.find_first_of(" \n", from) - from);
   };
+  const auto count = [&](const std::string& key) {
+    const std::string text = figure(key);
+    return text.find_first_not_of("0123456789") == std::string::npos && !text.empty()
+               ? std::stoull(text)
+               : ~0ull;
+  };
   EXPECT_EQ(health.device(), "sim");
   EXPECT_EQ(health.loop_budget_us(), 1000.0);
-  EXPECT_GT(health.loop_cycles(), 0u);
-  EXPECT_EQ(std::to_string(health.loop_cycles()), figure("loop_cycles")) << quit.out;
-  EXPECT_EQ(std::to_string(health.loop_overruns()), figure("overruns")) << quit.out;
-  char p99[32];
-  std::snprintf(p99, sizeof p99, "%.0f", health.loop_cycle_p99_us());
-  EXPECT_EQ(p99, figure("p99_cycle_end_us")) << quit.out;
+  // The session's 90 s at 1 kHz ran within the loop's cycles so far.
+  EXPECT_GE(health.loop_cycles(), 90000u);
+  EXPECT_LE(health.loop_cycles(), count("loop_cycles")) << quit.out;
+  EXPECT_LE(health.loop_overruns(), count("overruns")) << quit.out;
   EXPECT_GT(health.loop_cycle_p99_us(), 0.0);
   // Each 30 ms stop above ends at least one cycle past its next deadline.
   EXPECT_GE(health.loop_overruns(), 5u);
   EXPECT_EQ(health.safe_state_entries(), 0u);  // hard_faults=0
-  EXPECT_EQ(std::to_string(health.can_bus_errors()), figure("bus_errors")) << quit.out;
-  EXPECT_EQ(std::to_string(health.can_lost_frames()), figure("lost_frames")) << quit.out;
+  EXPECT_LE(health.can_bus_errors(), count("bus_errors")) << quit.out;
+  EXPECT_LE(health.can_lost_frames(), count("lost_frames")) << quit.out;
 }
 
 TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
@@ -475,6 +480,45 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
     ++committed;
   }
   EXPECT_EQ(committed, 2u) << quit.out;
+}
+
+// Each session is committed to the outbox as soon as it ends, not when the
+// trainee quits: a station killed while the last session's result is on the
+// screen still has every finished session of the sitting (docs/station-run.md).
+TEST_F(StationUi, EachSessionIsInTheOutboxAsSoonAsItEndsSoACrashLosesNone) {
+  const fs::path data = dir_ / "station";
+  CacheCase(data, kCaseFile);
+  StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
+                data.string(), "--seconds", "3"});
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
+  WaitForScreen();
+  const fs::path out = dir_ / "interactive.out";
+  const auto committed = [&] {
+    const std::string text = ReadFile(out);
+    size_t count = 0;
+    for (size_t at = text.find("committed to the outbox"); at != std::string::npos;
+         at = text.find("committed to the outbox", at + 1)) {
+      ++count;
+    }
+    return count;
+  };
+  // The 3 s session times out by itself; its record goes to the outbox while
+  // the screen still shows it over.
+  ASSERT_TRUE(WaitForOutput(out, "committed to the outbox")) << ReadFile(out)
+                                                               << ReadFile(dir_ / "interactive.err");
+  ASSERT_TRUE(station_->Running()) << "the station quit by itself: " << ReadFile(out);
+  // Repeat: a second session, which also ends on its own and is committed.
+  Keys({"r"});
+  for (int i = 0; i < 300 && committed() < 2 && station_->Running(); ++i) {
+    std::this_thread::sleep_for(milliseconds(100));
+  }
+  ASSERT_EQ(committed(), 2u) << ReadFile(out) << ReadFile(dir_ / "interactive.err");
+  ASSERT_TRUE(station_->Running());
+  // The station dies (a crash, the power) before the trainee quits.
+  ASSERT_EQ(::kill(station_->pid(), SIGKILL), 0);
+  station_->Wait(seconds(30));
+  EXPECT_EQ(PendingUploads(Station({"status", "--data-dir", data.string()}).out), 2)
+      << Station({"status", "--data-dir", data.string()}).out;
 }
 
 // An interactive lesson with neither aid: the X-ray area never shows an
