@@ -351,7 +351,12 @@ class SittingRecords {
     if (o_.lesson_plan) {
       record.set_lesson_id(o_.lesson_plan->lesson.lesson_id());
       PrintStationVerdict(o_.lesson_plan->lesson, record, /*wireframe_used=*/false, std::cout);
-      lessons_->AddAwaited({record.uuid(), record.lesson_id()});
+      try {  // called from the training screen's loop: nothing may escape it
+        lessons_->AddAwaited({record.uuid(), record.lesson_id()});
+      } catch (const std::exception& error) {
+        std::cerr << kName << ": the server's verdict on session " << record.uuid()
+                  << " will not be awaited: " << error.what() << "\n";
+      }
     }
     uuids_.push_back(record.uuid());
     if (!CommitRecord(paths_, record)) {

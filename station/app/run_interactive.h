@@ -56,6 +56,11 @@ struct InteractiveLiveTarget {
   uint32_t case_version{0};
 };
 
+// Called on the UI thread with each session's record as soon as the session
+// ends (cecum, time limit, or a repeat), with the station's health as it
+// ended, so that the caller can commit it at once.
+using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
+
 // Runs until the trainee quits (q / Esc) or the time limit of a session
 // passes and the trainee quits. Throws std::runtime_error when there is no
 // display or the device does not come up, render::RenderError when the views
@@ -66,11 +71,8 @@ struct InteractiveLiveTarget {
 // `choices`: the panel's case and scope lists; choosing another entry and
 // pressing "repeat" ends this run with next_case/next_scope set.
 // `live`: where the sessions stream (null: nowhere).
-// Called on the UI thread with each session's record as soon as the session
-// ends (cecum, time limit, or a repeat), with the station's health as it
-// ended, so that the caller can commit it at once.
-using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
-
+// `on_session_ended`: each record as its session ends (empty: they are all
+// returned in the result).
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,

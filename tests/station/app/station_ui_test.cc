@@ -266,6 +266,15 @@ class StationUi : public StationFixture {
   fs::path shots_dir_;
 };
 
+// How many times `needle` occurs in `text`.
+size_t Occurrences(const std::string& text, const std::string& needle) {
+  size_t count = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+    ++count;
+  }
+  return count;
+}
+
 // Fraction: how much of a region must change to count as "changed", and how
 // little may change for "unchanged" (a few pixels of anti-aliased text).
 constexpr double kChanged = 0.01;
@@ -474,12 +483,7 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
       << quit.out << quit.err;
   // Both runs' sessions were committed: the first (standard-adult, aborted by
   // the switch) and the second (paper-sigmoid).
-  size_t committed = 0;
-  for (size_t at = quit.out.find("committed to the outbox"); at != std::string::npos;
-       at = quit.out.find("committed to the outbox", at + 1)) {
-    ++committed;
-  }
-  EXPECT_EQ(committed, 2u) << quit.out;
+  EXPECT_EQ(Occurrences(quit.out, "committed to the outbox"), 2u) << quit.out;
 }
 
 // Each session is committed to the outbox as soon as it ends, not when the
@@ -493,15 +497,7 @@ TEST_F(StationUi, EachSessionIsInTheOutboxAsSoonAsItEndsSoACrashLosesNone) {
   ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   WaitForScreen();
   const fs::path out = dir_ / "interactive.out";
-  const auto committed = [&] {
-    const std::string text = ReadFile(out);
-    size_t count = 0;
-    for (size_t at = text.find("committed to the outbox"); at != std::string::npos;
-         at = text.find("committed to the outbox", at + 1)) {
-      ++count;
-    }
-    return count;
-  };
+  const auto committed = [&] { return Occurrences(ReadFile(out), "committed to the outbox"); };
   // The 3 s session times out by itself; its record goes to the outbox while
   // the screen still shows it over.
   ASSERT_TRUE(WaitForOutput(out, "committed to the outbox")) << ReadFile(out)
