@@ -137,7 +137,7 @@ class LoopSession {
       if (finished && !ended_.load(std::memory_order_relaxed)) {
         // Once per session: the station's health as it ended, for the record
         // the UI thread builds (plain values, no allocation here).
-        ended_health_ = health_source_ ? health_source_() : HealthFigures{};
+        ended_health_ = HealthNow();
         ended_.store(true, std::memory_order_release);
       }
       const std::uint32_t requested = repeat_requests_.load(std::memory_order_acquire);
@@ -145,7 +145,7 @@ class LoopSession {
       std::unique_lock<std::mutex> lock(record_mutex_, std::try_to_lock);
       if (!lock.owns_lock()) return;  // the UI is building a record: repeat next cycle
       repeats_done_ = requested;
-      if (!kept_) KeepRecord(health_source_ ? health_source_() : HealthFigures{});
+      if (!kept_) KeepRecord(HealthNow());
       runner_.Repeat();
       kept_ = false;
       ended_.store(false, std::memory_order_release);
@@ -189,7 +189,7 @@ class LoopSession {
   // the current session's included.
   InteractiveResult Finish() {
     std::lock_guard<std::mutex> lock(record_mutex_);
-    if (!kept_) KeepRecord(health_source_ ? health_source_() : HealthFigures{});
+    if (!kept_) KeepRecord(HealthNow());
     InteractiveResult result;
     result.records = std::move(ready_);
     result.result = last_result_;
@@ -224,6 +224,9 @@ class LoopSession {
     ++published_->sequence;
     return true;
   }
+
+  // The station's health figures now: on the loop thread, or once it stopped.
+  HealthFigures HealthNow() const { return health_source_ ? health_source_() : HealthFigures{}; }
 
   // The current session's record, with the station's health as it ended,
   // into ready_ (aborted first if it still runs); once per session. Under
