@@ -14,6 +14,7 @@
 #include "station/sync/case_cache.h"
 #include "station/sync/lesson_cache.h"
 #include "station/sync/outbox.h"
+#include "station/sync/session_journal.h"
 #include "station/sync/station_paths.h"
 
 namespace ves::station {
@@ -162,6 +163,23 @@ int RunStatusCommand(const CommandArgs& args) {
     for (const auto& record : set_aside) {
       std::cout << "  " << Shown(record.uuid) << "  attempts=" << record.attempts
                 << "  reason: " << Shown(record.reason) << "\n";
+    }
+    // Journals (docs/station-run.md, "Journal"): the session a station is
+    // running, or one it was running when it died, which the next run
+    // recovers into the outbox.
+    const auto journals = sync::ListJournals(paths.journal());
+    std::cout << "sessions in the journal: " << journals.size()
+              << (journals.empty() ? "" : " (running now, or interrupted: the next `ves-station run` "
+                                          "recovers them into the outbox)")
+              << "\n";
+    for (const auto& journal : journals) {
+      std::cout << "  " << journal.stem().string()
+                << (sync::JournalInUse(journal) ? "  running" : "  interrupted") << "\n";
+    }
+    const auto unreadable = sync::ListJournals(paths.journal() / "unreadable");
+    if (!unreadable.empty()) {
+      std::cout << "  unrecoverable, kept in " << (paths.journal() / "unreadable").string() << ": "
+                << unreadable.size() << "\n";
     }
     // Lesson sessions: the server judges them from their replay; until the
     // station has fetched that verdict (ves-station sync) it is awaited.

@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
@@ -42,6 +43,7 @@
 #include "station/haptics/candump_log.h"
 #include "station/haptics/sim_rig.h"
 #include "station/render/model_scene.h"
+#include "station/sync/session_journal.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_run.h"
 #include "station/training/replay.h"
@@ -322,6 +324,81 @@ bool CommitRecord(const sync::StationPaths& paths, const ves::v1::SessionRecord&
   }
 }
 
+// The inputs of a journal, chunk by chunk up to the first that does not
+// decode (written while the station died); *complete false then.
+std::vector<training::InputSample> JournaledInputs(const sync::JournalContents& journal,
+                                                   bool* complete) {
+  std::vector<training::InputSample> inputs;
+  *complete = !journal.torn_tail;
+  for (const std::string& chunk : journal.chunks) {
+    try {
+      const std::vector<training::InputSample> part = training::DecodeInputSamples(chunk);
+      inputs.insert(inputs.end(), part.begin(), part.end());
+    } catch (const training::InputLogError&) {
+      *complete = false;
+      break;
+    }
+  }
+  return inputs;
+}
+
+// Sessions a previous run left unfinished (it died mid-session): each
+// journal is re-run into an aborted session's record and committed to the
+// outbox, then deleted. One that cannot be recovered is moved to
+// journal/unreadable/ with the reason said, never deleted. When the outbox
+// cannot be opened the journals stay for the next run.
+void RecoverInterruptedSessions(const sync::StationPaths& paths) {
+  const std::vector<std::filesystem::path> journals = sync::ListJournals(paths.journal());
+  if (journals.empty()) return;
+  std::optional<sync::Outbox> outbox;
+  try {
+    outbox.emplace(paths.outbox_db());
+  } catch (const std::exception& error) {
+    std::cerr << kName << ": " << journals.size()
+              << " interrupted session(s) wait in the journal: cannot open the outbox: "
+              << error.what() << "\n";
+    return;
+  }
+  for (const std::filesystem::path& path : journals) {
+    if (sync::JournalInUse(path)) {
+      std::cout << "session " << path.stem().string()
+                << " is still running in another station process: its journal is left alone\n";
+      continue;
+    }
+    try {
+      const sync::JournalContents journal = sync::ReadSessionJournal(path);
+      const std::string& uuid = journal.header.uuid();
+      std::error_code ignored;
+      if (outbox->Find(uuid)) {  // its record was stored before the journal was deleted
+        std::filesystem::remove(path, ignored);
+        continue;
+      }
+      bool complete = true;
+      const std::vector<training::InputSample> inputs = JournaledInputs(journal, &complete);
+      if (inputs.empty()) {  // it had not stepped: nothing to record, as in a live run
+        std::filesystem::remove(path, ignored);
+        continue;
+      }
+      const ves::v1::SessionRecord record = training::RecoverSession(journal.header, inputs);
+      outbox->Commit(record);
+      std::filesystem::remove(path, ignored);
+      std::cout << "session " << uuid << " recovered from the journal of an interrupted run ("
+                << std::fixed << std::setprecision(1) << record.metrics().duration_s()
+                << " s of inputs" << (complete ? "" : ", its last chunk torn") << ", outcome "
+                << training::OutcomeName(static_cast<training::Outcome>(record.outcome()))
+                << "): committed to the outbox\n"
+                << std::defaultfloat;
+    } catch (const std::exception& error) {  // JournalError, ReplayError, InputLogError, disk
+      std::error_code moved;
+      const std::filesystem::path aside = paths.journal() / "unreadable" / path.filename();
+      std::filesystem::create_directories(aside.parent_path(), moved);
+      if (!moved) std::filesystem::rename(path, aside, moved);
+      std::cerr << kName << ": cannot recover '" << path.string() << "': " << error.what()
+                << (moved ? " (left where it is)" : "; set aside as " + aside.string()) << "\n";
+    }
+  }
+}
+
 // Commits the records, then (with a server) tries to deliver the outbox.
 // Returns false when a commit itself failed.
 bool CommitAndDeliver(const RunOptions& o, const sync::StationPaths& paths,
@@ -363,12 +440,15 @@ class SittingRecords {
       std::cerr << kName << ": session " << record.uuid()
                 << " is kept in memory and committed again when the run ends\n";
       held_.push_back(std::move(record));
+      return;
     }
+    DeleteJournal(record.uuid());
   }
   // At the end: the held records committed; false when one still fails.
   bool CommitHeld() {
     for (const auto& record : held_) {
       if (!CommitRecord(paths_, record)) return false;
+      DeleteJournal(record.uuid());
     }
     held_.clear();
     return true;
@@ -376,6 +456,12 @@ class SittingRecords {
   const std::vector<std::string>& uuids() const { return uuids_; }
 
  private:
+  // The record is in the outbox: its journal is no longer needed.
+  void DeleteJournal(const std::string& uuid) {
+    std::error_code ignored;
+    std::filesystem::remove(sync::JournalPath(paths_.journal(), uuid), ignored);
+  }
+
   const RunOptions& o_;
   const sync::StationPaths& paths_;
   sync::LessonCache* lessons_;
@@ -590,6 +676,7 @@ int Run(RunOptions o) {
     return kExitUsage;
   }
   const sync::StationPaths paths = sync::ResolveStationPaths(o.data_dir);
+  RecoverInterruptedSessions(paths);
   std::optional<ObtainedCase> obtained;
   bool obtained_from_file = false;
   ves::v1::EndoscopeSpec scope;
@@ -626,6 +713,7 @@ int Run(RunOptions o) {
   run.config.trainee_id = o.trainee_id;
   run.config.station_id = o.station_id;
   run.config.case_sha256_hex = obtained->entry.sha256_hex;
+  if (o.lesson_plan) run.config.lesson_id = o.lesson_plan->lesson.lesson_id();
   std::cout << "case " << obtained->entry.id << " v" << obtained->entry.version << " sha256="
             << obtained->entry.sha256_hex.substr(0, 16) << "… ("
             << (obtained_from_file      ? "from " + o.case_id + ", now in the offline cache"
@@ -664,7 +752,8 @@ int Run(RunOptions o) {
           run, obtained->colon_case, o.seconds, std::move(device),
           o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
           o.lesson_plan ? nullptr : &choices, &live,
-          [&sitting](ves::v1::SessionRecord record) { sitting.Keep(std::move(record)); });
+          [&sitting](ves::v1::SessionRecord record) { sitting.Keep(std::move(record)); },
+          paths.journal());
     } catch (const std::exception& error) {  // no display, the device did not come up
       std::cerr << kName << ": " << error.what() << "\n";
       if (sitting.uuids().empty()) return kExitFailed;
@@ -813,6 +902,9 @@ int RunSyncCommand(const CommandArgs& args) {
     std::cerr << "ves-station sync: " << e.what() << "\n";
     return kExitUsage;
   }
+  // A session an interrupted run left in the journal goes to the outbox
+  // first, so that this sync delivers it too.
+  RecoverInterruptedSessions(sync::ResolveStationPaths(data_dir));
   // Session files to queue: each read whole and checked (a truncated or
   // damaged file, a record without trainee) before any is committed.
   std::vector<ves::v1::SessionRecord> added;

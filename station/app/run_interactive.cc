@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -30,8 +31,10 @@
 #include "station/haptics/seqlock.h"
 #include "station/haptics/sim_rig.h"
 #include "station/haptics/simulated_ball_drive.h"
+#include "station/haptics/spsc_ring.h"
 #include "station/haptics/ves4_device.h"
 #include "station/render/model_scene.h"
+#include "station/sync/session_journal.h"
 #include "station/training/replay.h"
 #include "station/training/session_runner.h"
 #include "station/training/uuid.h"
@@ -108,6 +111,81 @@ class KeyboardHand {
   double commanded_m_{0.0};
 };
 
+// Loop thread -> UI thread, for the journal of the running session: a
+// session's start (its UUID and start time) or one logged input.
+struct JournalEntry {
+  bool starts{false};
+  std::array<char, 40> uuid{};
+  std::int64_t start_unix_ms{0};
+  training::InputSample sample;
+};
+// 8 s at 1 kHz: the UI thread drains it every frame.
+constexpr std::size_t kJournalRingEntries = 8192;
+
+// The UI thread's side of the journal: one file per session
+// (sync::SessionJournalWriter) holding its record's header and its inputs in
+// chunks of a quarter second. A failure (a full disk, inputs dropped while
+// the screen stalled) ends the journaling of that session, said once; its
+// record is still stored when it ends, as without a journal.
+class JournalKeeper {
+ public:
+  JournalKeeper(std::filesystem::path dir, const training::CaseRun& run,
+                const ves::v1::ColonCase& colon_case, double time_limit_s)
+      : dir_(std::move(dir)), header_(training::RecordHeader(run.config, "", 0)) {
+    *header_.mutable_replay_setup() = training::MakeReplaySetup(colon_case, {}, time_limit_s);
+  }
+
+  void Take(const JournalEntry& entry) {
+    if (entry.starts) {
+      Flush();
+      writer_.reset();
+      pending_.clear();
+      next_tick_ = 0;
+      header_.set_uuid(entry.uuid.data());
+      header_.set_start_unix_ms(entry.start_unix_ms);
+      try {
+        writer_ = std::make_unique<sync::SessionJournalWriter>(dir_, header_);
+      } catch (const std::exception& error) {
+        Fail(error.what());
+      }
+      return;
+    }
+    if (!writer_) return;
+    if (entry.sample.tick != next_tick_) {
+      Fail("inputs from " + std::to_string(next_tick_) + " on were dropped (the screen stalled)");
+      return;
+    }
+    ++next_tick_;
+    pending_.push_back(entry.sample);
+    if (pending_.size() >= kChunkSamples) Flush();
+  }
+
+ private:
+  static constexpr std::size_t kChunkSamples = 250;
+
+  void Flush() {
+    if (!writer_ || pending_.empty()) return;
+    try {
+      writer_->Append(training::EncodeInputSamples(pending_));
+      pending_.clear();
+    } catch (const std::exception& error) {
+      Fail(error.what());
+    }
+  }
+  void Fail(const std::string& why) {
+    std::cerr << "ves-station: session " << header_.uuid() << " is no longer journaled (" << why
+              << "); its record is still stored when it ends\n";
+    writer_.reset();
+    pending_.clear();
+  }
+
+  std::filesystem::path dir_;
+  ves::v1::SessionRecord header_;
+  std::unique_ptr<sync::SessionJournalWriter> writer_;
+  std::vector<training::InputSample> pending_;
+  std::uint64_t next_tick_{0};
+};
+
 // The session side of the loop thread: repeats asked for by the UI, records
 // of ended sessions, publication of the model state to the UI.
 //
@@ -152,8 +230,11 @@ class LoopSession {
       session_uuid_ = training::NewUuidV4();  // a one-off, like KeepRecord's record
       final_published_ = false;
       source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
+      JournalStart();
     });
-    source_.set_after_step([this](const training::SessionRunner&) {
+    source_.set_after_step([this](const training::SessionRunner& runner) {
+      // A full ring drops the input; the keeper sees the gap in the ticks.
+      journal_ring_.Push(JournalEntry{.sample = runner.session().inputs().back()});
       if (++steps_since_publish_ >= kPublishSteps && Publish()) steps_since_publish_ = 0;
     });
   }
@@ -168,7 +249,15 @@ class LoopSession {
   }
   void Start(double device_insertion_m, double device_roll_rad) {
     source_.Start(start_ms_ = NowUnixMs(), device_insertion_m, device_roll_rad);
+    JournalStart();
     Publish();
+  }
+  // UI thread, each frame: what the journal is to hold since the last call.
+  void DrainJournal(JournalKeeper* keeper) {
+    JournalEntry entry;
+    while (journal_ring_.Pop(&entry)) {
+      if (keeper != nullptr) keeper->Take(entry);
+    }
   }
   // UI thread: the loop finishes the current session and starts another.
   void RequestRepeat() { repeat_requests_.fetch_add(1, std::memory_order_acq_rel); }
@@ -225,6 +314,16 @@ class LoopSession {
     return true;
   }
 
+  // A new session's start, to the journal (the thread that starts it).
+  void JournalStart() {
+    JournalEntry entry;
+    entry.starts = true;
+    std::memcpy(entry.uuid.data(), session_uuid_.data(),
+                std::min(session_uuid_.size(), entry.uuid.size() - 1));
+    entry.start_unix_ms = start_ms_;
+    journal_ring_.Push(entry);
+  }
+
   // The station's health figures now: on the loop thread, or once it stopped.
   HealthFigures HealthNow() const { return health_source_ ? health_source_() : HealthFigures{}; }
 
@@ -270,6 +369,7 @@ class LoopSession {
   bool kept_{false};  // the current session's record is in ready_ (or it had no step)
   std::vector<ves::v1::SessionRecord> ready_;
   training::RunResult last_result_;
+  haptics::SpscRing<JournalEntry> journal_ring_{kJournalRingEntries};
 };
 
 // Device bring-up: the bus (SocketCAN to the real VES-IV, or a socketpair to
@@ -468,6 +568,8 @@ class CoupledLoop {
   }
   // UI thread: the records of sessions that ended since the last call.
   std::vector<ves::v1::SessionRecord> TakeEndedRecords() { return session_.TakeEndedRecords(); }
+  // UI thread: the running session's new inputs to the journal (null: none kept).
+  void DrainJournal(JournalKeeper* keeper) { session_.DrainJournal(keeper); }
   // After Stop().
   InteractiveResult Finish() {
     InteractiveResult result = session_.Finish();
@@ -513,6 +615,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
                              const InteractiveChoices* choices, const std::string& device_label,
                              ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
                              haptics::SeqLock<HandTarget>* hand, InteractiveLive* live,
+                             JournalKeeper* journal,
                              const std::function<void(ves::v1::SessionRecord)>& keep) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
@@ -542,6 +645,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   while (!controls.quit_requested) {
     const bool fresh =
         loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
+    loop->DrainJournal(journal);  // before the records: an ended session's inputs are all in
     for (auto& record : loop->TakeEndedRecords()) keep(std::move(record));
     if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
@@ -594,7 +698,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  InteractiveDevice device, const ves::v1::LessonAids* lesson_aids,
                                  const InteractiveChoices* choices,
                                  const InteractiveLiveTarget* live_target,
-                                 const SessionEndedCallback& on_session_ended) {
+                                 const SessionEndedCallback& on_session_ended,
+                                 const std::filesystem::path& journal_dir) {
   ui::TrainingWindow window;  // throws first when there is no display
   SessionViews views(run.params, colon_case);
   haptics::SeqLock<HandTarget> hand;
@@ -602,6 +707,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   InteractiveLive live(live_target ? live_target->server : std::nullopt, run.config.trainee_id,
                        live_target ? live_target->case_id : colon_case.id(),
                        live_target ? live_target->case_version : 0);
+  std::optional<JournalKeeper> journal;
+  if (!journal_dir.empty()) journal.emplace(journal_dir, run, colon_case, time_limit_s);
   CoupledLoop loop(run, colon_case, time_limit_s, &rig);
   // Records of sessions that end while the screen runs: to the caller at
   // once, or kept for the result.
@@ -614,7 +721,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
     }
   };
   const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
-                                            &window, &views, &loop, &hand, &live, keep);
+                                            &window, &views, &loop, &hand, &live,
+                                            journal ? &*journal : nullptr, keep);
   loop.Stop();
   InteractiveResult result = loop.Finish();
   result.records.insert(result.records.begin(), std::make_move_iterator(ended.begin()),

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -73,12 +74,17 @@ using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
 // `live`: where the sessions stream (null: nowhere).
 // `on_session_ended`: each record as its session ends (empty: they are all
 // returned in the result).
+// `journal_dir`: where each running session's inputs are journaled
+// (sync::SessionJournalWriter; empty: nowhere), so that a station that dies
+// mid-session loses at most its last second. The caller deletes a journal
+// once its session's record is safely stored.
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
                                  const ves::v1::LessonAids* lesson_aids = nullptr,
                                  const InteractiveChoices* choices = nullptr,
                                  const InteractiveLiveTarget* live = nullptr,
-                                 const SessionEndedCallback& on_session_ended = {});
+                                 const SessionEndedCallback& on_session_ended = {},
+                                 const std::filesystem::path& journal_dir = {});
 
 }  // namespace ves::station

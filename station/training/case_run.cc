@@ -1,5 +1,6 @@
 #include "station/training/case_run.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -67,6 +68,31 @@ RunResult RunScriptedCase(const v1::ColonCase& colon_case, const v1::EndoscopeSp
   if (record != nullptr)
     *record->mutable_replay_setup() = MakeReplaySetup(colon_case, options, seconds);
   return result;
+}
+
+v1::SessionRecord RecoverSession(const v1::SessionRecord& header,
+                                 std::span<const InputSample> inputs) {
+  CaseRun run = PrepareReplay(header);
+  const double max_samples =
+      static_cast<double>(MaxSessionSamples(run.config.time_limit_s, run.params.dt_s));
+  if (static_cast<double>(inputs.size()) > max_samples) {
+    throw ReplayError("recover: " + std::to_string(inputs.size()) +
+                      " inputs are more than the session's time limit allows");
+  }
+  run.config.station_id = header.station_id();
+  run.config.lesson_id = header.lesson_id();
+  run.config.case_id = header.case_id();
+  run.config.case_version = header.case_version();
+  run.config.case_sha256_hex = header.case_sha256_hex();
+  SessionRunner runner(run.params, run.config);
+  runner.Start(header.start_unix_ms());
+  RunInputs(inputs, &runner);
+  const auto duration_ms =
+      static_cast<std::int64_t>(std::llround(runner.session().metrics().duration_s * 1e3));
+  v1::SessionRecord record =
+      runner.session().ToRecord(header.uuid(), header.start_unix_ms() + duration_ms);
+  *record.mutable_replay_setup() = header.replay_setup();
+  return record;
 }
 
 RunResult ReplayRecord(const v1::SessionRecord& record, const StepCallback& on_step) {

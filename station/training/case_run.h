@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string_view>
 
 #include "station/training/case_model.h"
@@ -37,6 +38,14 @@ RunResult RunScriptedCase(const v1::ColonCase& colon_case, const v1::EndoscopeSp
                           const CaseModelOptions& options, std::string_view operator_kind,
                           double seconds, std::int64_t start_unix_ms, v1::SessionRecord* record,
                           const StepCallback& on_step = {}, double dt_s = 0.0);
+
+// The record of a session the station could not record itself (it stopped
+// mid-session): re-run from its journal's header (RecordHeader with the
+// replay_setup) and the inputs that reached the disk; aborted when they end
+// while it runs. Throws ReplayError for an unusable header or inputs out of
+// sequence.
+v1::SessionRecord RecoverSession(const v1::SessionRecord& header,
+                                 std::span<const InputSample> inputs);
 
 // Re-runs a recorded session from its log alone (PrepareReplay + Replay).
 RunResult ReplayRecord(const v1::SessionRecord& record, const StepCallback& on_step = {});

@@ -87,20 +87,25 @@ RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
   const std::vector<InputSample> inputs = DecodeInputLog(log);
   SessionRunner runner(params, config);
   runner.Start(0);
+  RunInputs(inputs, &runner, on_step);
+  return ResultOf(runner);
+}
+
+void RunInputs(std::span<const InputSample> inputs, SessionRunner* runner,
+               const StepCallback& on_step) {
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     if (inputs[i].tick != i) {
       throw ReplayError("replay: sample " + std::to_string(i) + " has tick " +
                         std::to_string(inputs[i].tick));
     }
-    if (runner.session().state() != SessionState::kRunning) {
+    if (runner->session().state() != SessionState::kRunning) {
       throw ReplayError("replay: the log continues " + std::to_string(inputs.size() - i) +
                         " samples after the session finished");
     }
-    runner.Step(inputs[i]);
-    if (on_step && !runner.diverged()) on_step(runner.session().inputs().back(), runner);
+    runner->Step(inputs[i]);
+    if (on_step && !runner->diverged()) on_step(runner->session().inputs().back(), *runner);
   }
-  if (runner.session().state() == SessionState::kRunning) runner.session().Abort();
-  return ResultOf(runner);
+  if (runner->session().state() == SessionState::kRunning) runner->session().Abort();
 }
 
 std::string SummaryLine(const RunResult& r) {

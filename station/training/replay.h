@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <stdexcept>
 #include <string_view>
 #include <vector>
@@ -65,6 +66,12 @@ RunResult RunScriptedSession(const model::ModelParams& params, SessionConfig con
 // ticks out of sequence.
 RunResult Replay(const model::ModelParams& params, const SessionConfig& config,
                  const v1::InputLog& log, const StepCallback& on_step = {});
+
+// Replay's loop: steps a started runner through the inputs (ticks in
+// sequence from 0, none after the session finished: ReplayError), then
+// aborts the session if it still runs.
+void RunInputs(std::span<const InputSample> inputs, SessionRunner* runner,
+               const StepCallback& on_step = {});
 
 // One line of key=value pairs for people and scripts, the same from `run`,
 // `sim --operator` and `replay` (docs/scoring.md): what did not happen is

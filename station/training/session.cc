@@ -82,14 +82,7 @@ v1::SessionRecord Session::ToRecord(const std::string& uuid, std::int64_t end_un
   if (state_ != SessionState::kFinished) {
     throw std::logic_error("session: ToRecord before the session finished");
   }
-  v1::SessionRecord r;
-  r.set_uuid(uuid);
-  r.set_trainee_id(config_.trainee_id);
-  r.set_case_id(config_.case_id);
-  r.set_case_version(config_.case_version);
-  r.set_case_sha256_hex(config_.case_sha256_hex);
-  r.set_station_id(config_.station_id);
-  r.set_start_unix_ms(start_unix_ms_);
+  v1::SessionRecord r = RecordHeader(config_, uuid, start_unix_ms_);
   r.set_end_unix_ms(end_unix_ms);
   r.set_outcome(static_cast<v1::Outcome>(outcome_));
   *r.mutable_metrics() = ToProto(metrics());
@@ -102,9 +95,23 @@ v1::SessionRecord Session::ToRecord(const std::string& uuid, std::int64_t end_un
   }
   for (const Event& e : metrics_.Events()) *r.add_events() = ToProto(e);
   *r.mutable_input_log() = MakeInputLog(inputs_, config_.dt_s);
-  *r.mutable_scope() = config_.scope;
-  r.set_operator_kind(config_.operator_kind);
-  r.set_lesson_id(config_.lesson_id);
+  return r;
+}
+
+v1::SessionRecord RecordHeader(const SessionConfig& config, const std::string& uuid,
+                               std::int64_t start_unix_ms) {
+  v1::SessionRecord r;
+  r.set_uuid(uuid);
+  r.set_trainee_id(config.trainee_id);
+  r.set_case_id(config.case_id);
+  r.set_case_version(config.case_version);
+  r.set_case_sha256_hex(config.case_sha256_hex);
+  r.set_station_id(config.station_id);
+  r.set_start_unix_ms(start_unix_ms);
+  r.mutable_input_log()->set_dt_s(config.dt_s);
+  *r.mutable_scope() = config.scope;
+  r.set_operator_kind(config.operator_kind);
+  r.set_lesson_id(config.lesson_id);
 #ifdef VES_VERSION
   r.set_software_version(VES_VERSION);
 #endif

@@ -82,6 +82,12 @@ class Session {
   std::vector<InputSample> inputs_;
 };
 
+// Who, what and when of a session's record, without its outcome, results or
+// inputs (input_log carries only dt_s): the start of Session::ToRecord, and
+// the header of the station's journal of a running session.
+v1::SessionRecord RecordHeader(const SessionConfig& config, const std::string& uuid,
+                               std::int64_t start_unix_ms);
+
 v1::SessionMetrics ToProto(const Metrics& metrics);
 Metrics FromProto(const v1::SessionMetrics& metrics);
 v1::SessionEvent ToProto(const Event& event);

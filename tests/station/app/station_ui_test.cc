@@ -517,6 +517,53 @@ TEST_F(StationUi, EachSessionIsInTheOutboxAsSoonAsItEndsSoACrashLosesNone) {
       << Station({"status", "--data-dir", data.string()}).out;
 }
 
+// A session still running when the station dies is in its journal
+// (docs/station-run.md, "Journal"); the next `ves-station run` re-runs it
+// into an aborted session's record in the outbox and deletes the journal.
+TEST_F(StationUi, ASessionRunningWhenTheStationDiesIsRecoveredFromItsJournal) {
+  const fs::path data = dir_ / "station";
+  CacheCase(data, kCaseFile);
+  StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
+                data.string(), "--seconds", "120"});
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
+  WaitForScreen();
+  // Two seconds and more of the session on disk (chunks of a quarter second).
+  const fs::path journal = data / "journal";
+  const auto journal_bytes = [&] {
+    std::uintmax_t bytes = 0;
+    std::error_code ignored;
+    for (const auto& entry : fs::directory_iterator(journal, ignored)) {
+      if (entry.path().extension() == ".journal") bytes += fs::file_size(entry.path(), ignored);
+    }
+    return bytes;
+  };
+  for (int i = 0; i < 300 && journal_bytes() == 0 && station_->Running(); ++i) {
+    std::this_thread::sleep_for(milliseconds(100));
+  }
+  const std::uintmax_t header_bytes = journal_bytes();
+  ASSERT_GT(header_bytes, 0u) << "no journal: " << ReadFile(dir_ / "interactive.err");
+  std::this_thread::sleep_for(seconds(3));
+  ASSERT_GT(journal_bytes(), header_bytes) << "the journal did not grow";
+  ASSERT_TRUE(station_->Running());
+  ASSERT_EQ(::kill(station_->pid(), SIGKILL), 0);
+  station_->Wait(seconds(30));
+  EXPECT_EQ(ReadFile(dir_ / "interactive.out").find("committed to the outbox"), std::string::npos)
+      << "the session ended before the station was killed";
+
+  const ProcessResult next =
+      Station({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
+               data.string(), "--headless", "--operator", "novice", "--seconds", "1", "--out",
+               (dir_ / "headless").string()});
+  ASSERT_EQ(next.exit_code, 0) << next.out << next.err;
+  EXPECT_NE(next.out.find("recovered from the journal of an interrupted run"), std::string::npos)
+      << next.out << next.err;
+  EXPECT_NE(next.out.find("outcome aborted"), std::string::npos) << next.out;
+  EXPECT_EQ(journal_bytes(), 0u) << "the recovered journal is still there";
+  // The recovered session and the headless one.
+  EXPECT_EQ(PendingUploads(Station({"status", "--data-dir", data.string()}).out), 2)
+      << Station({"status", "--data-dir", data.string()}).out;
+}
+
 // An interactive lesson with neither aid: the X-ray area never shows an
 // X-ray (it says the aid is not allowed), the keys for X-ray and wire-frame
 // change nothing the model gets, and the server's replay of the attempt
