@@ -382,6 +382,15 @@ void RecoverInterruptedSessions(const sync::StationPaths& paths) {
       const ves::v1::SessionRecord record = training::RecoverSession(journal.header, inputs);
       outbox->Commit(record);
       std::filesystem::remove(path, ignored);
+      if (!record.lesson_id().empty()) {
+        // A lesson's attempt, like a live one: its verdict is awaited.
+        try {
+          sync::LessonCache(paths.lessons()).AddAwaited({uuid, record.lesson_id()});
+        } catch (const std::exception& error) {
+          std::cerr << kName << ": the server's verdict on session " << uuid
+                    << " will not be awaited: " << error.what() << "\n";
+        }
+      }
       std::cout << "session " << uuid << " recovered from the journal of an interrupted run ("
                 << std::fixed << std::setprecision(1) << record.metrics().duration_s()
                 << " s of inputs" << (complete ? "" : ", its last chunk torn") << ", outcome "

@@ -220,6 +220,32 @@ class StationUi : public StationFixture {
     }
     return false;
   }
+  // The size of the station's session journals (docs/station-run.md, "Journal").
+  static std::uintmax_t JournalBytes(const fs::path& data) {
+    std::uintmax_t bytes = 0;
+    std::error_code ignored;
+    for (const auto& entry : fs::directory_iterator(data / "journal", ignored)) {
+      if (entry.path().extension() == ".journal") bytes += fs::file_size(entry.path(), ignored);
+    }
+    return bytes;
+  }
+  // Once the running session's journal holds three seconds more than its
+  // header, kills the station (SIGKILL: a crash, the power) mid-session.
+  void KillWithThreeSecondsJournaled(const fs::path& data) {
+    for (int i = 0; i < 300 && JournalBytes(data) == 0 && station_->Running(); ++i) {
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+    const std::uintmax_t header_bytes = JournalBytes(data);
+    ASSERT_GT(header_bytes, 0u) << "no journal: " << ReadFile(dir_ / "interactive.err");
+    std::this_thread::sleep_for(seconds(3));
+    ASSERT_GT(JournalBytes(data), header_bytes) << "the journal did not grow";
+    ASSERT_TRUE(station_->Running());
+    ASSERT_EQ(::kill(station_->pid(), SIGKILL), 0);
+    station_->Wait(seconds(30));
+    ASSERT_EQ(ReadFile(dir_ / "interactive.out").find("committed to the outbox"),
+              std::string::npos)
+        << "the session ended before the station was killed";
+  }
   // Waits (up to a minute on a loaded machine) until the training screen is
   // up: the window covers the screen with its background at the corners and
   // the endoscope image is drawn (not the black "starting" area).
@@ -527,28 +553,7 @@ TEST_F(StationUi, ASessionRunningWhenTheStationDiesIsRecoveredFromItsJournal) {
                 data.string(), "--seconds", "120"});
   ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   WaitForScreen();
-  // Two seconds and more of the session on disk (chunks of a quarter second).
-  const fs::path journal = data / "journal";
-  const auto journal_bytes = [&] {
-    std::uintmax_t bytes = 0;
-    std::error_code ignored;
-    for (const auto& entry : fs::directory_iterator(journal, ignored)) {
-      if (entry.path().extension() == ".journal") bytes += fs::file_size(entry.path(), ignored);
-    }
-    return bytes;
-  };
-  for (int i = 0; i < 300 && journal_bytes() == 0 && station_->Running(); ++i) {
-    std::this_thread::sleep_for(milliseconds(100));
-  }
-  const std::uintmax_t header_bytes = journal_bytes();
-  ASSERT_GT(header_bytes, 0u) << "no journal: " << ReadFile(dir_ / "interactive.err");
-  std::this_thread::sleep_for(seconds(3));
-  ASSERT_GT(journal_bytes(), header_bytes) << "the journal did not grow";
-  ASSERT_TRUE(station_->Running());
-  ASSERT_EQ(::kill(station_->pid(), SIGKILL), 0);
-  station_->Wait(seconds(30));
-  EXPECT_EQ(ReadFile(dir_ / "interactive.out").find("committed to the outbox"), std::string::npos)
-      << "the session ended before the station was killed";
+  KillWithThreeSecondsJournaled(data);
 
   const ProcessResult next =
       Station({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
@@ -558,10 +563,54 @@ TEST_F(StationUi, ASessionRunningWhenTheStationDiesIsRecoveredFromItsJournal) {
   EXPECT_NE(next.out.find("recovered from the journal of an interrupted run"), std::string::npos)
       << next.out << next.err;
   EXPECT_NE(next.out.find("outcome aborted"), std::string::npos) << next.out;
-  EXPECT_EQ(journal_bytes(), 0u) << "the recovered journal is still there";
+  EXPECT_EQ(JournalBytes(data), 0u) << "the recovered journal is still there";
   // The recovered session and the headless one.
   EXPECT_EQ(PendingUploads(Station({"status", "--data-dir", data.string()}).out), 2)
       << Station({"status", "--data-dir", data.string()}).out;
+}
+
+// A lesson attempt running when the station dies: `ves-station sync`
+// recovers it from the journal, uploads it, and the server judges it like
+// any attempt (docs/station-run.md, "Journal"; docs/lessons.md).
+TEST_F(StationUi, AnInterruptedLessonAttemptIsRecoveredUploadedAndJudged) {
+  const fs::path lesson_file = dir_ / "crash.textproto";
+  std::ofstream(lesson_file) << "curriculum_id: \"crash-ui\" lessons { lesson_id: \"crash-ui-1\" "
+                                "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 }\n";
+  const auto as = [&](const std::string& token, std::vector<std::string> args) {
+    args.insert(args.end(), {"--server", address_, "--token", token});
+    return Admin(args);
+  };
+  ASSERT_EQ(as(admin_token_, {"trainee", "add", "--id", "trainee-crash"}).exit_code, 0);
+  const ProcessResult created = as(supervisor_token_, {"curriculum", "create", lesson_file.string()});
+  ASSERT_EQ(created.exit_code, 0) << created.err;
+  ASSERT_EQ(as(supervisor_token_,
+               {"assign", "--curriculum", "crash-ui", "--trainee", "trainee-crash"})
+                .exit_code,
+            0);
+  const fs::path data = dir_ / "station";
+  StartStation({"run", "--trainee", "trainee-crash", "--lesson", "next", "--server", address_,
+                "--token", station_token_, "--data-dir", data.string(), "--no-live"});
+  ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
+  WaitForScreen();
+  KillWithThreeSecondsJournaled(data);
+  const ProcessResult before = Station({"status", "--data-dir", data.string()});
+  EXPECT_NE(before.out.find("sessions in the journal: 1"), std::string::npos) << before.out;
+  EXPECT_NE(before.out.find("  interrupted\n"), std::string::npos) << before.out;
+
+  const ProcessResult sync = Station(
+      {"sync", "--server", address_, "--token", station_token_, "--data-dir", data.string()});
+  EXPECT_EQ(sync.exit_code, 0) << sync.out << sync.err;
+  EXPECT_NE(sync.out.find("recovered from the journal of an interrupted run"), std::string::npos)
+      << sync.out << sync.err;
+  // Aborted a few seconds in: the server's replay fails it.
+  EXPECT_NE(sync.out.find("server verdict (replayed): lesson crash-ui-1 session "),
+            std::string::npos)
+      << sync.out;
+  EXPECT_NE(sync.out.find(": FAILED"), std::string::npos) << sync.out;
+  const ProcessResult after = Station({"status", "--data-dir", data.string()});
+  EXPECT_EQ(PendingUploads(after.out), 0) << after.out;
+  EXPECT_NE(after.out.find("sessions in the journal: 0"), std::string::npos) << after.out;
+  EXPECT_NE(after.out.find("lesson=crash-ui-1  FAILED"), std::string::npos) << after.out;
 }
 
 // An interactive lesson with neither aid: the X-ray area never shows an
