@@ -76,7 +76,7 @@ using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
 // returned in the result).
 // `journal_dir`: where each running session's inputs are journaled
 // (sync::SessionJournalWriter; empty: nowhere), so that a station that dies
-// mid-session loses at most its last second. The caller deletes a journal
+// mid-session loses at most about a second. The caller deletes a journal
 // once its session's record is safely stored.
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,

@@ -2,8 +2,8 @@
 
 // The journal of a session while it runs (docs/station-run.md, "Journal"):
 // an append-only file per running session, so that a station that dies
-// mid-session (a crash, a dead X server, a power cut) loses at most its last
-// second of inputs. The file holds a header (the session's record without
+// mid-session (a crash, a dead X server, a power cut) loses about its last
+// second of inputs at most. The file holds a header (the session's record without
 // its inputs or results) and then chunks of the input log, each framed with
 // its length and CRC-32; the station recovers an interrupted session from it
 // on its next run and deletes it once the session's record is in the outbox.
