@@ -348,6 +348,7 @@ std::vector<training::InputSample> JournaledInputs(const sync::JournalContents& 
 // journal/unreadable/ with the reason said, never deleted. When the outbox
 // cannot be opened the journals stay for the next run.
 void RecoverInterruptedSessions(const sync::StationPaths& paths) {
+  sync::RemoveStaleJournalParts(paths.journal());
   const std::vector<std::filesystem::path> journals = sync::ListJournals(paths.journal());
   if (journals.empty()) return;
   std::optional<sync::Outbox> outbox;

@@ -195,6 +195,20 @@ bool JournalInUse(const std::filesystem::path& path) {
   return locked;
 }
 
+int RemoveStaleJournalParts(const std::filesystem::path& dir) {
+  int removed = 0;
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(dir, error), end; !error && it != end;
+       it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    const bool part = name.size() > 13 && name.ends_with(".journal.part");
+    if (!part || !it->is_regular_file() || JournalInUse(it->path())) continue;
+    std::error_code ignored;
+    if (std::filesystem::remove(it->path(), ignored)) ++removed;
+  }
+  return removed;
+}
+
 std::vector<std::filesystem::path> ListJournals(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> found;
   std::error_code error;

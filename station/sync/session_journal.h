@@ -85,6 +85,11 @@ JournalContents ReadSessionJournal(const std::filesystem::path& path);
 // session: its lock goes with its process, however that ends).
 bool JournalInUse(const std::filesystem::path& path);
 
+// Removes the *.journal.part files in dir that no writer holds: a station
+// that died between creating a journal and renaming it leaves one, holding
+// at most a header (no inputs, nothing to recover). Returns how many.
+int RemoveStaleJournalParts(const std::filesystem::path& dir);
+
 // The journals in dir (*.journal), sorted by name; none when dir does not exist.
 std::vector<std::filesystem::path> ListJournals(const std::filesystem::path& dir);
 

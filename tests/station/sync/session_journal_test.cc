@@ -4,7 +4,9 @@
 // not a journal is refused by name.
 #include "station/sync/session_journal.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -101,6 +103,27 @@ TEST_F(SessionJournal, AJournalIsInUseWhileItsWriterLives) {
   }
   EXPECT_FALSE(JournalInUse(path));
   EXPECT_FALSE(JournalInUse(dir_ / "missing.journal"));
+}
+
+TEST_F(SessionJournal, OnlyTheTemporaryFilesOfDeadWritersAreRemoved) {
+  SessionJournalWriter live(dir_ / "journal", header_);
+  // A writer that died before its rename left this one (unlocked).
+  const fs::path stale = dir_ / "journal" / "0a1c8a0e-2b7d-4c55-9e0a-3d2f1b4c5a6e.journal.part";
+  std::ofstream(stale) << "VES-JOURNAL-1\n";
+  // One a live writer holds (as between its creation and its rename).
+  const fs::path held = dir_ / "journal" / "1d2e3f40-5a6b-4c7d-8e9f-a0b1c2d3e4f5.journal.part";
+  std::ofstream(held) << "VES-JOURNAL-1\n";
+  const int fd = ::open(held.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  EXPECT_EQ(RemoveStaleJournalParts(dir_ / "journal"), 1);
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_TRUE(fs::exists(held));
+  EXPECT_TRUE(fs::exists(live.path()));  // a whole journal is never touched here
+  ::close(fd);
+  EXPECT_EQ(RemoveStaleJournalParts(dir_ / "journal"), 1);
+  EXPECT_FALSE(fs::exists(held));
+  EXPECT_EQ(RemoveStaleJournalParts(dir_ / "nowhere"), 0);
 }
 
 TEST_F(SessionJournal, ASessionsJournalIsNeverOverwritten) {
