@@ -55,6 +55,15 @@ struct HandTarget {
   double roll_rad{0.0};
 };
 
+// A session's UUID as a fixed, NUL-terminated array, which the loop thread
+// can copy without allocating.
+using UuidChars = std::array<char, 40>;
+UuidChars UuidCharsOf(const std::string& uuid) {
+  UuidChars chars{};
+  std::memcpy(chars.data(), uuid.data(), std::min(uuid.size(), chars.size() - 1));
+  return chars;
+}
+
 // Loop -> UI: the model's state every kPublishSteps steps, copied under a
 // mutex the loop thread only try_locks (same sizes each time: no allocation),
 // so a slow UI frame never stalls the haptic loop (it skips a publication).
@@ -72,7 +81,7 @@ struct PanelNumbers {
   // For live proctoring (the UI thread streams them): the session's uuid
   // (the record's) and the figures of its latest step; fixed sizes, so the
   // loop copies them without allocating.
-  std::array<char, 40> session_uuid{};
+  UuidChars session_uuid{};
   LiveFigures live;
 };
 struct Published {
@@ -115,7 +124,7 @@ class KeyboardHand {
 // session's start (its UUID and start time) or one logged input.
 struct JournalEntry {
   bool starts{false};
-  std::array<char, 40> uuid{};
+  UuidChars uuid{};
   std::int64_t start_unix_ms{0};
   training::InputSample sample;
 };
@@ -306,9 +315,7 @@ class LoopSession {
     numbers.loop_s = metrics.loop_s;
     numbers.xray_s = metrics.xray_s;
     numbers.redout_s = metrics.redout_s;
-    std::memset(numbers.session_uuid.data(), 0, numbers.session_uuid.size());
-    std::memcpy(numbers.session_uuid.data(), session_uuid_.data(),
-                std::min(session_uuid_.size(), numbers.session_uuid.size() - 1));
+    numbers.session_uuid = UuidCharsOf(session_uuid_);
     numbers.live = LiveFiguresOf(runner_);
     ++published_->sequence;
     return true;
@@ -318,8 +325,7 @@ class LoopSession {
   void JournalStart() {
     JournalEntry entry;
     entry.starts = true;
-    std::memcpy(entry.uuid.data(), session_uuid_.data(),
-                std::min(session_uuid_.size(), entry.uuid.size() - 1));
+    entry.uuid = UuidCharsOf(session_uuid_);
     entry.start_unix_ms = start_ms_;
     journal_ring_.Push(entry);
   }

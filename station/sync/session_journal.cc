@@ -201,7 +201,7 @@ int RemoveStaleJournalParts(const std::filesystem::path& dir) {
   for (std::filesystem::directory_iterator it(dir, error), end; !error && it != end;
        it.increment(error)) {
     const std::string name = it->path().filename().string();
-    const bool part = name.size() > 13 && name.ends_with(".journal.part");
+    const bool part = name.ends_with(".journal.part");
     if (!part || !it->is_regular_file() || JournalInUse(it->path())) continue;
     std::error_code ignored;
     if (std::filesystem::remove(it->path(), ignored)) ++removed;

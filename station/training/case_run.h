@@ -42,8 +42,9 @@ RunResult RunScriptedCase(const v1::ColonCase& colon_case, const v1::EndoscopeSp
 // The record of a session the station could not record itself (it stopped
 // mid-session): re-run from its journal's header (RecordHeader with the
 // replay_setup) and the inputs that reached the disk; aborted when they end
-// while it runs. Throws ReplayError for an unusable header or inputs out of
-// sequence.
+// while it runs. Throws ReplayError for an unusable header, inputs out of
+// sequence, or inputs past the session's end (its time limit included:
+// RunInputs).
 v1::SessionRecord RecoverSession(const v1::SessionRecord& header,
                                  std::span<const InputSample> inputs);
 

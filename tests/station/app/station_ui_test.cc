@@ -246,6 +246,24 @@ class StationUi : public StationFixture {
               std::string::npos)
         << "the session ended before the station was killed";
   }
+  // A one-lesson curriculum (textproto `curriculum`, id `curriculum_id`)
+  // created by the supervisor and assigned to a new trainee on the server.
+  void AssignLesson(const std::string& curriculum, const std::string& curriculum_id,
+                    const std::string& trainee) {
+    const fs::path file = dir_ / (curriculum_id + ".textproto");
+    std::ofstream(file) << curriculum;
+    const auto as = [&](const std::string& token, std::vector<std::string> args) {
+      args.insert(args.end(), {"--server", address_, "--token", token});
+      return Admin(args);
+    };
+    ASSERT_EQ(as(admin_token_, {"trainee", "add", "--id", trainee}).exit_code, 0);
+    const ProcessResult created = as(supervisor_token_, {"curriculum", "create", file.string()});
+    ASSERT_EQ(created.exit_code, 0) << created.err;
+    ASSERT_EQ(
+        as(supervisor_token_, {"assign", "--curriculum", curriculum_id, "--trainee", trainee})
+            .exit_code,
+        0);
+  }
   // Waits (up to a minute on a loaded machine) until the training screen is
   // up: the window covers the screen with its background at the corners and
   // the endoscope image is drawn (not the black "starting" area).
@@ -573,20 +591,10 @@ TEST_F(StationUi, ASessionRunningWhenTheStationDiesIsRecoveredFromItsJournal) {
 // recovers it from the journal, uploads it, and the server judges it like
 // any attempt (docs/station-run.md, "Journal"; docs/lessons.md).
 TEST_F(StationUi, AnInterruptedLessonAttemptIsRecoveredUploadedAndJudged) {
-  const fs::path lesson_file = dir_ / "crash.textproto";
-  std::ofstream(lesson_file) << "curriculum_id: \"crash-ui\" lessons { lesson_id: \"crash-ui-1\" "
-                                "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 }\n";
-  const auto as = [&](const std::string& token, std::vector<std::string> args) {
-    args.insert(args.end(), {"--server", address_, "--token", token});
-    return Admin(args);
-  };
-  ASSERT_EQ(as(admin_token_, {"trainee", "add", "--id", "trainee-crash"}).exit_code, 0);
-  const ProcessResult created = as(supervisor_token_, {"curriculum", "create", lesson_file.string()});
-  ASSERT_EQ(created.exit_code, 0) << created.err;
-  ASSERT_EQ(as(supervisor_token_,
-               {"assign", "--curriculum", "crash-ui", "--trainee", "trainee-crash"})
-                .exit_code,
-            0);
+  AssignLesson("curriculum_id: \"crash-ui\" lessons { lesson_id: \"crash-ui-1\" "
+               "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 }\n",
+               "crash-ui", "trainee-crash");
+  if (HasFatalFailure()) return;
   const fs::path data = dir_ / "station";
   StartStation({"run", "--trainee", "trainee-crash", "--lesson", "next", "--server", address_,
                 "--token", station_token_, "--data-dir", data.string(), "--no-live"});
@@ -618,24 +626,11 @@ TEST_F(StationUi, AnInterruptedLessonAttemptIsRecoveredUploadedAndJudged) {
 // change nothing the model gets, and the server's replay of the attempt
 // agrees (docs/lessons.md, "Interactive lesson runs").
 TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) {
-  const fs::path lesson_file = dir_ / "no-aids.textproto";
-  {
-    std::ofstream out(lesson_file);
-    out << "curriculum_id: \"no-aids-ui\" lessons { lesson_id: \"no-aids-ui-1\" "
-           "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 "
-           "aids { fluoroscopy_allowed: false wireframe_allowed: false } }\n";
-  }
-  const auto as = [&](const std::string& token, std::vector<std::string> args) {
-    args.insert(args.end(), {"--server", address_, "--token", token});
-    return Admin(args);
-  };
-  ASSERT_EQ(as(admin_token_, {"trainee", "add", "--id", "trainee-ui"}).exit_code, 0);
-  const ProcessResult created = as(supervisor_token_, {"curriculum", "create", lesson_file.string()});
-  ASSERT_EQ(created.exit_code, 0) << created.err;
-  ASSERT_EQ(as(supervisor_token_,
-               {"assign", "--curriculum", "no-aids-ui", "--trainee", "trainee-ui"})
-                .exit_code,
-            0);
+  AssignLesson("curriculum_id: \"no-aids-ui\" lessons { lesson_id: \"no-aids-ui-1\" "
+               "case_ref { case_id: \"standard-adult\" } time_limit_s: 60 "
+               "aids { fluoroscopy_allowed: false wireframe_allowed: false } }\n",
+               "no-aids-ui", "trainee-ui");
+  if (HasFatalFailure()) return;
 
   const fs::path data = dir_ / "station";
   StartStation({"run", "--trainee", "trainee-ui", "--lesson", "next", "--server", address_,
