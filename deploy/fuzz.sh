@@ -8,6 +8,7 @@
 #   A crash leaves its input in DIR/crashes/<target>/ and makes the script
 #   exit 1; copy it into tests/fuzz/regressions/<target>/ once fixed.
 #   Targets: csv markups textproto bundle session_file input_log can_frame
+#   journal
 #   (default: all).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -25,7 +26,7 @@ while [ $# -gt 0 ]; do
     *) targets+=("$1"); shift ;;
   esac
 done
-all=(csv markups textproto bundle session_file input_log can_frame)
+all=(csv markups textproto bundle session_file input_log can_frame journal)
 [ ${#targets[@]} -eq 0 ] && targets=("${all[@]}")
 for t in "${targets[@]}"; do
   [[ " ${all[*]} " == *" $t "* ]] || { echo "fuzz.sh: unknown target '$t' (${all[*]})" >&2; exit 2; }
@@ -71,7 +72,7 @@ run_target() {
 }
 
 # VES_JOBS targets at a time (each libFuzzer run is one process on one core):
-# on CI's two cores the seven targets take four rounds of S seconds, not seven.
+# on CI's two cores the eight targets take four rounds of S seconds, not eight.
 at_once="${VES_JOBS:-1}"
 [[ "$at_once" =~ ^[0-9]+$ ]] && [ "$at_once" -ge 1 ] || at_once=1
 running=0

@@ -108,12 +108,7 @@ void SessionJournalWriter::WriteFrame(std::string_view payload) {
     throw std::runtime_error("journal '" + path_.string() + "': a chunk of " +
                              std::to_string(payload.size()) + " bytes is over the limit");
   }
-  // One write per frame: its length and CRC, then the payload.
-  std::string frame(8, '\0');
-  PutU32(static_cast<std::uint32_t>(payload.size()), frame.data());
-  PutU32(Crc32(payload), frame.data() + 4);
-  frame.append(payload);
-  WriteAll(fd_, frame, path_);
+  WriteAll(fd_, EncodeJournalFrame(payload), path_);  // one write per frame
   unsynced_ = true;
 }
 
@@ -130,21 +125,25 @@ void SessionJournalWriter::Sync() {
   unsynced_ = false;
 }
 
-JournalContents ReadSessionJournal(const std::filesystem::path& path) {
-  std::error_code error;
-  const std::uintmax_t size = std::filesystem::file_size(path, error);
-  if (error)
-    throw JournalError("journal '" + path.string() + "': cannot open it: " + error.message());
-  if (size > kMaxJournalBytes) {
-    throw JournalError("journal '" + path.string() + "': " + std::to_string(size) +
-                       " bytes, more than any session writes (" + std::to_string(kMaxJournalBytes) +
-                       ")");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw JournalError("journal '" + path.string() + "': cannot open it");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.compare(0, kMagic.size(), kMagic) != 0) {
-    throw JournalError("journal '" + path.string() + "': not a session journal (bad magic)");
+std::string EncodeJournalFrame(std::string_view payload) {
+  std::string frame(8, '\0');
+  PutU32(static_cast<std::uint32_t>(payload.size()), frame.data());
+  PutU32(Crc32(payload), frame.data() + 4);
+  frame.append(payload);
+  return frame;
+}
+
+std::string EncodeSessionJournal(const ves::v1::SessionRecord& header,
+                                 const std::vector<std::string>& chunks) {
+  std::string bytes(kMagic);
+  bytes += EncodeJournalFrame(header.SerializeAsString());
+  for (const std::string& chunk : chunks) bytes += EncodeJournalFrame(chunk);
+  return bytes;
+}
+
+JournalContents ParseSessionJournal(std::string_view bytes, const std::string& name) {
+  if (bytes.substr(0, kMagic.size()) != kMagic) {
+    throw JournalError("journal '" + name + "': not a session journal (bad magic)");
   }
   std::size_t at = kMagic.size();
   // The next whole frame's payload, or nothing (end of file, or a torn or
@@ -161,7 +160,7 @@ JournalContents ReadSessionJournal(const std::filesystem::path& path) {
       *torn = true;
       return std::nullopt;
     }
-    const std::string_view payload(bytes.data() + at + 8, length);
+    const std::string_view payload = bytes.substr(at + 8, length);
     if (Crc32(payload) != crc) {
       *torn = true;
       return std::nullopt;
@@ -174,16 +173,33 @@ JournalContents ReadSessionJournal(const std::filesystem::path& path) {
   const std::optional<std::string_view> header = next_frame(&torn);
   if (!header ||
       !contents.header.ParseFromArray(header->data(), static_cast<int>(header->size()))) {
-    throw JournalError("journal '" + path.string() + "': its header is missing or damaged");
-  }
-  if (JournalPath(path.parent_path(), contents.header.uuid()) != path) {
-    throw JournalError("journal '" + path.string() + "': its header names session '" +
-                       contents.header.uuid() + "'");
+    throw JournalError("journal '" + name + "': its header is missing or damaged");
   }
   while (const std::optional<std::string_view> chunk = next_frame(&torn)) {
     contents.chunks.emplace_back(*chunk);
   }
   contents.torn_tail = torn;
+  return contents;
+}
+
+JournalContents ReadSessionJournal(const std::filesystem::path& path) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (error)
+    throw JournalError("journal '" + path.string() + "': cannot open it: " + error.message());
+  if (size > kMaxJournalBytes) {
+    throw JournalError("journal '" + path.string() + "': " + std::to_string(size) +
+                       " bytes, more than any session writes (" + std::to_string(kMaxJournalBytes) +
+                       ")");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw JournalError("journal '" + path.string() + "': cannot open it");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  JournalContents contents = ParseSessionJournal(bytes, path.string());
+  if (JournalPath(path.parent_path(), contents.header.uuid()) != path) {
+    throw JournalError("journal '" + path.string() + "': its header names session '" +
+                       contents.header.uuid() + "'");
+  }
   return contents;
 }
 

@@ -81,6 +81,18 @@ struct JournalContents {
 // dropped (torn_tail).
 JournalContents ReadSessionJournal(const std::filesystem::path& path);
 
+// The reader's parse of a journal's bytes (ReadSessionJournal less the file
+// and its name's check); `name` is the one its errors give. A fuzz target
+// (docs/fuzzing.md).
+JournalContents ParseSessionJournal(std::string_view bytes, const std::string& name);
+
+// One frame as the writer appends it: length and CRC-32 (little-endian), then
+// the payload (at most kMaxJournalFrameBytes; the writer refuses larger).
+std::string EncodeJournalFrame(std::string_view payload);
+// A whole journal as a writer that lived to write these chunks leaves it.
+std::string EncodeSessionJournal(const ves::v1::SessionRecord& header,
+                                 const std::vector<std::string>& chunks);
+
 // Whether a live writer holds the journal (a station still running that
 // session: its lock goes with its process, however that ends).
 bool JournalInUse(const std::filesystem::path& path);

@@ -9,6 +9,7 @@
 #include "patient_db/case_format.h"
 #include "station/haptics/candump_log.h"
 #include "station/haptics/protocol.h"
+#include "station/sync/session_journal.h"
 #include "station/training/case_run.h"
 #include "station/training/input_log.h"
 #include "station/training/session_file.h"
@@ -72,6 +73,7 @@ const std::vector<FuzzTarget>& AllFuzzTargets() {
       {"session_file", FuzzSessionFile},
       {"input_log", FuzzInputLog},
       {"can_frame", FuzzCanFrame},
+      {"journal", FuzzJournal},
   };
   return kTargets;
 }
@@ -123,6 +125,32 @@ std::vector<std::string> SeedsFor(const std::string& target) {
       }
       seeds.push_back(training::EncodeInputSamples(samples));
     }
+  } else if (target == "journal") {
+    // A short scripted run's header and its log in chunks, as the station
+    // journals it; and the same journal torn inside its last chunk.
+    v1::SessionRecord record;
+    training::RunScriptedCase(cases[0], training::DefaultEndoscopeSpec(), {}, "expert", 0.6,
+                              1'700'000'000'000, &record);
+    const std::vector<training::InputSample> samples =
+        training::DecodeInputSamples(record.input_log().encoded());
+    std::vector<std::string> chunks;
+    for (std::size_t at = 0; at < samples.size(); at += 250) {
+      chunks.push_back(training::EncodeInputSamples(
+          {samples.begin() + at, samples.begin() + std::min(at + 250, samples.size())}));
+    }
+    v1::SessionRecord header = record;  // less what RecordHeader leaves out
+    header.clear_end_unix_ms();
+    header.clear_outcome();
+    header.clear_metrics();
+    header.clear_score();
+    header.clear_events();
+    header.clear_station_health();
+    header.mutable_input_log()->clear_encoded();
+    header.mutable_input_log()->clear_sample_count();
+    const std::string journal = sync::EncodeSessionJournal(header, chunks);
+    seeds.push_back(journal);
+    seeds.push_back(journal.substr(0, journal.size() - 7));
+    seeds.push_back(sync::EncodeSessionJournal(header, {}));
   } else if (target == "can_frame") {
     using namespace ves::haptics;  // NOLINT
     const can_frame frames[] = {

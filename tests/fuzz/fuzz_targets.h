@@ -27,6 +27,7 @@ int FuzzBundle(const std::uint8_t* data, std::size_t size);
 int FuzzSessionFile(const std::uint8_t* data, std::size_t size);
 int FuzzInputLog(const std::uint8_t* data, std::size_t size);
 int FuzzCanFrame(const std::uint8_t* data, std::size_t size);
+int FuzzJournal(const std::uint8_t* data, std::size_t size);
 
 const std::vector<FuzzTarget>& AllFuzzTargets();
 

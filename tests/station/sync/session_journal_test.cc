@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace ves::sync {
@@ -48,6 +49,27 @@ TEST_F(SessionJournal, WhatWasWrittenReadsBack) {
   EXPECT_EQ(read.chunks, chunks);
   EXPECT_FALSE(read.torn_tail);
   EXPECT_EQ(ListJournals(dir_ / "journal"), std::vector<fs::path>{path});
+}
+
+// EncodeSessionJournal (the fuzz target's round trip and seeds) writes what
+// the writer writes, so what the fuzzer learns holds for real journals.
+TEST_F(SessionJournal, TheEncoderWritesTheWritersBytes) {
+  const std::vector<std::string> chunks = {"first", std::string(300, '\0'), ""};
+  const fs::path path = Write(chunks);
+  std::ifstream in(path, std::ios::binary);
+  const std::string written((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(EncodeSessionJournal(header_, chunks), written);
+  const JournalContents parsed = ParseSessionJournal(written, "here");
+  EXPECT_EQ(parsed.chunks, chunks);
+  EXPECT_FALSE(parsed.torn_tail);
+  try {
+    ParseSessionJournal(written.substr(1), "here");
+    FAIL() << "a journal without its magic was parsed";
+  } catch (const JournalError& e) {
+    EXPECT_NE(std::string(e.what()).find("journal 'here': not a session journal"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(SessionJournal, AChunkCutShortOrDamagedIsDroppedWithTheRest) {
