@@ -47,7 +47,15 @@ namespace {
 // The simulated hand follows the keyboard's insertion target no faster than a
 // person pushes a colonoscope, so a key press is a push, not a jump.
 constexpr double kHandSpeed_m_per_s = 0.15;
-constexpr int kPollMs = 5;
+// The screen is shown at most at a display's refresh rate, and at 10 Hz
+// once nothing has moved for a second (a session over, the trainee reading
+// the results: the force gauge still moves). The views are rendered only
+// when the model published a new state or a view's controls changed. An
+// idle screen took a whole core redrawing the same picture
+// (docs/station-ui.md, "CPU").
+constexpr std::chrono::steady_clock::duration kScreenPeriod = std::chrono::microseconds(16'667);
+constexpr std::chrono::steady_clock::duration kIdleScreenPeriod = std::chrono::milliseconds(100);
+constexpr std::chrono::steady_clock::duration kIdleAfter = std::chrono::seconds(1);
 
 // UI -> simulated hand: where the keyboard wants the scope (device coordinates).
 struct HandTarget {
@@ -606,6 +614,22 @@ class CoupledLoop {
   haptics::HapticLoop loop_;
 };
 
+// What the two views show besides the model's state.
+struct ViewControls {
+  training::ViewMode view_mode{};
+  bool fluoroscopy_visible{false};
+  double fluoro_yaw_rad{0.0};
+  double fluoro_pitch_rad{0.0};
+  double fluoro_zoom{1.0};
+  bool damage_display{false};
+  bool operator==(const ViewControls&) const = default;
+};
+
+ViewControls ViewControlsOf(const ui::ControlState& c) {
+  return {c.view_mode,      c.fluoroscopy_visible, c.fluoro_yaw_rad,
+          c.fluoro_pitch_rad, c.fluoro_zoom,        c.damage_display};
+}
+
 // The training screen on the UI thread until the trainee quits or picks
 // another case or scope: composes the screen from the loop's latest
 // publication, polls keys and mouse, hands the controls to the loop and the
@@ -648,6 +672,11 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   model::StepOutput shown_output;
   PanelNumbers numbers;
   std::uint64_t shown_sequence = 0;
+  cv::Mat endoscope;
+  cv::Mat fluoroscopy;
+  std::optional<ViewControls> rendered_with;  // the controls of the views shown; none yet
+  auto next_screen = std::chrono::steady_clock::now();
+  auto last_activity = next_screen;  // a new state, a view change or an input
   while (!controls.quit_requested) {
     const bool fresh =
         loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
@@ -656,16 +685,19 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
     if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
-    cv::Mat endoscope;
-    cv::Mat fluoroscopy;
-    if (shown_sequence > 0) {
+    const ViewControls wanted = ViewControlsOf(controls);
+    const auto now = std::chrono::steady_clock::now();
+    if (fresh || rendered_with != wanted) last_activity = now;
+    if (shown_sequence > 0 && (fresh || rendered_with != wanted)) {
       FluoroscopyControls fluoro;
       fluoro.yaw_rad = controls.fluoro_yaw_rad;
       fluoro.pitch_rad = controls.fluoro_pitch_rad;
       fluoro.zoom = controls.fluoro_zoom;
       fluoro.damage_display = controls.damage_display;
       endoscope = views->Endoscope(scene, controls.view_mode);
-      if (controls.fluoroscopy_visible) fluoroscopy = views->Fluoroscopy(scene, fluoro);
+      fluoroscopy =
+          controls.fluoroscopy_visible ? views->Fluoroscopy(scene, fluoro) : cv::Mat();
+      rendered_with = wanted;
     }
     if (fresh) {
       // Built here, not in the loop: the 1 kHz thread only copied plain values.
@@ -676,8 +708,21 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
     } else {
       live->Poll();
     }
-    window->Show(ui::ComposeScreen(window->layout(), endoscope, fluoroscopy, screen, controls));
-    window->Poll(kPollMs, screen, &controls);
+    if (now >= next_screen) {
+      window->Show(ui::ComposeScreen(window->layout(), endoscope, fluoroscopy, screen, controls));
+      const auto period = now - last_activity < kIdleAfter ? kScreenPeriod : kIdleScreenPeriod;
+      next_screen += period;
+      if (next_screen < now) next_screen = now + period;  // fell behind: no burst
+    }
+    // Nothing is due before the next screen; a key or a click ends the wait
+    // at once (waitKeyEx).
+    const auto until_screen = std::chrono::duration_cast<std::chrono::milliseconds>(
+        next_screen - std::chrono::steady_clock::now());
+    const int wait_ms = static_cast<int>(std::clamp<std::int64_t>(until_screen.count(), 1, 100));
+    if (window->Poll(wait_ms, screen, &controls) > 0) {
+      last_activity = std::chrono::steady_clock::now();
+      next_screen = last_activity;  // show the key's effect at once
+    }
     enforce_aids(&controls);
     if (controls.repeat_requested && choices != nullptr &&
         (controls.case_choice != choices->current_case ||
