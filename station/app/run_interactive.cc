@@ -626,8 +626,8 @@ struct ViewControls {
 };
 
 ViewControls ViewControlsOf(const ui::ControlState& c) {
-  return {c.view_mode,      c.fluoroscopy_visible, c.fluoro_yaw_rad,
-          c.fluoro_pitch_rad, c.fluoro_zoom,        c.damage_display};
+  return {c.view_mode,        c.fluoroscopy_visible, c.fluoro_yaw_rad,
+          c.fluoro_pitch_rad, c.fluoro_zoom,         c.damage_display};
 }
 
 // The training screen on the UI thread until the trainee quits or picks
@@ -695,8 +695,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       fluoro.zoom = controls.fluoro_zoom;
       fluoro.damage_display = controls.damage_display;
       endoscope = views->Endoscope(scene, controls.view_mode);
-      fluoroscopy =
-          controls.fluoroscopy_visible ? views->Fluoroscopy(scene, fluoro) : cv::Mat();
+      fluoroscopy = controls.fluoroscopy_visible ? views->Fluoroscopy(scene, fluoro) : cv::Mat();
       rendered_with = wanted;
     }
     if (fresh) {

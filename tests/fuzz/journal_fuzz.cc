@@ -26,8 +26,8 @@ int FuzzJournal(const std::uint8_t* data, std::size_t size) {
   }
   Require(chunk_bytes <= bytes.size(), "the chunks are no larger than the journal");
   // What was read, written again, reads back whole and the same.
-  const sync::JournalContents again =
-      sync::ParseSessionJournal(sync::EncodeSessionJournal(contents.header, contents.chunks), "again");
+  const sync::JournalContents again = sync::ParseSessionJournal(
+      sync::EncodeSessionJournal(contents.header, contents.chunks), "again");
   Require(!again.torn_tail, "a re-encoded journal has no torn tail");
   Require(again.chunks == contents.chunks, "the chunks survive a round trip");
   Require(google::protobuf::util::MessageDifferencer::Equals(again.header, contents.header),
