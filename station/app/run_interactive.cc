@@ -152,10 +152,22 @@ class JournalKeeper {
     *header_.mutable_replay_setup() = training::MakeReplaySetup(colon_case, {}, time_limit_s);
   }
 
+  // The session's record is in the outbox (and its journal deleted): its
+  // writer and lock go.
+  void Release(const std::string& uuid) {
+    if (writer_ && header_.uuid() == uuid) {
+      writer_.reset();
+      pending_.clear();
+    }
+    std::erase_if(retired_, [&](const auto& w) { return w->uuid() == uuid; });
+  }
+
   void Take(const JournalEntry& entry) {
     if (entry.starts) {
       Flush();
-      writer_.reset();
+      // The ended session's journal stays locked until its record is
+      // committed (Release): a `sync` meanwhile must not recover it too.
+      if (writer_) retired_.push_back(std::move(writer_));
       pending_.clear();
       next_tick_ = 0;
       header_.set_uuid(entry.uuid.data());
@@ -199,6 +211,7 @@ class JournalKeeper {
   std::filesystem::path dir_;
   ves::v1::SessionRecord header_;
   std::unique_ptr<sync::SessionJournalWriter> writer_;
+  std::vector<std::unique_ptr<sync::SessionJournalWriter>> retired_;  // ended, not yet committed
   std::vector<training::InputSample> pending_;
   std::uint64_t next_tick_{0};
 };
@@ -761,11 +774,13 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   if (!journal_dir.empty()) journal.emplace(journal_dir, run, colon_case, time_limit_s);
   CoupledLoop loop(run, colon_case, time_limit_s, &rig);
   // Records of sessions that end while the screen runs: to the caller at
-  // once, or kept for the result.
+  // once (its journal locked until then), or kept for the result.
   std::vector<ves::v1::SessionRecord> ended;
   const auto keep = [&](ves::v1::SessionRecord record) {
     if (on_session_ended) {
+      const std::string uuid = record.uuid();
       on_session_ended(std::move(record));
+      if (journal) journal->Release(uuid);
     } else {
       ended.push_back(std::move(record));
     }
@@ -775,6 +790,11 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                             journal ? &*journal : nullptr, keep);
   loop.Stop();
   InteractiveResult result = loop.Finish();
+  if (on_session_ended) {
+    // The last session's too, while the journal keeper still holds its lock.
+    for (auto& record : result.records) keep(std::move(record));
+    result.records.clear();
+  }
   result.records.insert(result.records.begin(), std::make_move_iterator(ended.begin()),
                         std::make_move_iterator(ended.end()));
   std::ostringstream live_report;

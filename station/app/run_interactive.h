@@ -72,12 +72,14 @@ using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
 // `choices`: the panel's case and scope lists; choosing another entry and
 // pressing "repeat" ends this run with next_case/next_scope set.
 // `live`: where the sessions stream (null: nowhere).
-// `on_session_ended`: each record as its session ends (empty: they are all
-// returned in the result).
+// `on_session_ended`: each record as its session ends, the one running at
+// the quit included (empty: they are all returned in the result).
 // `journal_dir`: where each running session's inputs are journaled
 // (sync::SessionJournalWriter; empty: nowhere), so that a station that dies
 // mid-session loses at most about a second. The caller deletes a journal
-// once its session's record is safely stored.
+// once its session's record is safely stored; with `on_session_ended` each
+// journal stays locked (sync::JournalInUse) until that call returns, so a
+// `ves-station sync` meanwhile cannot recover the session a second time.
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
