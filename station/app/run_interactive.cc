@@ -155,7 +155,7 @@ class JournalKeeper {
   // The session's record is in the outbox (and its journal deleted): its
   // writer and lock go.
   void Release(const std::string& uuid) {
-    if (writer_ && header_.uuid() == uuid) {
+    if (writer_ && writer_->uuid() == uuid) {
       writer_.reset();
       pending_.clear();
     }
@@ -631,16 +631,14 @@ class CoupledLoop {
 struct ViewControls {
   training::ViewMode view_mode{};
   bool fluoroscopy_visible{false};
-  double fluoro_yaw_rad{0.0};
-  double fluoro_pitch_rad{0.0};
-  double fluoro_zoom{1.0};
-  bool damage_display{false};
+  FluoroscopyControls fluoro;
   bool operator==(const ViewControls&) const = default;
 };
 
 ViewControls ViewControlsOf(const ui::ControlState& c) {
-  return {c.view_mode,        c.fluoroscopy_visible, c.fluoro_yaw_rad,
-          c.fluoro_pitch_rad, c.fluoro_zoom,         c.damage_display};
+  return {
+      c.view_mode, c.fluoroscopy_visible,
+      FluoroscopyControls{c.fluoro_yaw_rad, c.fluoro_pitch_rad, c.fluoro_zoom, c.damage_display}};
 }
 
 // The training screen on the UI thread until the trainee quits or picks
@@ -699,16 +697,13 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
     const ViewControls wanted = ViewControlsOf(controls);
+    const bool views_changed = fresh || rendered_with != wanted;
     const auto now = std::chrono::steady_clock::now();
-    if (fresh || rendered_with != wanted) last_activity = now;
-    if (shown_sequence > 0 && (fresh || rendered_with != wanted)) {
-      FluoroscopyControls fluoro;
-      fluoro.yaw_rad = controls.fluoro_yaw_rad;
-      fluoro.pitch_rad = controls.fluoro_pitch_rad;
-      fluoro.zoom = controls.fluoro_zoom;
-      fluoro.damage_display = controls.damage_display;
-      endoscope = views->Endoscope(scene, controls.view_mode);
-      fluoroscopy = controls.fluoroscopy_visible ? views->Fluoroscopy(scene, fluoro) : cv::Mat();
+    if (views_changed) last_activity = now;
+    if (views_changed && shown_sequence > 0) {
+      endoscope = views->Endoscope(scene, wanted.view_mode);
+      fluoroscopy =
+          wanted.fluoroscopy_visible ? views->Fluoroscopy(scene, wanted.fluoro) : cv::Mat();
       rendered_with = wanted;
     }
     if (fresh) {

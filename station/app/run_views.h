@@ -21,6 +21,7 @@ struct FluoroscopyControls {
   double pitch_rad{0.0};
   double zoom{1.0};
   bool damage_display{false};
+  bool operator==(const FluoroscopyControls&) const = default;
 };
 
 class SessionViews {

@@ -53,7 +53,7 @@ std::filesystem::path JournalPath(const std::filesystem::path& dir, const std::s
 
 SessionJournalWriter::SessionJournalWriter(const std::filesystem::path& dir,
                                            const ves::v1::SessionRecord& header)
-    : uuid_(header.uuid()), path_(JournalPath(dir, header.uuid())) {
+    : path_(JournalPath(dir, header.uuid())) {
   if (header.uuid().empty() || header.uuid().find('/') != std::string::npos) {
     throw std::runtime_error("journal: the session has no usable UUID ('" + header.uuid() + "')");
   }

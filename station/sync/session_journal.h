@@ -54,14 +54,13 @@ class SessionJournalWriter {
   // Flushes to disk now (a session that ended, before its record is built).
   void Sync();
   const std::filesystem::path& path() const { return path_; }
-  const std::string& uuid() const { return uuid_; }
+  std::string uuid() const { return path_.stem().string(); }  // the session's
 
   static constexpr std::chrono::milliseconds kSyncInterval{1000};
 
  private:
   void WriteFrame(std::string_view payload);
 
-  std::string uuid_;
   std::filesystem::path path_;
   int fd_{-1};
   std::chrono::steady_clock::time_point last_sync_;

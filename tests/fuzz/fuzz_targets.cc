@@ -12,6 +12,7 @@
 #include "station/sync/session_journal.h"
 #include "station/training/case_run.h"
 #include "station/training/input_log.h"
+#include "station/training/session.h"
 #include "station/training/session_file.h"
 
 namespace ves::fuzz {
@@ -138,15 +139,12 @@ std::vector<std::string> SeedsFor(const std::string& target) {
       chunks.push_back(training::EncodeInputSamples(
           {samples.begin() + at, samples.begin() + std::min(at + 250, samples.size())}));
     }
-    v1::SessionRecord header = record;  // less what RecordHeader leaves out
-    header.clear_end_unix_ms();
-    header.clear_outcome();
-    header.clear_metrics();
-    header.clear_score();
-    header.clear_events();
-    header.clear_station_health();
-    header.mutable_input_log()->clear_encoded();
-    header.mutable_input_log()->clear_sample_count();
+    // The header as the station's journal keeper builds it.
+    const training::CaseRun run =
+        training::PrepareCaseRun(cases[0], training::DefaultEndoscopeSpec(), {}, 0.6);
+    v1::SessionRecord header =
+        training::RecordHeader(run.config, record.uuid(), record.start_unix_ms());
+    *header.mutable_replay_setup() = record.replay_setup();
     const std::string journal = sync::EncodeSessionJournal(header, chunks);
     seeds.push_back(journal);
     seeds.push_back(journal.substr(0, journal.size() - 7));
