@@ -18,8 +18,12 @@
 // steps (show_damage=1 prints these). ring_hold is the peak 10 ms mean of
 // the ring contacts' push along the shaft toward the anus (N), ring_hold_s
 // the time they hold more than half of a push of 4 N or more.
+// state_hash=1 also prints a hash of the final model state (every colon and
+// scope array, bit for bit): a speed change that must not change one result
+// gives the same hash before and after it.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -38,6 +42,35 @@ namespace {
 // One step of trace_from=T: the largest wall force and where, every sample
 // tracked within 4 segments of it (a sample changing segment from step to
 // step shows up here), and every ring contact with its load.
+// FNV-1a over the bytes of the state's arrays (they hold doubles only).
+std::uint64_t HashModelState(const ves::model::ModelState& state) {
+  std::uint64_t hash = 14695981039346656037ull;
+  auto add = [&](const void* data, std::size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  };
+  auto add_vector = [&](const auto& v) { add(v.data(), v.size() * sizeof(v[0])); };
+  add(&state.time_s, sizeof state.time_s);
+  add(&state.inserted_m, sizeof state.inserted_m);
+  add(&state.roll_rad, sizeof state.roll_rad);
+  add(&state.tip_arc_m, sizeof state.tip_arc_m);
+  add_vector(state.bend_rad);
+  add_vector(state.bend_rate_rad_per_s);
+  add_vector(state.p_WSample);
+  add_vector(state.colon_displacement_m);
+  add_vector(state.colon_reference_m);
+  add_vector(state.colon_pair_rest_gap_m);
+  add_vector(state.colon_velocity_m_per_s);
+  add_vector(state.p_WColon);
+  add_vector(state.colon_tangent);
+  add_vector(state.colon_gap_m);
+  add_vector(state.colon_tether_distance_m);
+  add_vector(state.colon_lumen_radius_m);
+  add_vector(state.wall_deformation_m);
+  add_vector(state.ring_onset);
+  return hash;
+}
+
 void PrintStepTrace(const ves::model::ModelParams& params, const ves::model::ModelState& state,
                     const ves::model::StepOutput& out, const ves::model::Scratch& scratch,
                     double hand_N) {
@@ -288,5 +321,8 @@ int main(int argc, char** argv) {
               1e3 * peak_fixed,
               pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], peak_ring_hold_N,
               ring_hold_s, tag.c_str());
+  if (get("state_hash", 0.0) != 0.0) {
+    std::printf("STATE_HASH %016llx\n", static_cast<unsigned long long>(HashModelState(state)));
+  }
   return 0;
 }

@@ -79,19 +79,23 @@ BENCHMARK_CAPTURE(BM_Step, scaling_64links_4000seg, 64, 4000)->Unit(benchmark::k
 void BM_ColonElimination(benchmark::State& bench, int points) {
   std::mt19937 random(1);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::vector<Eigen::Matrix3d> diag(points), upper(points), gain(points);
-  std::vector<Eigen::Vector3d> rhs(points), x(points);
+  ColonSystem system;
+  system.Resize(points);
   for (int i = 0; i < points; ++i) {
     Eigen::Matrix3d a;
     for (int k = 0; k < 9; ++k) a.data()[k] = unit(random);
-    upper[i] = 0.3 * (a + a.transpose());
-    diag[i] = 5.0 * Eigen::Matrix3d::Identity() + 0.1 * a * a.transpose();
-    rhs[i] = Eigen::Vector3d(unit(random), unit(random), unit(random));
+    const Eigen::Matrix3d upper = 0.3 * (a + a.transpose());
+    const Eigen::Matrix3d diag = 5.0 * Eigen::Matrix3d::Identity() + 0.1 * a * a.transpose();
+    const int entry[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+    for (int e = 0; e < 6; ++e) system.diag[e][i] = diag(entry[e][0], entry[e][1]);
+    for (int e = 0; e < 9; ++e) system.upper[e][i] = upper(e / 3, e % 3);
+    for (int c = 0; c < 3; ++c) system.rhs[c][i] = unit(random);
   }
+  const CoordinateArrays rhs = system.rhs;
   for (auto _ : bench) {
-    x = rhs;
-    internal::SolveBlockTridiagonal(diag, upper, points - 1, &x, &gain);
-    benchmark::DoNotOptimize(x.data());
+    system.rhs = rhs;
+    internal::SolveBlockTridiagonal(points - 1, &system);
+    benchmark::DoNotOptimize(system.rhs[0].data());
   }
 }
 

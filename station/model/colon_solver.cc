@@ -9,10 +9,25 @@
 // of the step (backward Euler). That is one symmetric block-tridiagonal
 // system (3x3 blocks, positive definite: every stiffness added is), solved in
 // O(N) by block Thomas elimination. Point 0 (the anus) is fixed.
+//
+// The loops over every point and every pair take four at a time ("lanes",
+// GCC and Clang vector extensions; docs/model.md, "Speed"), on arrays with
+// one coordinate each (Scratch::colon_arrays, Scratch::colon_system).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#if defined(__x86_64__)
+#include <emmintrin.h>
+#endif
 
 #include "station/model/internal.h"
+
+#if defined(__GNUC__) && !defined(__clang__)
+// Lanes are 32 bytes; no function takes or returns them (see
+// VES_LANE_FUNCTION), so GCC's note that AVX changes how they are passed
+// does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 
 namespace ves::model::internal {
 namespace {
@@ -45,82 +60,536 @@ int LastActivePoint(const ModelState& s, int N) {
   return std::min(N - 1, last + kActiveMargin);
 }
 
-// The direction a pair of neighbours is pulled toward: its rest direction
-// turned by the smallest rotation that takes the pair's rest mean tangent to
-// its current one (the colon turned as a whole exerts no kink force).
-Eigen::Vector3d CalcKinkDirection(const Eigen::Vector3d& rest_mean, const Eigen::Vector3d& mean_sum,
-                                  const Eigen::Vector3d& rest_direction,
-                                  const Eigen::Vector3d& fallback) {
-  const double length = mean_sum.norm();
-  if (length < 1e-6) return fallback;
-  // Rodrigues for the rotation taking rest_mean onto mean = mean_sum / length:
-  // v + c x v + c x (c x v) / (1 + cos) with c = rest_mean x mean, cos =
-  // rest_mean . mean (a rotation: the unit rest direction stays unit). Taken
-  // with the unnormalised sum, c' = length c and cos' = length cos, it needs
-  // one division: 1 / (length (length + cos')).
-  const Eigen::Vector3d c = rest_mean.cross(mean_sum);
-  const double cos_sum = rest_mean.dot(mean_sum);
-  if (cos_sum < -0.99 * length) return fallback;  // turned about half a turn: no smallest rotation
-  const double inv = 1.0 / (length * (length + cos_sum));
-  const Eigen::Vector3d cv = c.cross(rest_direction);
-  return rest_direction + ((length + cos_sum) * inv) * cv + inv * c.cross(cv);
+// Four doubles in one value. Each lane does the scalar formula's IEEE
+// operations in the scalar code's order, Eigen's included (a dot product or
+// a norm sums from the first coordinate; s (u u^T) is evaluated as (s u) u^T;
+// a 3x3 matrix times a vector sums its first two rows from the left and its
+// third from the right), and nothing is fused into an FMA: the results are
+// bit for bit those of one point at a time, in the AVX2 build and in the
+// baseline one, so a replay stays exact on any x86-64.
+typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
+typedef double LanesInMemory
+    __attribute__((vector_size(4 * sizeof(double)), aligned(alignof(double)), may_alias));
+using LaneMask = decltype(Lanes{} < Lanes{});
+constexpr int kLanes = 4;
+// (row, column) of ColonSystem::diag's entries in a block, and back.
+constexpr int kDiagEntry[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+constexpr int kDiagIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+static_assert(kLanes <= kColonLanePadding, "the colon's arrays must hold a whole last group");
+
+// A vector loop is built twice, for AVX2 and for the baseline x86-64, and the
+// one the CPU runs is chosen when the program loads. No function takes or
+// returns Lanes: the two builds would pass them differently (Clang refuses
+// it), so these are macros. A lane function ends with no call either: GCC 12
+// left the AVX registers' upper halves in use before such a tail call
+// (no vzeroupper), and every SSE instruction after it, the elimination's
+// among them, ran about 2.4 times slower on the project's VM.
+#if defined(__x86_64__)
+#define VES_LANE_FUNCTION [[gnu::target_clones("avx2", "default")]]
+#else
+#define VES_LANE_FUNCTION
+#endif
+#define VES_LOAD(array, i) (Lanes(*reinterpret_cast<const LanesInMemory*>((array).data() + (i))))
+#define VES_STORE(array, i, value) \
+  (*reinterpret_cast<LanesInMemory*>((array).data() + (i)) = (value))
+// Lanes where mask is set take a, the others b.
+#define VES_SELECT(mask, a, b) ((Lanes)(((mask) & (LaneMask)(a)) | (~(mask) & (LaneMask)(b))))
+// Square roots (correctly rounded, as std::sqrt's), two lanes per SSE2
+// instruction; the AVX2 build encodes them in VEX.
+#if defined(__x86_64__)
+#define VES_SQRT(v)                                                 \
+  ({                                                                \
+    const Lanes ves_sqrt_in = (v);                                  \
+    __m128d ves_sqrt_half[2];                                       \
+    std::memcpy(ves_sqrt_half, &ves_sqrt_in, sizeof ves_sqrt_in);   \
+    ves_sqrt_half[0] = _mm_sqrt_pd(ves_sqrt_half[0]);               \
+    ves_sqrt_half[1] = _mm_sqrt_pd(ves_sqrt_half[1]);               \
+    Lanes ves_sqrt_out;                                             \
+    std::memcpy(&ves_sqrt_out, ves_sqrt_half, sizeof ves_sqrt_out); \
+    ves_sqrt_out;                                                   \
+  })
+#else
+#define VES_SQRT(v) \
+  (Lanes{std::sqrt((v)[0]), std::sqrt((v)[1]), std::sqrt((v)[2]), std::sqrt((v)[3])})
+#endif
+#define VES_ANY(mask) (((mask)[0] | (mask)[1] | (mask)[2] | (mask)[3]) != 0)
+
+// The stored upper triangle of D_i as a symmetric matrix, and back; a
+// matrix's upper triangle added to it.
+Eigen::Matrix3d LoadDiag(const ColonSystem& sys, int i) {
+  Eigen::Matrix3d D;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) D(r, c) = sys.diag[kDiagIndex[r][c]][i];
+  }
+  return D;
+}
+void StoreDiag(const Eigen::Matrix3d& D, int i, ColonSystem* sys) {
+  for (int e = 0; e < 6; ++e) sys->diag[e][i] = D(kDiagEntry[e][0], kDiagEntry[e][1]);
+}
+void AddToDiag(const Eigen::Matrix3d& add, int i, ColonSystem* sys) {
+  for (int e = 0; e < 6; ++e) sys->diag[e][i] += add(kDiagEntry[e][0], kDiagEntry[e][1]);
+}
+void AddToUpper(const Eigen::Matrix3d& add, int i, ColonSystem* sys) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) sys->upper[3 * r + c][i] += add(r, c);
+  }
+}
+void AddToRhs(const Eigen::Vector3d& add, int i, ColonSystem* sys) {
+  for (int c = 0; c < 3; ++c) sys->rhs[c][i] += add[c];
+}
+
+// Points from..to of a list of 3-D points into one array per coordinate,
+// four points at a time while four remain.
+static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "points are read as plain doubles");
+VES_LANE_FUNCTION void SplitCoordinates(const std::vector<Eigen::Vector3d>& points, int from,
+                                        int to, CoordinateArrays* xyz) {
+  const double* p = points.data()->data();
+  int i = from;
+  for (; i + kLanes - 1 <= to; i += kLanes) {
+    const double* q = p + 3 * i;
+    for (int c = 0; c < 3; ++c) {
+      VES_STORE((*xyz)[c], i, (Lanes{q[c], q[3 + c], q[6 + c], q[9 + c]}));
+    }
+  }
+  for (; i <= to; ++i) {
+    for (int c = 0; c < 3; ++c) (*xyz)[c][i] = p[3 * i + c];
+  }
+}
+
+// The colon's state, one array per coordinate, for points 0..end (the
+// positions one further: the last tangent taken after the solve needs it).
+void CopyColonState(const ModelState& s, int end, ColonSolverArrays* a) {
+  const int N = static_cast<int>(s.p_WColon.size());
+  SplitCoordinates(s.p_WColon, 0, std::min(end + 1, N - 1), &a->position_m);
+  SplitCoordinates(s.colon_reference_m, 0, end, &a->reference_m);
+  SplitCoordinates(s.colon_tangent, 0, end, &a->tangent);
+  const auto copy = [end](const std::vector<double>& from, std::vector<double>* to) {
+    std::copy(from.begin(), from.begin() + end + 1, to->begin());
+  };
+  copy(s.colon_gap_m, &a->gap_m);
+  copy(s.colon_pair_rest_gap_m, &a->rest_gap_m);
+  copy(s.colon_tether_distance_m, &a->tether_distance_m);
+  a->gap_behind_m[0] = 0.0;
+  std::copy(s.colon_gap_m.begin(), s.colon_gap_m.begin() + end, a->gap_behind_m.begin() + 1);
+}
+
+// The terms of point i's own that few points have at a time: the body wall
+// behind its mesentery's root, the assistant's hand and the abdomen's walls
+// (added after its suspension and tether, in that order).
+void AddOwnExtraTerms(const ModelParams& params, const StepInput& input, const ModelState& s, int i,
+                      ColonSystem* sys) {
+  const ColonPoint& p = params.colon.points[i];
+  const double dt = params.dt_s;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d& x = s.p_WColon[i];
+  Eigen::Matrix3d diag = LoadDiag(*sys, i);  // only its upper triangle is kept
+  Eigen::Vector3d rhs = sys->Rhs(i);
+  const Eigen::Vector3d r = x - p.tether_anchor_m;
+  // The colon hangs on one side of its root: swung through it by more
+  // than mesentery_crossing_m, it meets the body wall behind the root.
+  const double crossed_m = -(r.dot(p.tether_side) + params.colon.mesentery_crossing_m);
+  if (crossed_m > 0.0 && p.tether_side.squaredNorm() > 0.5) {
+    const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
+    rhs += (dt * k * crossed_m) * p.tether_side;
+    diag += (dt * k) * p.tether_side * p.tether_side.transpose();
+  }
+  // The assistant's hand: a pressed mobile point is held within the slack
+  // of its root (isotropic; the same implicit form as the tether).
+  const double pressure = input.abdominal_pressure[static_cast<int>(p.region)];
+  if (pressure > 0.0 && p.tissue.mobile) {
+    const double d = r.norm();
+    const double slack = params.abdominal_pressure_slack_m;
+    if (d > slack) {
+      const double k = pressure * params.abdominal_pressure_stiffness_N_per_m2 * p.length_m;
+      const Eigen::Vector3d g = r / d;
+      rhs -= (dt * k * (d - slack)) * g;
+      diag += (dt * k) * (g * g.transpose() + (1.0 - slack / d) * (I - g * g.transpose()));
+    }
+  }
+  // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
+  for (int axis = 0; axis < 3; ++axis) {
+    const double below_m = params.colon.abdomen_min_m[axis] - x[axis];
+    const double above_m = x[axis] - params.colon.abdomen_max_m[axis];
+    const double out_m = below_m > 0.0 ? below_m : (above_m > 0.0 ? -above_m : 0.0);
+    if (out_m == 0.0) continue;
+    const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
+    rhs[axis] += dt * k * out_m;
+    diag(axis, axis) += dt * k;
+  }
+  StoreDiag(diag, i, sys);
+  for (int c = 0; c < 3; ++c) sys->rhs[c][i] = rhs[c];
+}
+
+// Each point's own terms for points 0..end: damping, the paper's suspension
+// in its rest plane and the mesentery tether, four points at a time, then
+// the extra terms of the points that have any.
+VES_LANE_FUNCTION void AddOwnTerms(const ModelParams& params, const StepInput& input,
+                                   const ModelState& s, int end, Scratch* sc) {
+  const ColonSolverArrays& a = sc->colon_arrays;
+  ColonSystem& sys = sc->colon_system;
+  bool pressed = false;  // the hand's terms need the point's region: all go the scalar way
+  for (double pressure : input.abdominal_pressure) pressed = pressed || pressure > 0.0;
+  const double crossing_m = params.colon.mesentery_crossing_m;
+  const Eigen::Vector3d& box_min = params.colon.abdomen_min_m;
+  const Eigen::Vector3d& box_max = params.colon.abdomen_max_m;
+  const double shear_ratio = params.colon.mesentery_shear_ratio;
+  const double shear_term = shear_ratio * shear_ratio - 1.0;
+  const double dt = params.dt_s;
+  const Lanes zero{}, one = zero + 1.0;
+  for (int i = 0; i <= end; i += kLanes) {
+    // paper §3.3.2: K_c ||d_ri|| pulls the point home within its plane P_i
+    // (home: its reference, which may have settled since rest):
+    // rhs = -(dt K_c) (d - (t . d) t).
+    const Lanes x0 = VES_LOAD(a.position_m[0], i), x1 = VES_LOAD(a.position_m[1], i),
+                x2 = VES_LOAD(a.position_m[2], i);
+    const Lanes d0 = x0 - VES_LOAD(a.reference_m[0], i), d1 = x1 - VES_LOAD(a.reference_m[1], i),
+                d2 = x2 - VES_LOAD(a.reference_m[2], i);
+    const Lanes t0 = VES_LOAD(a.rest_tangent[0], i), t1 = VES_LOAD(a.rest_tangent[1], i),
+                t2 = VES_LOAD(a.rest_tangent[2], i);
+    const Lanes along = (t0 * d0 + t1 * d1) + t2 * d2;
+    const Lanes factor = VES_LOAD(a.suspension_rhs_factor, i);
+    Lanes rhs[3] = {factor * (d0 - along * t0), factor * (d1 - along * t1),
+                    factor * (d2 - along * t2)};
+    Lanes diag[6];
+    for (int e = 0; e < 6; ++e) diag[e] = VES_LOAD(a.own_diag[e], i);
+    // Mesentery: its reach is measured in the tether's metric, in which a
+    // move along the root c counts mesentery_shear_ratio (s) times:
+    // rho^2 = r^T G r with G = I + (s^2 - 1) c c^T. Taut (rho > L), it pulls
+    // with k (rho - L) G r / rho; its stiffness is
+    // k [g g^T + (1 - L/rho)(G - g g^T)] with g = G r / rho (positive
+    // semidefinite: G is). Where the reach gathers, a pleated run of
+    // mobile colon (its two gaps shorter than at rest) reaches only as far
+    // as it is long, down to the mesentery's length.
+    const Lanes r0 = x0 - VES_LOAD(a.tether_anchor_m[0], i),
+                r1 = x1 - VES_LOAD(a.tether_anchor_m[1], i),
+                r2 = x2 - VES_LOAD(a.tether_anchor_m[2], i);
+    const Lanes rho = VES_LOAD(a.tether_distance_m, i);
+    const Lanes length = VES_LOAD(a.tether_length_m, i);
+    const LaneMask gathers = VES_LOAD(a.reach_gathers, i) > 0.5;
+    Lanes reach = length;
+    if (VES_ANY(gathers)) {
+      const Lanes now = VES_LOAD(a.gap_m, i) + VES_LOAD(a.gap_behind_m, i);
+      const Lanes natural = VES_LOAD(a.natural_span_m, i);
+      const Lanes quotient = now / natural;
+      const Lanes ratio =
+          VES_SELECT(natural > 1e-12, VES_SELECT(quotient < 1.0, quotient, one), one);
+      const Lanes gathered = length * ratio;
+      const Lanes mesentery = VES_LOAD(a.mesentery_length_m, i);
+      const Lanes gathered_reach = VES_SELECT(mesentery < gathered, gathered, mesentery);
+      reach = VES_SELECT(gathers, gathered_reach, length);
+    }
+    const LaneMask taut = (rho > reach) & (rho > 1e-12);
+    if (VES_ANY(taut)) {
+      const Lanes c[3] = {VES_LOAD(a.tether_root_direction[0], i),
+                          VES_LOAD(a.tether_root_direction[1], i),
+                          VES_LOAD(a.tether_root_direction[2], i)};
+      Lanes G[3][3];
+      for (int row = 0; row < 3; ++row) {
+        const Lanes sheared = shear_term * c[row];
+        for (int col = 0; col < 3; ++col)
+          G[row][col] = (row == col ? one : zero) + sheared * c[col];
+      }
+      const Lanes g[3] = {((G[0][0] * r0 + G[0][1] * r1) + G[0][2] * r2) / rho,
+                          ((G[1][0] * r0 + G[1][1] * r1) + G[1][2] * r2) / rho,
+                          (G[2][0] * r0 + (G[2][1] * r1 + G[2][2] * r2)) / rho};
+      const Lanes across = 1.0 - reach / rho;
+      const Lanes dt_k = dt * VES_LOAD(sc->colon_tether_N_per_m, i);
+      const Lanes pull = dt_k * (rho - reach);
+      for (int e = 0; e < 3; ++e) rhs[e] = VES_SELECT(taut, rhs[e] - pull * g[e], rhs[e]);
+      for (int e = 0; e < 6; ++e) {
+        const int row = kDiagEntry[e][0], col = kDiagEntry[e][1];
+        const Lanes gg = g[row] * g[col];
+        diag[e] = VES_SELECT(taut, diag[e] + dt_k * (gg + across * (G[row][col] - gg)), diag[e]);
+      }
+    }
+    for (int e = 0; e < 6; ++e) VES_STORE(sys.diag[e], i, diag[e]);
+    for (int e = 0; e < 3; ++e) VES_STORE(sys.rhs[e], i, rhs[e]);
+    // The points with extra terms, by AddOwnExtraTerms' tests: ...
+    LaneMask extra{};
+    // ... a point swung through its root ...
+    const Lanes crossed =
+        -(((r0 * VES_LOAD(a.tether_side[0], i) + r1 * VES_LOAD(a.tether_side[1], i)) +
+           r2 * VES_LOAD(a.tether_side[2], i)) +
+          crossing_m);
+    extra |= (crossed > 0.0) & (VES_LOAD(a.has_tether_side, i) > 0.5);
+    // ... or out of the abdomen.
+    extra |= ((box_min[0] - x0) > 0.0) | ((x0 - box_max[0]) > 0.0) | ((box_min[1] - x1) > 0.0) |
+             ((x1 - box_max[1]) > 0.0) | ((box_min[2] - x2) > 0.0) | ((x2 - box_max[2]) > 0.0);
+    if (!pressed && !VES_ANY(extra)) continue;
+    for (int lane = 0; lane < kLanes && i + lane <= end; ++lane) {
+      if (pressed || extra[lane] != 0) AddOwnExtraTerms(params, input, s, i + lane, &sys);
+    }
+  }
+}
+
+// Each neighbour pair's (i, i+1, for i < end) axial link and kink tension,
+// four pairs at a time: its stiffness block dt C (the upper triangle into
+// Scratch::colon_arrays.pair_block, -dt C as U_i into the system; the last
+// group writes U past end - 1, which AddPairTerms clears at end) and its
+// impulse dt F (pair_impulse).
+VES_LANE_FUNCTION void CalcPairTerms(const ModelParams& params, int end, Scratch* sc) {
+  ColonSolverArrays& a = sc->colon_arrays;
+  ColonSystem& sys = sc->colon_system;
+  const double dt = params.dt_s;
+  const double soft = params.colon_pleat_stiffness_N;
+  const double tension = params.colon_tension_stiffness_N;
+  const double packed = params.colon_packed_stiffness_N;
+  // The wall's tension stiffness is reached over this onset strain (see
+  // kTensionOnsetStrain), through the toe up to colon_toe_strain.
+  const double e_b = std::min(kTensionOnsetStrain, params.colon_toe_strain);
+  const double e_t = params.colon_toe_strain;
+  const Lanes zero{}, one = zero + 1.0;
+  for (int i = 0; i < end; i += kLanes) {
+    const Lanes s0 = VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i);
+    const Lanes s1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
+    const Lanes s2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
+    const Lanes g = VES_LOAD(a.gap_m, i);
+    const LaneMask apart = g > 1e-12;
+    const Lanes inv_g = VES_SELECT(apart, 1.0 / g, zero);
+    // Strain against the gap's rest length (shorter where folds have set);
+    // the folds pack at pleat_limit of the natural gap.
+    const Lanes inv_g0 = 1.0 / VES_LOAD(a.rest_gap_m, i);
+    const Lanes natural_gap_m = VES_LOAD(sc->colon_pair_gap_m, i);
+    const Lanes u0 = VES_SELECT(apart, s0 * inv_g, VES_LOAD(a.rest_tangent[0], i));
+    const Lanes u1 = VES_SELECT(apart, s1 * inv_g, VES_LOAD(a.rest_tangent[1], i));
+    const Lanes u2 = VES_SELECT(apart, s2 * inv_g, VES_LOAD(a.rest_tangent[2], i));
+    const Lanes pleat_limit = VES_LOAD(a.pair_pleat_limit, i) * natural_gap_m * inv_g0;
+    const Lanes limit = VES_SELECT(1.0 < pleat_limit, one, pleat_limit) - 1.0;  // <= 0
+    const Lanes strain = g * inv_g0 - 1.0;
+    // The axial force (+ pulls the pair together) and its slope per unit
+    // strain. Tension, J-shaped: the slope rises from `soft` to the toe's
+    // over the onset strain, stays there through the toe, then becomes EA
+    // (the wall's linear modulus; the toe's where the gap has no toe).
+    const Lanes toe = VES_LOAD(a.pair_toe_N, i);
+    const LaneMask stretched = strain >= 0.0, in_onset = strain <= e_b, in_toe = strain <= e_t;
+    Lanes onset_force = zero, onset_slope = zero;
+    if (VES_ANY(stretched & in_onset)) {  // two divisions, few pairs
+      onset_force = soft * strain + (toe - soft) * strain * strain / (2.0 * e_b);
+      onset_slope = soft + (toe - soft) * strain / e_b;
+    }
+    const Lanes at_onset_N = soft * e_b + (toe - soft) * e_b / 2.0;
+    const Lanes toe_force = at_onset_N + toe * (strain - e_b);
+    const Lanes linear_force = at_onset_N + toe * (e_t - e_b) + tension * (strain - e_t);
+    // Shortening: the wall folds onto the scope ("pleats", the accordion of
+    // real colonoscopy) until the gap is pleat_limit of its rest length;
+    // then the folds are packed.
+    const Lanes pleat_force = soft * strain;
+    const Lanes packed_force = soft * limit + packed * (strain - limit);
+    const LaneMask folding = strain >= limit;
+    const Lanes force = VES_SELECT(
+        stretched, VES_SELECT(in_onset, onset_force, VES_SELECT(in_toe, toe_force, linear_force)),
+        VES_SELECT(folding, pleat_force, packed_force));
+    const Lanes slope = VES_SELECT(
+        stretched, VES_SELECT(in_onset, onset_slope, VES_SELECT(in_toe, toe, zero + tension)),
+        VES_SELECT(folding, zero + soft, zero + packed));
+    // Kink tension: the pair is pulled toward the tube's local direction m,
+    // never along it, so the tube stays smooth and still pleats freely. m
+    // is the pair's rest direction turned by the smallest rotation that
+    // takes the pair's rest mean tangent onto the mean of its ends' tangents
+    // now (of the start of the step), so the colon at rest, or turned as a
+    // whole, feels no force. Rodrigues with the unnormalised sum of the
+    // tangents (length L): v + c x v + c x (c x v) / (1 + cos), with
+    // c' = L c and cos' = L cos, needs one division, 1 / (L (L + cos')).
+    const Lanes w0 = VES_LOAD(a.tangent[0], i) + VES_LOAD(a.tangent[0], i + 1);
+    const Lanes w1 = VES_LOAD(a.tangent[1], i) + VES_LOAD(a.tangent[1], i + 1);
+    const Lanes w2 = VES_LOAD(a.tangent[2], i) + VES_LOAD(a.tangent[2], i + 1);
+    const Lanes squared_length = (w0 * w0 + w1 * w1) + w2 * w2;
+    const Lanes length = VES_SQRT(squared_length);
+    const Lanes q0 = VES_LOAD(a.pair_rest_mean_tangent[0], i);
+    const Lanes q1 = VES_LOAD(a.pair_rest_mean_tangent[1], i);
+    const Lanes q2 = VES_LOAD(a.pair_rest_mean_tangent[2], i);
+    const Lanes c0 = q1 * w2 - q2 * w1, c1 = q2 * w0 - q0 * w2, c2 = q0 * w1 - q1 * w0;
+    const Lanes cos_sum = (q0 * w0 + q1 * w1) + q2 * w2;
+    const Lanes inv = 1.0 / (length * (length + cos_sum));
+    const Lanes v0 = VES_LOAD(a.pair_rest_direction[0], i);
+    const Lanes v1 = VES_LOAD(a.pair_rest_direction[1], i);
+    const Lanes v2 = VES_LOAD(a.pair_rest_direction[2], i);
+    const Lanes cv0 = c1 * v2 - c2 * v1, cv1 = c2 * v0 - c0 * v2, cv2 = c0 * v1 - c1 * v0;
+    const Lanes ccv0 = c1 * cv2 - c2 * cv1, ccv1 = c2 * cv0 - c0 * cv2, ccv2 = c0 * cv1 - c1 * cv0;
+    const Lanes turn = (length + cos_sum) * inv;
+    // No smallest rotation when the tangents cancel or have turned about
+    // half a turn: the pair's own direction then.
+    const LaneMask rotates = ~(length < 1e-6) & ~(cos_sum < -0.99 * length);
+    const Lanes m0 = VES_SELECT(rotates, (v0 + turn * cv0) + inv * ccv0, u0);
+    const Lanes m1 = VES_SELECT(rotates, (v1 + turn * cv1) + inv * ccv1, u1);
+    const Lanes m2 = VES_SELECT(rotates, (v2 + turn * cv2) + inv * ccv2, u2);
+    // Tension also resists the pair turning (a taut string); compression
+    // does not push it sideways (dropping that term keeps the matrix
+    // definite). C = (slope/g0) u u^T + (f/g)(I - u u^T) [taut only]
+    // + k (I - m m^T), k = T over the natural gap.
+    const Lanes k = VES_LOAD(a.pair_kink_N_per_m, i);
+    const Lanes taut = VES_SELECT(force > 0.0, force * inv_g, zero);
+    const Lanes on_diagonal = dt * (taut + k);
+    const Lanes along = dt * (slope * inv_g0 - taut);
+    const Lanes across = dt * k;
+    const Lanes au0 = along * u0, au1 = along * u1, au2 = along * u2;
+    const Lanes km0 = across * m0, km1 = across * m1, km2 = across * m2;
+    const Lanes off_diagonal = on_diagonal * 0.0;
+    // Entry (r, c) is (on_diagonal I_rc + (along u_r) u_c) - (across m_r) m_c:
+    // not quite symmetric in its last bit, so all nine are kept.
+    const Lanes u[3] = {u0, u1, u2}, au[3] = {au0, au1, au2}, m[3] = {m0, m1, m2};
+    const Lanes km[3] = {km0, km1, km2};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        const Lanes block = ((r == c ? on_diagonal : off_diagonal) + au[r] * u[c]) - km[r] * m[c];
+        VES_STORE(sys.upper[3 * r + c], i, -block);  // U_i = -dt C
+        if (r <= c) VES_STORE(a.pair_block[kDiagIndex[r][c]], i, block);
+      }
+    }
+    // F = f u + k (seg - (m . seg) m) on point i; -F on i+1.
+    const Lanes m_seg = (m0 * s0 + m1 * s1) + m2 * s2;
+    VES_STORE(a.pair_impulse[0], i, dt * (force * u0 + k * (s0 - m_seg * m0)));
+    VES_STORE(a.pair_impulse[1], i, dt * (force * u1 + k * (s1 - m_seg * m1)));
+    VES_STORE(a.pair_impulse[2], i, dt * (force * u2 + k * (s2 - m_seg * m2)));
+  }
+}
+
+// Each pair's block and impulse into the system (U_i = -dt C_i is already
+// there): D_i gets dt C of the pair behind it and then of the pair ahead,
+// and the impulses push the pair's ends apart (in the order the pairs were
+// once added one by one, so the sums are the same to the bit).
+VES_LANE_FUNCTION void AddPairTerms(int end, Scratch* sc) {
+  const ColonSolverArrays& a = sc->colon_arrays;
+  ColonSystem& sys = sc->colon_system;
+  // The groups of four run past end - 1 into the padding: the entries at
+  // end are kept aside and done last, those past it are never read.
+  for (int e = 0; e < 6; ++e) {
+    auto& d = sys.diag[e];
+    const auto& c = a.pair_block[e];
+    const double at_end = d[end];
+    d[0] += c[0];
+    for (int i = 1; i < end; i += kLanes) {
+      VES_STORE(d, i, (VES_LOAD(d, i) + VES_LOAD(c, i - 1)) + VES_LOAD(c, i));
+    }
+    d[end] = at_end + c[end - 1];
+  }
+  for (auto& u : sys.upper) u[end] = 0.0;  // (CalcPairTerms' last group wrote past end - 1)
+  for (int e = 0; e < 3; ++e) {
+    auto& r = sys.rhs[e];
+    const auto& f = a.pair_impulse[e];
+    const double at_end = r[end];
+    r[0] += f[0];
+    for (int i = 1; i < end; i += kLanes) {
+      VES_STORE(r, i, (VES_LOAD(r, i) - VES_LOAD(f, i - 1)) + VES_LOAD(f, i));
+    }
+    r[end] = at_end - f[end - 1];
+  }
+}
+
+// After the solve, from the solved positions (colon_arrays.position_m), four
+// at a time: the tether distances of points 1..last (CalcTetherDistance)
+// into colon_arrays.tether_distance_m, the gaps of pairs 0..last_gap into
+// colon_arrays.gap_m.
+VES_LANE_FUNCTION void CalcSolvedDistances(const ModelParams& params, int last, int last_gap,
+                                           Scratch* sc) {
+  ColonSolverArrays& a = sc->colon_arrays;
+  const double shear_ratio = params.colon.mesentery_shear_ratio;
+  const double shear_term = shear_ratio * shear_ratio - 1.0;
+  const Lanes zero{};
+  // |r|^2 + (s^2 - 1) (r . c)^2, at least 0, rooted.
+  for (int i = 1; i <= last; i += kLanes) {
+    const Lanes r0 = VES_LOAD(a.position_m[0], i) - VES_LOAD(a.tether_anchor_m[0], i);
+    const Lanes r1 = VES_LOAD(a.position_m[1], i) - VES_LOAD(a.tether_anchor_m[1], i);
+    const Lanes r2 = VES_LOAD(a.position_m[2], i) - VES_LOAD(a.tether_anchor_m[2], i);
+    const Lanes along = (r0 * VES_LOAD(a.tether_root_direction[0], i) +
+                         r1 * VES_LOAD(a.tether_root_direction[1], i)) +
+                        r2 * VES_LOAD(a.tether_root_direction[2], i);
+    const Lanes squared = ((r0 * r0 + r1 * r1) + r2 * r2) + shear_term * along * along;
+    const Lanes at_least_zero = VES_SELECT(zero < squared, squared, zero);
+    VES_STORE(a.tether_distance_m, i, VES_SQRT(at_least_zero));
+  }
+  for (int i = 0; i <= last_gap; i += kLanes) {
+    const Lanes d0 = VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i);
+    const Lanes d1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
+    const Lanes d2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
+    const Lanes squared = (d0 * d0 + d1 * d1) + d2 * d2;
+    VES_STORE(a.gap_m, i, VES_SQRT(squared));
+  }
+}
+
+// The tangents of the inner points 1..to (UpdateColonTangents' rule) from
+// the solved positions, four at a time, into colon_arrays.tangent (which
+// holds the old ones: a point whose neighbours coincide keeps its own).
+VES_LANE_FUNCTION void CalcSolvedTangents(int to, Scratch* sc) {
+  ColonSolverArrays& a = sc->colon_arrays;
+  for (int i = 1; i <= to; i += kLanes) {
+    const Lanes chord[3] = {VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i - 1),
+                            VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i - 1),
+                            VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i - 1)};
+    const Lanes squared = (chord[0] * chord[0] + chord[1] * chord[1]) + chord[2] * chord[2];
+    const Lanes length = VES_SQRT(squared);
+    const LaneMask apart = length > 1e-12;
+    for (int c = 0; c < 3; ++c) {
+      VES_STORE(a.tangent[c], i, VES_SELECT(apart, chord[c] / length, VES_LOAD(a.tangent[c], i)));
+    }
+  }
 }
 
 }  // namespace
 
-PairAxial CalcPairAxial(const ModelParams& params, double toe_N, double pleat_limit, double strain) {
-  const double soft = params.colon_pleat_stiffness_N;
-  if (strain >= 0.0) {
-    // Tension, J-shaped: the slope rises from `soft` to the toe's over the
-    // onset strain, stays there through the toe, then becomes EA (the wall's
-    // linear modulus).
-    const double toe = toe_N;
-    const double e_b = std::min(kTensionOnsetStrain, params.colon_toe_strain);
-    const double e_t = params.colon_toe_strain;
-    if (strain <= e_b) {
-      return {soft * strain + (toe - soft) * strain * strain / (2.0 * e_b),
-              soft + (toe - soft) * strain / e_b};
-    }
-    const double at_onset_N = soft * e_b + (toe - soft) * e_b / 2.0;
-    if (strain <= e_t) return {at_onset_N + toe * (strain - e_b), toe};
-    return {at_onset_N + toe * (e_t - e_b) + params.colon_tension_stiffness_N * (strain - e_t),
-            params.colon_tension_stiffness_N};
-  }
-  // Shortening: the wall folds onto the scope ("pleats", the accordion of
-  // real colonoscopy) until the gap is pleat_limit of its rest length; then
-  // the folds are packed.
-  const double limit = pleat_limit - 1.0;  // <= 0
-  if (strain >= limit) return {soft * strain, soft};
-  return {soft * limit + params.colon_packed_stiffness_N * (strain - limit),
-          params.colon_packed_stiffness_N};
-}
-
 void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
-  sc->colon_suspension_N_per_m.assign(N, 0.0);
-  sc->colon_tether_N_per_m.assign(N, 0.0);
-  sc->colon_own_diag.assign(N, Eigen::Matrix3d::Zero());
-  sc->colon_relax_factor.assign(N, 0.0);
-  sc->colon_pair_gap_m.assign(N, 1.0);
-  sc->colon_pair_kink_N_per_m.assign(N, 0.0);
-  sc->colon_pair_pleat_limit.assign(N, 1.0);
-  sc->colon_pair_toe_N.assign(N, params.colon_tension_stiffness_N);
-  sc->colon_pair_rest_direction.assign(N, Eigen::Vector3d::UnitZ());
-  sc->colon_pair_rest_mean_tangent.assign(N, Eigen::Vector3d::UnitZ());
+  const size_t size = static_cast<size_t>(N) + kColonLanePadding;
+  ColonSolverArrays& a = sc->colon_arrays;
+  for (CoordinateArrays* xyz :
+       {&a.position_m, &a.reference_m, &a.tangent, &a.pair_impulse, &a.rest_tangent,
+        &a.tether_anchor_m, &a.tether_root_direction, &a.tether_side}) {
+    for (auto& v : *xyz) v.assign(size, 0.0);
+  }
+  for (auto& v : a.pair_block) v.assign(size, 0.0);
+  for (auto& v : a.own_diag) v.assign(size, 0.0);
+  for (std::vector<double>* v :
+       {&a.gap_m, &a.gap_behind_m, &a.rest_gap_m, &a.tether_distance_m, &a.suspension_rhs_factor,
+        &a.has_tether_side, &a.tether_length_m, &a.mesentery_length_m, &a.length_m,
+        &a.reach_gathers, &a.natural_span_m, &a.pair_kink_N_per_m}) {
+    v->assign(size, 0.0);
+  }
+  a.mobile.assign(size, 0);
+  a.rest_position_m.assign(size, Eigen::Vector3d::Zero());
+  std::fill(a.rest_gap_m.begin(), a.rest_gap_m.end(), 1.0);
+  std::fill(a.natural_span_m.begin(), a.natural_span_m.end(), 1.0);
+  a.pair_pleat_limit.assign(size, 1.0);
+  a.pair_toe_N.assign(size, params.colon_tension_stiffness_N);
+  for (CoordinateArrays* xyz : {&a.pair_rest_direction, &a.pair_rest_mean_tangent}) {
+    (*xyz)[0].assign(size, 0.0);
+    (*xyz)[1].assign(size, 0.0);
+    (*xyz)[2].assign(size, 1.0);
+  }
+  sc->colon_suspension_N_per_m.assign(size, 0.0);
+  sc->colon_tether_N_per_m.assign(size, 0.0);
+  sc->colon_relax_factor.assign(size, 0.0);
+  sc->colon_pair_gap_m.assign(size, 1.0);
   double smallest_pleat_limit = 1.0;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   for (int i = 0; i < N; ++i) {
-    const TissueParams& t = pts[i].tissue;
-    const double h = pts[i].length_m;
+    const ColonPoint& p = pts[i];
+    const TissueParams& t = p.tissue;
+    const double h = p.length_m;
     sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
     sc->colon_tether_N_per_m[i] = t.mesentery_stiffness_N_per_m2 * h;
-    const Eigen::Matrix3d P = I - pts[i].rest_tangent * pts[i].rest_tangent.transpose();
-    sc->colon_own_diag[i] = (t.suspension_damping_N_s_per_m2 * h) * I +
-                            (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
+    const Eigen::Matrix3d P = I - p.rest_tangent * p.rest_tangent.transpose();
+    const Eigen::Matrix3d own = (t.suspension_damping_N_s_per_m2 * h) * I +
+                                (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
+    for (int e = 0; e < 6; ++e) a.own_diag[e][i] = own(kDiagEntry[e][0], kDiagEntry[e][1]);
+    a.suspension_rhs_factor[i] = -(params.dt_s * sc->colon_suspension_N_per_m[i]);
     if (t.suspension_relaxation_s > 0.0) {
       sc->colon_relax_factor[i] = params.dt_s / (t.suspension_relaxation_s + params.dt_s);
     }
+    for (int c = 0; c < 3; ++c) {
+      a.rest_tangent[c][i] = p.rest_tangent[c];
+      a.tether_anchor_m[c][i] = p.tether_anchor_m[c];
+      a.tether_root_direction[c][i] = p.tether_root_direction[c];
+      a.tether_side[c][i] = p.tether_side[c];
+    }
+    a.has_tether_side[i] = p.tether_side.squaredNorm() > 0.5 ? 1.0 : 0.0;
+    a.tether_length_m[i] = p.tether_length_m;
+    a.length_m[i] = p.length_m;
+    a.mobile[i] = t.mobile ? 1 : 0;
+    a.rest_position_m[i] = p.rest_position_m;
+    a.mesentery_length_m[i] = t.mesentery_length_m;
+    a.reach_gathers[i] =
+        params.mesentery_reach_gathers && t.mobile && i > 0 && i < N - 1 ? 1.0 : 0.0;
     smallest_pleat_limit = std::min(smallest_pleat_limit, t.pleat_limit);
   }
   const auto has_toe = [&](Region r) {
@@ -131,15 +600,22 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     const double T =
         0.5 * (pts[i].tissue.neighbor_tension_N + pts[i + 1].tissue.neighbor_tension_N);
     sc->colon_pair_gap_m[i] = gap;
-    sc->colon_pair_kink_N_per_m[i] = T / gap;
-    sc->colon_pair_pleat_limit[i] = std::min(pts[i].tissue.pleat_limit, pts[i + 1].tissue.pleat_limit);
+    a.pair_kink_N_per_m[i] = T / gap;
+    a.pair_pleat_limit[i] = std::min(pts[i].tissue.pleat_limit, pts[i + 1].tissue.pleat_limit);
     if (has_toe(pts[i].region) && has_toe(pts[i + 1].region)) {
-      sc->colon_pair_toe_N[i] = params.colon_toe_stiffness_N;
+      a.pair_toe_N[i] = params.colon_toe_stiffness_N;
     }
-    sc->colon_pair_rest_direction[i] = (pts[i + 1].rest_position_m - pts[i].rest_position_m) / gap;
+    const Eigen::Vector3d direction = (pts[i + 1].rest_position_m - pts[i].rest_position_m) / gap;
     const Eigen::Vector3d mean = pts[i].rest_tangent + pts[i + 1].rest_tangent;
-    sc->colon_pair_rest_mean_tangent[i] =
-        mean.norm() > 1e-6 ? Eigen::Vector3d(mean.normalized()) : sc->colon_pair_rest_direction[i];
+    const Eigen::Vector3d mean_tangent =
+        mean.norm() > 1e-6 ? Eigen::Vector3d(mean.normalized()) : direction;
+    for (int c = 0; c < 3; ++c) {
+      a.pair_rest_direction[c][i] = direction[c];
+      a.pair_rest_mean_tangent[c][i] = mean_tangent[c];
+    }
+  }
+  for (int i = 1; i + 1 < N; ++i) {
+    a.natural_span_m[i] = sc->colon_pair_gap_m[i] + sc->colon_pair_gap_m[i - 1];
   }
   sc->tracking_arc_ratio = params.tracking_arc_ratio > 0.0
                                ? std::max(params.tracking_arc_ratio, 1.2 / smallest_pleat_limit)
@@ -168,58 +644,81 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   }
 }
 
+namespace {
+
+// The back substitution of one point, x_i -= G_i x_(i+1): Eigen summed the
+// product's first two rows from the left and its third from the right.
+[[gnu::always_inline]] inline void SubstituteBack(int i, ColonSystem* system) {
+  auto& x = system->rhs;
+  const auto& G = system->gain;
+  const double z0 = x[0][i + 1], z1 = x[1][i + 1], z2 = x[2][i + 1];
+  x[0][i] -= (G[0][i] * z0 + G[1][i] * z1) + G[2][i] * z2;
+  x[1][i] -= (G[3][i] * z0 + G[4][i] * z1) + G[5][i] * z2;
+  x[2][i] -= G[6][i] * z0 + (G[7][i] * z1 + G[8][i] * z2);
+}
+
 // Block Thomas over points 1..last (point 0 and the points past `last`
 // held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
-// M_i = D_i - U_(i-1)^T G_(i-1); then x_i = y_i - G_i x_(i+1). M_i is
+// M_i = D_i - U_(i-1)^T G_(i-1) (this forward sweep); then
+// x_i = y_i - G_i x_(i+1) (SubstituteBack, from the last point down). M_i is
 // symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
 // triangle is formed and it is inverted by its adjugate, in scalars: the
 // generic 3x3 products were most of the step (docs/model.md, "Speed").
-[[gnu::flatten]] void SolveBlockTridiagonal(const std::vector<Eigen::Matrix3d>& diag,
-                                            const std::vector<Eigen::Matrix3d>& upper, int last,
-                                            std::vector<Eigen::Vector3d>* rhs_io,
-                                            std::vector<Eigen::Matrix3d>* gain_io) {
-  auto& rhs = *rhs_io;
-  auto& gain = *gain_io;
+// The sums are in the order Eigen gave them when the blocks were Eigen
+// matrices (see Lanes), so the solution is bit for bit the same.
+void EliminateForward(int last, ColonSystem* system) {
+  ColonSystem& sys = *system;
+  const auto& U = sys.upper;
+  auto& G = sys.gain;
+  auto& x = sys.rhs;
   for (int i = 1; i <= last; ++i) {
-    const Eigen::Matrix3d& D = diag[i];
-    double m00 = D(0, 0), m01 = D(0, 1), m02 = D(0, 2), m11 = D(1, 1), m12 = D(1, 2), m22 = D(2, 2);
-    Eigen::Vector3d y = rhs[i];
+    double m00 = sys.diag[0][i], m01 = sys.diag[1][i], m02 = sys.diag[2][i], m11 = sys.diag[3][i],
+           m12 = sys.diag[4][i], m22 = sys.diag[5][i];
+    double y0 = x[0][i], y1 = x[1][i], y2 = x[2][i];
     if (i > 1) {
-      const Eigen::Matrix3d& U = upper[i - 1];
-      const Eigen::Matrix3d& G = gain[i - 1];
-      const Eigen::Vector3d u0 = U.col(0), u1 = U.col(1), u2 = U.col(2);
-      m00 -= u0.dot(G.col(0));
-      m01 -= u0.dot(G.col(1));
-      m02 -= u0.dot(G.col(2));
-      m11 -= u1.dot(G.col(1));
-      m12 -= u1.dot(G.col(2));
-      m22 -= u2.dot(G.col(2));
-      const Eigen::Vector3d& r = rhs[i - 1];
-      y -= Eigen::Vector3d(u0.dot(r), u1.dot(r), u2.dot(r));
+      // M -= U^T G and y -= U^T y_(i-1), column by column of U (entry (r, c) at 3 r + c).
+      const int j = i - 1;
+      const double u00 = U[0][j], u01 = U[1][j], u02 = U[2][j], u10 = U[3][j], u11 = U[4][j],
+                   u12 = U[5][j], u20 = U[6][j], u21 = U[7][j], u22 = U[8][j];
+      m00 -= (u00 * G[0][j] + u10 * G[3][j]) + u20 * G[6][j];
+      m01 -= (u00 * G[1][j] + u10 * G[4][j]) + u20 * G[7][j];
+      m02 -= (u00 * G[2][j] + u10 * G[5][j]) + u20 * G[8][j];
+      m11 -= (u01 * G[1][j] + u11 * G[4][j]) + u21 * G[7][j];
+      m12 -= (u01 * G[2][j] + u11 * G[5][j]) + u21 * G[8][j];
+      m22 -= (u02 * G[2][j] + u12 * G[5][j]) + u22 * G[8][j];
+      const double r0 = x[0][j], r1 = x[1][j], r2 = x[2][j];
+      y0 -= (u00 * r0 + u10 * r1) + u20 * r2;
+      y1 -= (u01 * r0 + u11 * r1) + u21 * r2;
+      y2 -= (u02 * r0 + u12 * r1) + u22 * r2;
     }
     // The adjugate of the symmetric M over its determinant.
     const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
                  c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
                  c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
     const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
-    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det,
-                 i11 = c11 * inv_det, i12 = c12 * inv_det, i22 = c22 * inv_det;
-    auto apply_inverse = [&](const Eigen::Vector3d& v) {
-      return Eigen::Vector3d(i00 * v.x() + i01 * v.y() + i02 * v.z(),
-                             i01 * v.x() + i11 * v.y() + i12 * v.z(),
-                             i02 * v.x() + i12 * v.y() + i22 * v.z());
-    };
+    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det, i11 = c11 * inv_det,
+                 i12 = c12 * inv_det, i22 = c22 * inv_det;
     if (i < last) {
-      const Eigen::Matrix3d& U = upper[i];
-      gain[i].col(0) = apply_inverse(U.col(0));
-      gain[i].col(1) = apply_inverse(U.col(1));
-      gain[i].col(2) = apply_inverse(U.col(2));
+      for (int c = 0; c < 3; ++c) {
+        const double v0 = U[c][i], v1 = U[3 + c][i], v2 = U[6 + c][i];
+        G[c][i] = i00 * v0 + i01 * v1 + i02 * v2;
+        G[3 + c][i] = i01 * v0 + i11 * v1 + i12 * v2;
+        G[6 + c][i] = i02 * v0 + i12 * v1 + i22 * v2;
+      }
     } else {
-      gain[i].setZero();
+      for (auto& g : G) g[i] = 0.0;
     }
-    rhs[i] = apply_inverse(y);
+    x[0][i] = i00 * y0 + i01 * y1 + i02 * y2;
+    x[1][i] = i01 * y0 + i11 * y1 + i12 * y2;
+    x[2][i] = i02 * y0 + i12 * y1 + i22 * y2;
   }
-  for (int i = last - 1; i >= 1; --i) rhs[i] -= gain[i] * rhs[i + 1];
+}
+
+}  // namespace
+
+void SolveBlockTridiagonal(int last, ColonSystem* system) {
+  EliminateForward(last, system);
+  for (int i = last - 1; i >= 1; --i) SubstituteBack(i, system);
 }
 
 // flatten: at -O2 GCC left Eigen's small products out of line, and their calls
@@ -229,118 +728,18 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
   const auto& pts = params.colon.points;
   const int N = static_cast<int>(pts.size());
   const double dt = params.dt_s;
-  auto& diag = sc->colon_diag;
-  auto& upper = sc->colon_upper;
-  auto& rhs = sc->colon_rhs;
-  const auto& x = s->p_WColon;
+  ColonSystem& sys = sc->colon_system;
   const int last = LastActivePoint(*s, N);
   const int end = std::min(last + 1, N - 1);  // first point past the solved ones (or the last)
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
-  const double shear_ratio = params.colon.mesentery_shear_ratio;
 
-  // Each point's own terms: damping, the paper's suspension in its rest plane
-  // and the mesentery tether.
-  for (int i = 0; i <= end; ++i) {
-    const ColonPoint& p = pts[i];
-    const double K_c = sc->colon_suspension_N_per_m[i];
-    diag[i] = sc->colon_own_diag[i];
-    // paper §3.3.2: K_c ||d_ri|| pulls the point home within its plane P_i
-    // (home: its reference, which may have settled since rest).
-    const Eigen::Vector3d d = x[i] - s->colon_reference_m[i];
-    rhs[i] = -(dt * K_c) * (d - p.rest_tangent.dot(d) * p.rest_tangent);
-    upper[i].setZero();
-    // Mesentery: its reach is measured in the tether's metric, in which a
-    // move along the root counts mesentery_shear_ratio times: rho^2 = r^T G r
-    // with G = I + (s^2 - 1) c c^T. Taut (rho > L), it pulls with
-    // k (rho - L) G r / rho; its stiffness is k [g g^T + (1 - L/rho)(G - g g^T)]
-    // with g = G r / rho (positive semidefinite: G is).
-    const Eigen::Vector3d r = x[i] - p.tether_anchor_m;
-    const double rho = s->colon_tether_distance_m[i];
-    double reach_m = p.tether_length_m;
-    if (params.mesentery_reach_gathers && p.tissue.mobile && i > 0 && i < N - 1) {
-      const double now = s->colon_gap_m[i] + s->colon_gap_m[i - 1];
-      const double natural = sc->colon_pair_gap_m[i] + sc->colon_pair_gap_m[i - 1];
-      const double ratio = natural > 1e-12 ? std::min(1.0, now / natural) : 1.0;
-      reach_m = std::max(p.tissue.mesentery_length_m, p.tether_length_m * ratio);
-    }
-    if (rho > reach_m && rho > 1e-12) {
-      const double k = sc->colon_tether_N_per_m[i];
-      const Eigen::Vector3d& c = p.tether_root_direction;
-      const Eigen::Matrix3d G = I + (shear_ratio * shear_ratio - 1.0) * c * c.transpose();
-      const Eigen::Vector3d g = G * r / rho;
-      const double across = 1.0 - reach_m / rho;
-      rhs[i] -= (dt * k * (rho - reach_m)) * g;
-      diag[i] += (dt * k) * (g * g.transpose() + across * (G - g * g.transpose()));
-    }
-    // The colon hangs on one side of its root: swung through it by more
-    // than mesentery_crossing_m, it meets the body wall behind the root.
-    const double crossed_m = -(r.dot(p.tether_side) + params.colon.mesentery_crossing_m);
-    if (crossed_m > 0.0 && p.tether_side.squaredNorm() > 0.5) {
-      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
-      rhs[i] += (dt * k * crossed_m) * p.tether_side;
-      diag[i] += (dt * k) * p.tether_side * p.tether_side.transpose();
-    }
-    // The assistant's hand: a pressed mobile point is held within the slack
-    // of its root (isotropic; the same implicit form as the tether).
-    const double pressure = input.abdominal_pressure[static_cast<int>(p.region)];
-    if (pressure > 0.0 && p.tissue.mobile) {
-      const double d = r.norm();
-      const double slack = params.abdominal_pressure_slack_m;
-      if (d > slack) {
-        const double k = pressure * params.abdominal_pressure_stiffness_N_per_m2 * p.length_m;
-        const Eigen::Vector3d g = r / d;
-        rhs[i] -= (dt * k * (d - slack)) * g;
-        diag[i] += (dt * k) * (g * g.transpose() + (1.0 - slack / d) * (I - g * g.transpose()));
-      }
-    }
-    // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
-    for (int axis = 0; axis < 3; ++axis) {
-      const double below_m = params.colon.abdomen_min_m[axis] - x[i][axis];
-      const double above_m = x[i][axis] - params.colon.abdomen_max_m[axis];
-      const double out_m = below_m > 0.0 ? below_m : (above_m > 0.0 ? -above_m : 0.0);
-      if (out_m == 0.0) continue;
-      const double k = params.colon.root_wall_stiffness_N_per_m2 * p.length_m;
-      rhs[i][axis] += dt * k * out_m;
-      diag[i](axis, axis) += dt * k;
-    }
-  }
+  CopyColonState(*s, end, &sc->colon_arrays);
+  // Each point's own terms: damping, the paper's suspension in its rest plane,
+  // the mesentery tether and the walls.
+  AddOwnTerms(params, input, *s, end, sc);
   // Neighbour pairs (i, i+1): the axial link and the kink tension.
-  for (int i = 0; i < end; ++i) {
-    const Eigen::Vector3d seg = x[i + 1] - x[i];
-    const double g = s->colon_gap_m[i];
-    const double inv_g = g > 1e-12 ? 1.0 / g : 0.0;
-    // Strain against the gap's rest length (shorter where folds have set);
-    // the folds pack at pleat_limit of the natural gap.
-    const double inv_g0 = 1.0 / s->colon_pair_rest_gap_m[i];
-    const double natural_gap_m = sc->colon_pair_gap_m[i];
-    const Eigen::Vector3d u = g > 1e-12 ? Eigen::Vector3d(seg * inv_g) : pts[i].rest_tangent;
-    const double pleat_limit = sc->colon_pair_pleat_limit[i] * natural_gap_m * inv_g0;
-    const PairAxial a = CalcPairAxial(params, sc->colon_pair_toe_N[i], std::min(pleat_limit, 1.0),
-                                      g * inv_g0 - 1.0);
-    // Tension also resists the pair turning (a taut string); compression does
-    // not push it sideways (dropping that term keeps the matrix definite).
-    // Kink tension: the pair is pulled toward the tube's local direction,
-    // never along it, so the tube stays smooth and still pleats freely. That
-    // direction is the pair's rest direction turned as the mean of its ends'
-    // tangents has turned since rest (tangents of the start of the step), so
-    // the colon at rest feels no force.
-    const Eigen::Vector3d m = CalcKinkDirection(sc->colon_pair_rest_mean_tangent[i],
-                                                s->colon_tangent[i] + s->colon_tangent[i + 1],
-                                                sc->colon_pair_rest_direction[i], u);
-    const double k = sc->colon_pair_kink_N_per_m[i];  // T over the natural gap
-    // C = (slope/g0) u u^T + (f/g)(I - u u^T) [taut only] + k (I - m m^T).
-    const double taut = a.force_N > 0.0 ? a.force_N * inv_g : 0.0;
-    const Eigen::Matrix3d dtC = (dt * (taut + k)) * I +
-                                (dt * (a.slope_N * inv_g0 - taut)) * (u * u.transpose()) -
-                                (dt * k) * (m * m.transpose());
-    const Eigen::Vector3d F = a.force_N * u + k * (seg - m.dot(seg) * m);  // on point i; -F on i+1
-    diag[i] += dtC;
-    diag[i + 1] += dtC;
-    upper[i] = -dtC;
-    rhs[i] += dt * F;
-    rhs[i + 1] -= dt * F;
-  }
-  upper[end].setZero();
+  CalcPairTerms(params, end, sc);
+  AddPairTerms(end, sc);
   // Contacts: the scope (at its new shape) presses the wall outward along n;
   // the wall's friction reaction is the opposite of the scope's friction, in
   // every direction (along the scope it drags the colon: pleating).
@@ -375,13 +774,13 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
     const Eigen::Matrix3d K3 = b * I + (a - b) * normal * normal.transpose();
     const double w0 = 1.0 - t, w1 = t;
     if (k >= 1 && k <= last) {
-      rhs[k] += (dt * w0) * f_wall;
-      diag[k] += (w0 * w0) * K3;
+      AddToRhs((dt * w0) * f_wall, k, &sys);
+      AddToDiag((w0 * w0) * K3, k, &sys);
     }
     if (k + 1 <= last) {
-      rhs[k + 1] += (dt * w1) * f_wall;
-      diag[k + 1] += (w1 * w1) * K3;
-      if (k >= 1) upper[k] += (w0 * w1) * K3;
+      AddToRhs((dt * w1) * f_wall, k + 1, &sys);
+      AddToDiag((w1 * w1) * K3, k + 1, &sys);
+      if (k >= 1) AddToUpper((w0 * w1) * K3, k, &sys);
     }
   }
   // Ring contacts: the scope piece pulls the ring's centre toward it (its
@@ -399,21 +798,36 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
                                                              penetration_m).force_N
                                : rc.slope_N_per_m * penetration_m;
     const double a = dt * rc.slope_N_per_m + rc.onset * pts[m].tissue.wall_damping_N_s_per_m;
-    rhs[m] += (dt * force_N) * rc.normal_W;
-    diag[m] += a * rc.normal_W * rc.normal_W.transpose();
+    AddToRhs((dt * force_N) * rc.normal_W, m, &sys);
+    const Eigen::Matrix3d K = a * rc.normal_W * rc.normal_W.transpose();
+    AddToDiag(K, m, &sys);
   }
-  SolveBlockTridiagonal(diag, upper, last, &rhs, &sc->colon_work);
-
+  // The elimination, then the back substitution with each point moved as
+  // soon as its increment is known: the substitution is a chain of
+  // dependent operations, and the moves fill the time it leaves idle.
+  EliminateForward(last, &sys);
   const double inv_dt = 1.0 / dt;
-  for (int i = 1; i <= last; ++i) {
-    s->colon_displacement_m[i] += rhs[i];
-    s->colon_velocity_m_per_s[i] = rhs[i] * inv_dt;
-    s->p_WColon[i] = pts[i].rest_position_m + s->colon_displacement_m[i];
+  ColonSolverArrays& arrays = sc->colon_arrays;
+  for (int i = last; i >= 1; --i) {
+    if (i < last) SubstituteBack(i, &sys);
+    const Eigen::Vector3d dx = sys.Rhs(i);
+    s->colon_displacement_m[i] += dx;
+    s->colon_velocity_m_per_s[i] = dx * inv_dt;
+    s->p_WColon[i] = arrays.rest_position_m[i] + s->colon_displacement_m[i];
     // The suspension's reference settles toward where the point is.
     const double relax = sc->colon_relax_factor[i];
     if (relax > 0.0) s->colon_reference_m[i] += relax * (s->p_WColon[i] - s->colon_reference_m[i]);
+    for (int c = 0; c < 3; ++c) arrays.position_m[c][i] = s->p_WColon[i][c];
   }
-  UpdateColonDerived(params, 1, last, s);
+  // UpdateColonDerived(params, 1, last, s), four points at a time (and
+  // UpdateColonTangents(0, last + 1, s) at the end).
+  const int last_gap = std::min(last, N - 2);
+  const int tangents_to = std::min(last + 1, N - 1);
+  const int inner_tangents_to = std::min(tangents_to, N - 2);
+  CalcSolvedDistances(params, last, last_gap, sc);
+  std::copy(arrays.tether_distance_m.begin() + 1, arrays.tether_distance_m.begin() + last + 1,
+            s->colon_tether_distance_m.begin() + 1);
+  std::copy(arrays.gap_m.begin(), arrays.gap_m.begin() + last_gap + 1, s->colon_gap_m.begin());
   // Folds set where a gap is held shortened, and release slowly elsewhere.
   if (params.colon_pleat_set_s > 0.0) {
     const double set = dt / (params.colon_pleat_set_s + dt);
@@ -423,7 +837,7 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
       double& rest_m = s->colon_pair_rest_gap_m[i];
       const double natural_m = sc->colon_pair_gap_m[i];
       if (g < rest_m) {
-        const double floor_m = sc->colon_pair_pleat_limit[i] * natural_m;
+        const double floor_m = sc->colon_arrays.pair_pleat_limit[i] * natural_m;
         rest_m += set * (std::max(g, floor_m) - rest_m);
       } else if (rest_m < natural_m) {
         rest_m += release * (natural_m - rest_m);
@@ -445,12 +859,20 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
       s->colon_lumen_radius_m[i] = R > hug_m ? hug_m + open * (R - hug_m) : R;
     }
   }
-  rhs[0].setZero();
-  for (int i = last + 1; i < N; ++i) {
-    rhs[i].setZero();
-    s->colon_velocity_m_per_s[i].setZero();
+  for (auto& rhs : sys.rhs) {
+    rhs[0] = 0.0;
+    std::fill(rhs.begin() + last + 1, rhs.begin() + N, 0.0);
   }
-  UpdateColonTangents(0, last + 1, s);
+  for (int i = last + 1; i < N; ++i) s->colon_velocity_m_per_s[i].setZero();
+  // The tangents: the inner points four at a time, the ends by
+  // UpdateColonTangents itself.
+  CalcSolvedTangents(inner_tangents_to, sc);
+  UpdateColonTangents(0, 0, s);
+  for (int i = 1; i <= inner_tangents_to; ++i) {
+    s->colon_tangent[i] =
+        Eigen::Vector3d(arrays.tangent[0][i], arrays.tangent[1][i], arrays.tangent[2][i]);
+  }
+  if (tangents_to == N - 1) UpdateColonTangents(N - 1, N - 1, s);
 }
 
 }  // namespace ves::model::internal

@@ -54,19 +54,16 @@ void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
 // Linearly implicit update of the colon points in 3-D (scope held at its new
 // shape): suspension, mesentery, axial links, kink tension and contact
 // stiffness in one block-tridiagonal solve. Writes the points' increments into
-// scratch->colon_rhs and updates their tangents.
+// scratch->colon_system.rhs and updates their tangents.
 void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
                 Scratch* scratch);
 
 // Solves the symmetric positive definite block-tridiagonal system of the
-// colon for points 1..last (diagonal blocks diag[i], off-diagonal blocks
-// upper[i] = (i, i+1)) by block Thomas elimination: rhs_io[1..last] in,
-// the solution out; gain_io[1..last] is work space. SolveColon's
-// elimination, on its own so that model_bench can time it.
-void SolveBlockTridiagonal(const std::vector<Eigen::Matrix3d>& diag,
-                           const std::vector<Eigen::Matrix3d>& upper, int last,
-                           std::vector<Eigen::Vector3d>* rhs_io,
-                           std::vector<Eigen::Matrix3d>* gain_io);
+// colon for points 1..last (ColonSystem: diagonal blocks diag, off-diagonal
+// blocks upper) by block Thomas elimination: rhs[1..last] in, the solution
+// out; gain is work space. SolveColon's elimination, on its own so that
+// model_bench can time it.
+void SolveBlockTridiagonal(int last, ColonSystem* system);
 
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);
@@ -75,18 +72,6 @@ void UpdateColonTangents(int from, int to, ModelState* state);
 // the lengths of the gaps on either side of them (ModelState::colon_gap_m,
 // colon_tether_distance_m).
 void UpdateColonDerived(const ModelParams& params, int from, int to, ModelState* state);
-
-// Axial force of a neighbour pair (+ pulls the pair together) for the strain
-// of its gap, and its slope per unit strain: the wall's toe (toe_N per unit
-// strain up to colon_toe_strain; the tension stiffness where the gap has no
-// toe) and then its tension stiffness, both reached over a small onset
-// strain; shortened, the soft pleating down to pleat_limit, then the packed
-// folds.
-struct PairAxial {
-  double force_N;
-  double slope_N;
-};
-PairAxial CalcPairAxial(const ModelParams& params, double toe_N, double pleat_limit, double strain);
 
 // Moves a sample's tracked segment toward p by at most `window` segments,
 // plane by plane (the lumen planes of CalcSegmentHit); it crosses a

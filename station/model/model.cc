@@ -179,12 +179,17 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.ring_contacts.assign(params.colon.points.size(), RingContact{});
   sc.ring_held.assign(params.colon.points.size(), 0);
   const size_t N = params.colon.points.size();
-  sc.colon_diag.assign(N, Eigen::Matrix3d::Zero());
-  sc.colon_upper.assign(N, Eigen::Matrix3d::Zero());
-  sc.colon_rhs.assign(N, Eigen::Vector3d::Zero());
-  sc.colon_work.assign(N, Eigen::Matrix3d::Zero());
+  sc.colon_system.Resize(static_cast<int>(N));
   internal::PrepareColonSystem(params, &sc);
   return sc;
+}
+
+void ColonSystem::Resize(int points) {
+  const size_t size = static_cast<size_t>(points) + kColonLanePadding;
+  for (auto& a : diag) a.assign(size, 0.0);
+  for (auto& a : upper) a.assign(size, 0.0);
+  for (auto& a : rhs) a.assign(size, 0.0);
+  for (auto& a : gain) a.assign(size, 0.0);
 }
 
 StepOutput MakeStepOutput(const ModelParams& params) {

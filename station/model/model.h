@@ -257,6 +257,63 @@ struct RingContact {
   double onset{1.0};              // share of the load taken (ModelParams::ring_onset_s)
 };
 
+// Three arrays, one per coordinate (x, y, z) of each point.
+using CoordinateArrays = std::array<std::vector<double>, 3>;
+
+// Arrays of the colon solver hold this many entries past the last point:
+// its loops take four points (or pairs) at a time, and the last group may
+// run past the end (those lanes are computed and never read).
+inline constexpr int kColonLanePadding = 4;
+
+// The colon's block-tridiagonal system (3x3 blocks, points 0..N-1), one
+// array per entry so that the solver's loops take four points at a time
+// (docs/model.md, "Speed").
+struct ColonSystem {
+  std::array<std::vector<double>, 6> diag;   // D_i's upper triangle: 00, 01, 02, 11, 12, 22
+  std::array<std::vector<double>, 9> upper;  // U_i, the block (i, i+1): entry (r, c) at 3 r + c
+  CoordinateArrays rhs;                      // after the solve: the increments of r_i
+  std::array<std::vector<double>, 9> gain;   // the elimination's work space, laid out as upper
+  Eigen::Vector3d Rhs(int i) const { return {rhs[0][i], rhs[1][i], rhs[2][i]}; }
+  void Resize(int points);  // zeroes every entry
+};
+
+// SolveColon's per-coordinate arrays (padded by kColonLanePadding).
+struct ColonSolverArrays {
+  // Copies of the colon's state, taken at the start of each solve.
+  CoordinateArrays position_m;       // p_WColon
+  CoordinateArrays reference_m;      // colon_reference_m
+  CoordinateArrays tangent;          // colon_tangent
+  std::vector<double> gap_m;         // colon_gap_m
+  std::vector<double> gap_behind_m;  // colon_gap_m[i - 1] (0 at point 0)
+  std::vector<double> rest_gap_m;    // colon_pair_rest_gap_m
+  std::vector<double> tether_distance_m;
+  // Each pair's dt C (its stiffness block's upper triangle, ordered as
+  // ColonSystem::diag) and dt F (its force on point i) this step.
+  std::array<std::vector<double>, 6> pair_block;
+  CoordinateArrays pair_impulse;
+  // Constant parts, computed once by MakeScratch from the rest geometry (a
+  // Scratch belongs to the params it was made from).
+  std::array<std::vector<double>, 6> own_diag;  // [i]: D_c h_i I + dt K_c h_i P_i (upper triangle)
+  std::vector<double> suspension_rhs_factor;    // [i]: -(dt K_c h_i)
+  CoordinateArrays rest_tangent;
+  CoordinateArrays tether_anchor_m;
+  CoordinateArrays tether_root_direction;
+  CoordinateArrays tether_side;
+  std::vector<double> has_tether_side;  // [i]: 1 where tether_side is set, else 0
+  std::vector<double> tether_length_m;
+  std::vector<double> mesentery_length_m;
+  std::vector<double> length_m;                  // [i]: h_i
+  std::vector<std::uint8_t> mobile;              // [i]: 1 where the tissue is mobile
+  std::vector<Eigen::Vector3d> rest_position_m;  // the points' (kept together: read every step)
+  std::vector<double> reach_gathers;             // [i]: 1 where the reach gathers, else 0
+  std::vector<double> natural_span_m;            // [i]: rest gaps behind and ahead of i
+  std::vector<double> pair_kink_N_per_m;         // [i]: T / gap of pair (i, i+1)
+  std::vector<double> pair_pleat_limit;          // [i]: smaller pleat_limit of i, i+1
+  std::vector<double> pair_toe_N;                // [i]: the toe's stiffness of gap i
+  CoordinateArrays pair_rest_direction;          // [i]: unit, i -> i+1 at rest
+  CoordinateArrays pair_rest_mean_tangent;       // [i]: mean of i's, i+1's
+};
+
 // Work arrays for Step, sized once.
 struct Scratch {
   std::vector<Eigen::Matrix<double, 6, 6>> articulated_stiffness;
@@ -279,23 +336,14 @@ struct Scratch {
   std::vector<RingContact> ring_contacts;  // first ring_contact_count valid, by sample
   int ring_contact_count{0};
   std::vector<std::uint8_t> ring_held;    // [point]: held as a ring this step
-  // The colon's block-tridiagonal system (3x3 blocks), points 0..N-1.
-  std::vector<Eigen::Matrix3d> colon_diag;
-  std::vector<Eigen::Matrix3d> colon_upper;  // block (i, i+1)
-  std::vector<Eigen::Vector3d> colon_rhs;    // after the solve: the increments of r_i
-  std::vector<Eigen::Matrix3d> colon_work;
-  // Constant parts, computed once by MakeScratch from the rest geometry (a
-  // Scratch belongs to the params it was made from).
+  // The colon's system and the solver's per-coordinate arrays (SolveColon).
+  ColonSystem colon_system;
+  ColonSolverArrays colon_arrays;
+  // Constant parts, computed once by MakeScratch (padded as colon_arrays).
   std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i (in P_i)
   std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
-  std::vector<Eigen::Matrix3d> colon_own_diag;     // [i]: D_c h_i I + dt K_c h_i P_i
   std::vector<double> colon_relax_factor;          // [i]: dt / (suspension relaxation + dt)
   std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
-  std::vector<double> colon_pair_kink_N_per_m;     // [i]: T / gap
-  std::vector<double> colon_pair_pleat_limit;      // [i]: smaller pleat_limit of i, i+1
-  std::vector<double> colon_pair_toe_N;            // [i]: the toe's stiffness of gap i
-  std::vector<Eigen::Vector3d> colon_pair_rest_direction;     // [i]: unit, i -> i+1 at rest
-  std::vector<Eigen::Vector3d> colon_pair_rest_mean_tangent;  // [i]: mean of i's, i+1's
   double tracking_arc_ratio{0.0};                  // as used (ModelParams::tracking_arc_ratio)
 };
 

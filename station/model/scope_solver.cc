@@ -48,13 +48,18 @@ struct BodyStiffnessSum {
   Eigen::Vector3d force{Eigen::Vector3d::Zero()};
   bool stiff{false};
 
-  void AddSpring(double k_n, double k_t, const Eigen::Vector3d& n, const Eigen::Vector3d& p) {
+  // flatten: GCC left the four outer products out of line, a call each per
+  // contact (about 3 % of the 64 x 1000 step).
+  [[gnu::flatten]] void AddSpring(double k_n, double k_t, const Eigen::Vector3d& n,
+                                  const Eigen::Vector3d& p) {
     const double c = k_n - k_t;
     const Eigen::Vector3d m = p.cross(n);
-    b += k_t;
-    b_p2 += k_t * p.squaredNorm();
-    b_p += k_t * p;
-    b_ppT.noalias() += (k_t * p) * p.transpose();
+    if (k_t != 0.0) {  // a ring's spring has no friction: these sums would gain zeros
+      b += k_t;
+      b_p2 += k_t * p.squaredNorm();
+      b_p += k_t * p;
+      b_ppT.noalias() += (k_t * p) * p.transpose();
+    }
     c_mmT.noalias() += (c * m) * m.transpose();
     c_mnT.noalias() += (c * m) * n.transpose();
     c_nnT.noalias() += (c * n) * n.transpose();

@@ -81,7 +81,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     if (!c.touching) continue;
     const int k = c.segment;
     const Eigen::Vector3d dc =
-        (1.0 - c.segment_t) * sc->colon_rhs[k] + c.segment_t * sc->colon_rhs[k + 1];
+        (1.0 - c.segment_t) * sc->colon_system.Rhs(k) + c.segment_t * sc->colon_system.Rhs(k + 1);
     const Eigen::Vector3d& n = sc->sample_normal_W[i];
     const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
     out->roll_torque_Nm -= scope_radius_m * n.cross(sc->sample_friction_W_N[i]).dot(axis);
@@ -128,25 +128,28 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   // The gap behind point i and the one ahead of it (0 past the ends, where
   // the point's own is used).
   double gap_behind_m = 0.0;
+  // The points' constants from the scratch's compact copies: the points
+  // themselves are large and this loop visits every one.
+  const ColonSolverArrays& constants = sc->colon_arrays;
   for (int i = 0; i < N; ++i) {
-    const ColonPoint& p = pts[i];
     const double moved2_m2 = s->colon_displacement_m[i].squaredNorm();
     colon_sum_m2 += moved2_m2;
     speed2 += s->colon_velocity_m_per_s[i].squaredNorm();
     // Mesentery stretch: how far the tether is pulled beyond its reach.
-    const double stretch = std::max(0.0, s->colon_tether_distance_m[i] - p.tether_length_m);
+    const double stretch =
+        std::max(0.0, s->colon_tether_distance_m[i] - constants.tether_length_m[i]);
     out->stretch_m[i] = stretch;
     if (stretch > out->peak_stretch_m) {
       out->peak_stretch_m = stretch;
-      out->peak_stretch_arc_m = p.arc_m;
+      out->peak_stretch_arc_m = pts[i].arc_m;
     }
-    if (!p.tissue.mobile) {
+    if (constants.mobile[i] == 0) {
       peak_fixed_moved2_m2 = std::max(peak_fixed_moved2_m2, moved2_m2);
     }
     out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
     // Pleat ratio: the tube's current length over its rest length around r_i.
     const double gap_ahead_m = i + 1 < N ? s->colon_gap_m[i] : 0.0;
-    const double rest_m = p.length_m;  // half of each neighbouring gap at rest
+    const double rest_m = constants.length_m[i];  // half of each neighbouring gap at rest
     out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
     gap_behind_m = gap_ahead_m;
   }

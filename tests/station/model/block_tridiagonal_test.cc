@@ -50,9 +50,19 @@ Eigen::Vector3d ApplyRow(const System& s, const std::vector<Eigen::Vector3d>& x,
 TEST(BlockTridiagonal, SolvesTheSystemAndLeavesTheHeldPointsAlone) {
   for (const int last : {1, 2, 7, 149}) {
     const System s = MakeSystem(last + 3, 17u + static_cast<unsigned>(last));
-    std::vector<Eigen::Vector3d> x = s.rhs;
-    std::vector<Eigen::Matrix3d> gain(s.diag.size());
-    internal::SolveBlockTridiagonal(s.diag, s.upper, last, &x, &gain);
+    // Into the solver's layout: D's upper triangle, U whole, one array each.
+    const int points = static_cast<int>(s.diag.size());
+    ColonSystem system;
+    system.Resize(points);
+    const int diag_entry[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+    for (int i = 0; i < points; ++i) {
+      for (int e = 0; e < 6; ++e) system.diag[e][i] = s.diag[i](diag_entry[e][0], diag_entry[e][1]);
+      for (int e = 0; e < 9; ++e) system.upper[e][i] = s.upper[i](e / 3, e % 3);
+      for (int c = 0; c < 3; ++c) system.rhs[c][i] = s.rhs[i][c];
+    }
+    internal::SolveBlockTridiagonal(last, &system);
+    std::vector<Eigen::Vector3d> x(points);
+    for (int i = 0; i < points; ++i) x[i] = system.Rhs(i);
     for (int i = 1; i <= last; ++i) {
       const Eigen::Vector3d residual = ApplyRow(s, x, i, last) - s.rhs[i];
       EXPECT_LT(residual.norm(), 1e-12 * s.rhs[i].norm() + 1e-14)
