@@ -163,14 +163,12 @@ void CopyColonState(const ModelState& s, int end, ColonSolverArrays* a) {
   SplitCoordinates(s.p_WColon, 0, std::min(end + 1, N - 1), &a->position_m);
   SplitCoordinates(s.colon_reference_m, 0, end, &a->reference_m);
   SplitCoordinates(s.colon_tangent, 0, end, &a->tangent);
-  const auto copy = [end](const std::vector<double>& from, std::vector<double>* to) {
-    std::copy(from.begin(), from.begin() + end + 1, to->begin());
+  const auto copy = [end](const std::vector<double>& from, std::vector<double>* to, int at) {
+    std::copy(from.begin(), from.begin() + end + 1, to->begin() + at);
   };
-  copy(s.colon_gap_m, &a->gap_m);
-  copy(s.colon_pair_rest_gap_m, &a->rest_gap_m);
-  copy(s.colon_tether_distance_m, &a->tether_distance_m);
-  a->gap_behind_m[0] = 0.0;
-  std::copy(s.colon_gap_m.begin(), s.colon_gap_m.begin() + end, a->gap_behind_m.begin() + 1);
+  copy(s.colon_gap_m, &a->gap_m, 1);
+  copy(s.colon_pair_rest_gap_m, &a->rest_gap_m, 0);
+  copy(s.colon_tether_distance_m, &a->tether_distance_m, 0);
 }
 
 // The terms of point i's own that few points have at a time: the body wall
@@ -268,7 +266,7 @@ VES_LANE_FUNCTION void AddOwnTerms(const ModelParams& params, const StepInput& i
     const LaneMask gathers = VES_LOAD(a.reach_gathers, i) > 0.5;
     Lanes reach = length;
     if (VES_ANY(gathers)) {
-      const Lanes now = VES_LOAD(a.gap_m, i) + VES_LOAD(a.gap_behind_m, i);
+      const Lanes now = VES_LOAD(a.gap_m, i + 1) + VES_LOAD(a.gap_m, i);
       const Lanes natural = VES_LOAD(a.natural_span_m, i);
       const Lanes quotient = now / natural;
       const Lanes ratio =
@@ -343,7 +341,7 @@ VES_LANE_FUNCTION void CalcPairTerms(const ModelParams& params, int end, Scratch
     const Lanes s0 = VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i);
     const Lanes s1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
     const Lanes s2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
-    const Lanes g = VES_LOAD(a.gap_m, i);
+    const Lanes g = VES_LOAD(a.gap_m, i + 1);
     const LaneMask apart = g > 1e-12;
     const Lanes inv_g = VES_SELECT(apart, 1.0 / g, zero);
     // Strain against the gap's rest length (shorter where folds have set);
@@ -479,7 +477,7 @@ VES_LANE_FUNCTION void AddPairTerms(int end, Scratch* sc) {
 // After the solve, from the solved positions (colon_arrays.position_m), four
 // at a time: the tether distances of points 1..last (CalcTetherDistance)
 // into colon_arrays.tether_distance_m, the gaps of pairs 0..last_gap into
-// colon_arrays.gap_m.
+// colon_arrays.gap_m (one entry later).
 VES_LANE_FUNCTION void CalcSolvedDistances(const ModelParams& params, int last, int last_gap,
                                            Scratch* sc) {
   ColonSolverArrays& a = sc->colon_arrays;
@@ -503,7 +501,7 @@ VES_LANE_FUNCTION void CalcSolvedDistances(const ModelParams& params, int last, 
     const Lanes d1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
     const Lanes d2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
     const Lanes squared = (d0 * d0 + d1 * d1) + d2 * d2;
-    VES_STORE(a.gap_m, i, VES_SQRT(squared));
+    VES_STORE(a.gap_m, i + 1, VES_SQRT(squared));
   }
 }
 
@@ -540,11 +538,12 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   for (auto& v : a.pair_block) v.assign(size, 0.0);
   for (auto& v : a.own_diag) v.assign(size, 0.0);
   for (std::vector<double>* v :
-       {&a.gap_m, &a.gap_behind_m, &a.rest_gap_m, &a.tether_distance_m, &a.suspension_rhs_factor,
-        &a.has_tether_side, &a.tether_length_m, &a.mesentery_length_m, &a.length_m,
-        &a.reach_gathers, &a.natural_span_m, &a.pair_kink_N_per_m}) {
+       {&a.rest_gap_m, &a.tether_distance_m, &a.suspension_rhs_factor, &a.has_tether_side,
+        &a.tether_length_m, &a.mesentery_length_m, &a.length_m, &a.reach_gathers, &a.natural_span_m,
+        &a.pair_kink_N_per_m}) {
     v->assign(size, 0.0);
   }
+  a.gap_m.assign(size + 1, 0.0);
   a.mobile.assign(size, 0);
   a.rest_position_m.assign(size, Eigen::Vector3d::Zero());
   std::fill(a.rest_gap_m.begin(), a.rest_gap_m.end(), 1.0);
@@ -556,7 +555,6 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     (*xyz)[1].assign(size, 0.0);
     (*xyz)[2].assign(size, 1.0);
   }
-  sc->colon_suspension_N_per_m.assign(size, 0.0);
   sc->colon_tether_N_per_m.assign(size, 0.0);
   sc->colon_relax_factor.assign(size, 0.0);
   sc->colon_pair_gap_m.assign(size, 1.0);
@@ -566,13 +564,12 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     const ColonPoint& p = pts[i];
     const TissueParams& t = p.tissue;
     const double h = p.length_m;
-    sc->colon_suspension_N_per_m[i] = t.suspension_stiffness_N_per_m2 * h;
+    const double K_c = t.suspension_stiffness_N_per_m2 * h;
     sc->colon_tether_N_per_m[i] = t.mesentery_stiffness_N_per_m2 * h;
     const Eigen::Matrix3d P = I - p.rest_tangent * p.rest_tangent.transpose();
-    const Eigen::Matrix3d own = (t.suspension_damping_N_s_per_m2 * h) * I +
-                                (params.dt_s * sc->colon_suspension_N_per_m[i]) * P;
+    const Eigen::Matrix3d own = (t.suspension_damping_N_s_per_m2 * h) * I + (params.dt_s * K_c) * P;
     for (int e = 0; e < 6; ++e) a.own_diag[e][i] = own(kDiagEntry[e][0], kDiagEntry[e][1]);
-    a.suspension_rhs_factor[i] = -(params.dt_s * sc->colon_suspension_N_per_m[i]);
+    a.suspension_rhs_factor[i] = -(params.dt_s * K_c);
     if (t.suspension_relaxation_s > 0.0) {
       sc->colon_relax_factor[i] = params.dt_s / (t.suspension_relaxation_s + params.dt_s);
     }
@@ -827,7 +824,7 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   CalcSolvedDistances(params, last, last_gap, sc);
   std::copy(arrays.tether_distance_m.begin() + 1, arrays.tether_distance_m.begin() + last + 1,
             s->colon_tether_distance_m.begin() + 1);
-  std::copy(arrays.gap_m.begin(), arrays.gap_m.begin() + last_gap + 1, s->colon_gap_m.begin());
+  std::copy(arrays.gap_m.begin() + 1, arrays.gap_m.begin() + last_gap + 2, s->colon_gap_m.begin());
   // Folds set where a gap is held shortened, and release slowly elsewhere.
   if (params.colon_pleat_set_s > 0.0) {
     const double set = dt / (params.colon_pleat_set_s + dt);

@@ -283,8 +283,9 @@ struct ColonSolverArrays {
   CoordinateArrays position_m;       // p_WColon
   CoordinateArrays reference_m;      // colon_reference_m
   CoordinateArrays tangent;          // colon_tangent
-  std::vector<double> gap_m;         // colon_gap_m
-  std::vector<double> gap_behind_m;  // colon_gap_m[i - 1] (0 at point 0)
+  // colon_gap_m one entry later: [i + 1] is the gap ahead of point i and
+  // [i] the one behind it ([0] = 0, before point 0).
+  std::vector<double> gap_m;
   std::vector<double> rest_gap_m;    // colon_pair_rest_gap_m
   std::vector<double> tether_distance_m;
   // Each pair's dt C (its stiffness block's upper triangle, ordered as
@@ -340,7 +341,6 @@ struct Scratch {
   ColonSystem colon_system;
   ColonSolverArrays colon_arrays;
   // Constant parts, computed once by MakeScratch (padded as colon_arrays).
-  std::vector<double> colon_suspension_N_per_m;    // [i]: K_c h_i (in P_i)
   std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
   std::vector<double> colon_relax_factor;          // [i]: dt / (suspension relaxation + dt)
   std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
