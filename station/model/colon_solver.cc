@@ -68,8 +68,13 @@ int LastActivePoint(const ModelState& s, int N) {
 // bit for bit those of one point at a time, in the AVX2 build and in the
 // baseline one, so a replay stays exact on any x86-64.
 typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
+// Four doubles of an array, at any double's alignment. Not may_alias: GCC
+// takes a vector of doubles to alias doubles (every array read or written
+// this way holds doubles) and nothing else, so it keeps the arrays' data
+// pointers in registers, which with may_alias it read again after every
+// store (Clang takes any vector access to alias anything, as before).
 typedef double LanesInMemory
-    __attribute__((vector_size(4 * sizeof(double)), aligned(alignof(double)), may_alias));
+    __attribute__((vector_size(4 * sizeof(double)), aligned(alignof(double))));
 using LaneMask = decltype(Lanes{} < Lanes{});
 constexpr int kLanes = 4;
 // (row, column) of ColonSystem::diag's entries in a block, and back.
@@ -84,7 +89,9 @@ static_assert(kLanes <= kColonLanePadding, "the colon's arrays must hold a whole
 // left the AVX registers' upper halves in use before such a tail call
 // (no vzeroupper), and every SSE instruction after it, the elimination's
 // among them, ran about 2.4 times slower on the project's VM.
-#if defined(__x86_64__)
+// VES_MODEL_BASELINE_ONLY builds the baseline alone (and the elimination's
+// scalar sweep), to check on a CPU with AVX2 that it gives the same bits.
+#if defined(__x86_64__) && !defined(VES_MODEL_BASELINE_ONLY)
 #define VES_LANE_FUNCTION [[gnu::target_clones("avx2", "default")]]
 #else
 #define VES_LANE_FUNCTION
@@ -92,6 +99,7 @@ static_assert(kLanes <= kColonLanePadding, "the colon's arrays must hold a whole
 #define VES_LOAD(array, i) (Lanes(*reinterpret_cast<const LanesInMemory*>((array).data() + (i))))
 #define VES_STORE(array, i, value) \
   (*reinterpret_cast<LanesInMemory*>((array).data() + (i)) = (value))
+#define VES_STORE_AT(pointer, value) (*reinterpret_cast<LanesInMemory*>(pointer) = (value))
 // Lanes where mask is set take a, the others b.
 #define VES_SELECT(mask, a, b) ((Lanes)(((mask) & (LaneMask)(a)) | (~(mask) & (LaneMask)(b))))
 // Square roots (correctly rounded, as std::sqrt's), two lanes per SSE2
@@ -643,47 +651,71 @@ void UpdateColonTangents(int from, int to, ModelState* s) {
 
 namespace {
 
-// The back substitution of one point, x_i -= G_i x_(i+1): Eigen summed the
-// product's first two rows from the left and its third from the right.
-[[gnu::always_inline]] inline void SubstituteBack(int i, ColonSystem* system) {
-  auto& x = system->rhs;
-  const auto& G = system->gain;
-  const double z0 = x[0][i + 1], z1 = x[1][i + 1], z2 = x[2][i + 1];
-  x[0][i] -= (G[0][i] * z0 + G[1][i] * z1) + G[2][i] * z2;
-  x[1][i] -= (G[3][i] * z0 + G[4][i] * z1) + G[5][i] * z2;
-  x[2][i] -= G[6][i] * z0 + (G[7][i] * z1 + G[8][i] * z2);
+// The back substitution of one point, x_i = y_i - G_i x_(i+1): Eigen summed
+// the product's first two rows from the left and its third from the right.
+// x_(i+1) comes and x_i goes in registers: the substitution is a chain, and
+// a trip through memory would add to every link (a vector read of three
+// scalar stores is not even forwarded, and waits for them).
+[[gnu::always_inline]] inline Eigen::Vector3d SubstituteBack(int i, const Eigen::Vector3d& next,
+                                                             ColonSystem* system) {
+  double* x = system->solution.data() + 4 * i;
+  const double* G = system->gain.data() + 12 * i;
+  const double z0 = next[0], z1 = next[1], z2 = next[2];
+  const double x0 = x[0] - ((G[0] * z0 + G[1] * z1) + G[2] * z2);
+  const double x1 = x[1] - ((G[4] * z0 + G[5] * z1) + G[6] * z2);
+  const double x2 = x[2] - (G[8] * z0 + (G[9] * z1 + G[10] * z2));
+  x[0] = x0;
+  x[1] = x1;
+  x[2] = x2;
+  return {x0, x1, x2};
 }
+
+}  // namespace
 
 // Block Thomas over points 1..last (point 0 and the points past `last`
 // held): G_i = M_i^-1 U_i, y_i = M_i^-1 (r_i - U_(i-1)^T y_(i-1)) with
-// M_i = D_i - U_(i-1)^T G_(i-1) (this forward sweep); then
-// x_i = y_i - G_i x_(i+1) (SubstituteBack, from the last point down). M_i is
-// symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
-// triangle is formed and it is inverted by its adjugate, in scalars: the
-// generic 3x3 products were most of the step (docs/model.md, "Speed").
-// The sums are in the order Eigen gave them when the blocks were Eigen
-// matrices (see Lanes), so the solution is bit for bit the same.
-void EliminateForward(int last, ColonSystem* system) {
+// M_i = D_i - U_(i-1)^T G_(i-1) (this forward sweep, y_i into solution);
+// then x_i = y_i - G_i x_(i+1) (SubstituteBack, from the last point down).
+// M_i is symmetric (D_i is, and U^T M^-1 U is for any U), so only its upper
+// triangle is formed and it is inverted by its adjugate: the generic 3x3
+// products were most of the step (docs/model.md, "Speed"). The sums are in
+// the order Eigen gave them when the blocks were Eigen matrices (see
+// Lanes), so the solution is bit for bit the same.
+//
+// Two builds of the sweep, chosen when the program loads: with AVX2 a row
+// of G, M or x is one vector (three lanes used), which takes about a fifth
+// off the sweep; on the baseline x86-64 the same rows in two halves were
+// twice as slow as scalars, so that build does one entry at a time. Both do
+// every entry's operations in the same order: the same bits. (Outside the
+// anonymous namespace: Clang counts only the default version's callers and
+// would call the other unused.)
+#if defined(__x86_64__) && !defined(VES_MODEL_BASELINE_ONLY)
+#define VES_BASELINE_BUILD [[gnu::target("default")]]
+#else
+#define VES_BASELINE_BUILD
+#endif
+VES_BASELINE_BUILD void EliminateForward(int last, ColonSystem* system) {
   ColonSystem& sys = *system;
   const auto& U = sys.upper;
-  auto& G = sys.gain;
-  auto& x = sys.rhs;
+  double* const G = sys.gain.data();
+  double* const x = sys.solution.data();
   for (int i = 1; i <= last; ++i) {
     double m00 = sys.diag[0][i], m01 = sys.diag[1][i], m02 = sys.diag[2][i], m11 = sys.diag[3][i],
            m12 = sys.diag[4][i], m22 = sys.diag[5][i];
-    double y0 = x[0][i], y1 = x[1][i], y2 = x[2][i];
+    double y0 = sys.rhs[0][i], y1 = sys.rhs[1][i], y2 = sys.rhs[2][i];
     if (i > 1) {
       // M -= U^T G and y -= U^T y_(i-1), column by column of U (entry (r, c) at 3 r + c).
       const int j = i - 1;
+      const double* g = G + 12 * j;
       const double u00 = U[0][j], u01 = U[1][j], u02 = U[2][j], u10 = U[3][j], u11 = U[4][j],
                    u12 = U[5][j], u20 = U[6][j], u21 = U[7][j], u22 = U[8][j];
-      m00 -= (u00 * G[0][j] + u10 * G[3][j]) + u20 * G[6][j];
-      m01 -= (u00 * G[1][j] + u10 * G[4][j]) + u20 * G[7][j];
-      m02 -= (u00 * G[2][j] + u10 * G[5][j]) + u20 * G[8][j];
-      m11 -= (u01 * G[1][j] + u11 * G[4][j]) + u21 * G[7][j];
-      m12 -= (u01 * G[2][j] + u11 * G[5][j]) + u21 * G[8][j];
-      m22 -= (u02 * G[2][j] + u12 * G[5][j]) + u22 * G[8][j];
-      const double r0 = x[0][j], r1 = x[1][j], r2 = x[2][j];
+      m00 -= (u00 * g[0] + u10 * g[4]) + u20 * g[8];
+      m01 -= (u00 * g[1] + u10 * g[5]) + u20 * g[9];
+      m02 -= (u00 * g[2] + u10 * g[6]) + u20 * g[10];
+      m11 -= (u01 * g[1] + u11 * g[5]) + u21 * g[9];
+      m12 -= (u01 * g[2] + u11 * g[6]) + u21 * g[10];
+      m22 -= (u02 * g[2] + u12 * g[6]) + u22 * g[10];
+      const double r0 = x[4 * j], r1 = x[4 * j + 1], r2 = x[4 * j + 2];
       y0 -= (u00 * r0 + u10 * r1) + u20 * r2;
       y1 -= (u01 * r0 + u11 * r1) + u21 * r2;
       y2 -= (u02 * r0 + u12 * r1) + u22 * r2;
@@ -695,27 +727,80 @@ void EliminateForward(int last, ColonSystem* system) {
     const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
     const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det, i11 = c11 * inv_det,
                  i12 = c12 * inv_det, i22 = c22 * inv_det;
-    if (i < last) {
-      for (int c = 0; c < 3; ++c) {
+    double* g = G + 12 * i;
+    for (int c = 0; c < 3; ++c) {
+      if (i < last) {
         const double v0 = U[c][i], v1 = U[3 + c][i], v2 = U[6 + c][i];
-        G[c][i] = i00 * v0 + i01 * v1 + i02 * v2;
-        G[3 + c][i] = i01 * v0 + i11 * v1 + i12 * v2;
-        G[6 + c][i] = i02 * v0 + i12 * v1 + i22 * v2;
+        g[c] = i00 * v0 + i01 * v1 + i02 * v2;
+        g[4 + c] = i01 * v0 + i11 * v1 + i12 * v2;
+        g[8 + c] = i02 * v0 + i12 * v1 + i22 * v2;
+      } else {
+        g[c] = g[4 + c] = g[8 + c] = 0.0;
       }
-    } else {
-      for (auto& g : G) g[i] = 0.0;
     }
-    x[0][i] = i00 * y0 + i01 * y1 + i02 * y2;
-    x[1][i] = i01 * y0 + i11 * y1 + i12 * y2;
-    x[2][i] = i02 * y0 + i12 * y1 + i22 * y2;
+    x[4 * i] = i00 * y0 + i01 * y1 + i02 * y2;
+    x[4 * i + 1] = i01 * y0 + i11 * y1 + i12 * y2;
+    x[4 * i + 2] = i02 * y0 + i12 * y1 + i22 * y2;
   }
 }
 
-}  // namespace
+#if defined(__x86_64__) && !defined(VES_MODEL_BASELINE_ONLY)
+// The same sweep a row at a time: lane c of a row holds its column c.
+[[gnu::target("avx2")]] void EliminateForward(int last, ColonSystem* system) {
+  ColonSystem& sys = *system;
+  const auto& D = sys.diag;
+  const auto& U = sys.upper;
+  const auto& R = sys.rhs;
+  double* const G = sys.gain.data();
+  double* const X = sys.solution.data();
+  // G_(i-1)'s rows, U_(i-1)'s rows and y_(i-1), carried to the next point.
+  Lanes g0{}, g1{}, g2{}, u0{}, u1{}, u2{}, x{};
+  for (int i = 1; i <= last; ++i) {
+    Lanes m0 = {D[0][i], D[1][i], D[2][i], 0.0};
+    Lanes m1 = {0.0, D[3][i], D[4][i], 0.0};  // lanes 1 and 2 used
+    Lanes m2 = {0.0, 0.0, D[5][i], 0.0};      // lane 2 used
+    Lanes y = {R[0][i], R[1][i], R[2][i], 0.0};
+    if (i > 1) {
+      // Row r of M: m(r, c) -= (u_0r g_0c + u_1r g_1c) + u_2r g_2c; y_r likewise.
+      const int j = i - 1;
+      m0 -= (U[0][j] * g0 + U[3][j] * g1) + U[6][j] * g2;
+      m1 -= (U[1][j] * g0 + U[4][j] * g1) + U[7][j] * g2;
+      m2 -= (U[2][j] * g0 + U[5][j] * g1) + U[8][j] * g2;
+      y -= (u0 * x[0] + u1 * x[1]) + u2 * x[2];
+    }
+    const double m00 = m0[0], m01 = m0[1], m02 = m0[2], m11 = m1[1], m12 = m1[2], m22 = m2[2];
+    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
+                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
+                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
+    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
+    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det, i11 = c11 * inv_det,
+                 i12 = c12 * inv_det, i22 = c22 * inv_det;
+    if (i < last) {
+      u0 = Lanes{U[0][i], U[1][i], U[2][i], 0.0};
+      u1 = Lanes{U[3][i], U[4][i], U[5][i], 0.0};
+      u2 = Lanes{U[6][i], U[7][i], U[8][i], 0.0};
+      g0 = (i00 * u0 + i01 * u1) + i02 * u2;
+      g1 = (i01 * u0 + i11 * u1) + i12 * u2;
+      g2 = (i02 * u0 + i12 * u1) + i22 * u2;
+    } else {
+      g0 = g1 = g2 = Lanes{};
+    }
+    double* g = G + 12 * i;
+    VES_STORE_AT(g, g0);
+    VES_STORE_AT(g + 4, g1);
+    VES_STORE_AT(g + 8, g2);
+    // x_r = (i_r0 y0 + i_r1 y1) + i_r2 y2 (the inverse is symmetric).
+    x = (Lanes{i00, i01, i02, 0.0} * y[0] + Lanes{i01, i11, i12, 0.0} * y[1]) +
+        Lanes{i02, i12, i22, 0.0} * y[2];
+    VES_STORE_AT(X + 4 * i, x);
+  }
+}
+#endif
 
 void SolveBlockTridiagonal(int last, ColonSystem* system) {
   EliminateForward(last, system);
-  for (int i = last - 1; i >= 1; --i) SubstituteBack(i, system);
+  Eigen::Vector3d x = system->Solution(last);
+  for (int i = last - 1; i >= 1; --i) x = SubstituteBack(i, x, system);
 }
 
 // flatten: at -O2 GCC left Eigen's small products out of line, and their calls
@@ -805,9 +890,9 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   EliminateForward(last, &sys);
   const double inv_dt = 1.0 / dt;
   ColonSolverArrays& arrays = sc->colon_arrays;
+  Eigen::Vector3d dx = sys.Solution(last);
   for (int i = last; i >= 1; --i) {
-    if (i < last) SubstituteBack(i, &sys);
-    const Eigen::Vector3d dx = sys.Rhs(i);
+    if (i < last) dx = SubstituteBack(i, dx, &sys);
     s->colon_displacement_m[i] += dx;
     s->colon_velocity_m_per_s[i] = dx * inv_dt;
     s->p_WColon[i] = arrays.rest_position_m[i] + s->colon_displacement_m[i];
@@ -856,10 +941,8 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
       s->colon_lumen_radius_m[i] = R > hug_m ? hug_m + open * (R - hug_m) : R;
     }
   }
-  for (auto& rhs : sys.rhs) {
-    rhs[0] = 0.0;
-    std::fill(rhs.begin() + last + 1, rhs.begin() + N, 0.0);
-  }
+  std::fill(sys.solution.begin(), sys.solution.begin() + 4, 0.0);
+  std::fill(sys.solution.begin() + 4 * (last + 1), sys.solution.begin() + 4 * N, 0.0);
   for (int i = last + 1; i < N; ++i) s->colon_velocity_m_per_s[i].setZero();
   // The tangents: the inner points four at a time, the ends by
   // UpdateColonTangents itself.

@@ -54,15 +54,16 @@ void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
 // Linearly implicit update of the colon points in 3-D (scope held at its new
 // shape): suspension, mesentery, axial links, kink tension and contact
 // stiffness in one block-tridiagonal solve. Writes the points' increments into
-// scratch->colon_system.rhs and updates their tangents.
+// scratch->colon_system.solution (zero for the points not solved) and updates
+// their tangents.
 void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
                 Scratch* scratch);
 
 // Solves the symmetric positive definite block-tridiagonal system of the
 // colon for points 1..last (ColonSystem: diagonal blocks diag, off-diagonal
-// blocks upper) by block Thomas elimination: rhs[1..last] in, the solution
-// out; gain is work space. SolveColon's elimination, on its own so that
-// model_bench can time it.
+// blocks upper) by block Thomas elimination: rhs[1..last] in, solution[1..last]
+// out (its other points untouched); gain is work space. SolveColon's
+// elimination, on its own so that model_bench can time it.
 void SolveBlockTridiagonal(int last, ColonSystem* system);
 
 // Recomputes the current tangents of points from..to (central differences).

@@ -189,7 +189,8 @@ void ColonSystem::Resize(int points) {
   for (auto& a : diag) a.assign(size, 0.0);
   for (auto& a : upper) a.assign(size, 0.0);
   for (auto& a : rhs) a.assign(size, 0.0);
-  for (auto& a : gain) a.assign(size, 0.0);
+  gain.assign(12 * size, 0.0);
+  solution.assign(4 * size, 0.0);
 }
 
 StepOutput MakeStepOutput(const ModelParams& params) {

@@ -271,9 +271,16 @@ inline constexpr int kColonLanePadding = 4;
 struct ColonSystem {
   std::array<std::vector<double>, 6> diag;   // D_i's upper triangle: 00, 01, 02, 11, 12, 22
   std::array<std::vector<double>, 9> upper;  // U_i, the block (i, i+1): entry (r, c) at 3 r + c
-  CoordinateArrays rhs;                      // after the solve: the increments of r_i
-  std::array<std::vector<double>, 9> gain;   // the elimination's work space, laid out as upper
+  CoordinateArrays rhs;
+  // The elimination's gains G_i and its solution x_i (the increments of
+  // r_i), four entries a row (the fourth unused) so that a row is one vector
+  // in the elimination: G_i's (r, c) at 12 i + 4 r + c, x_i's c at 4 i + c.
+  std::vector<double> gain;
+  std::vector<double> solution;
   Eigen::Vector3d Rhs(int i) const { return {rhs[0][i], rhs[1][i], rhs[2][i]}; }
+  Eigen::Vector3d Solution(int i) const {
+    return {solution[4 * i], solution[4 * i + 1], solution[4 * i + 2]};
+  }
   void Resize(int points);  // zeroes every entry
 };
 

@@ -80,8 +80,8 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     speed2 += dp.squaredNorm();
     if (!c.touching) continue;
     const int k = c.segment;
-    const Eigen::Vector3d dc =
-        (1.0 - c.segment_t) * sc->colon_system.Rhs(k) + c.segment_t * sc->colon_system.Rhs(k + 1);
+    const Eigen::Vector3d dc = (1.0 - c.segment_t) * sc->colon_system.Solution(k) +
+                               c.segment_t * sc->colon_system.Solution(k + 1);
     const Eigen::Vector3d& n = sc->sample_normal_W[i];
     const Eigen::Vector3d axis = s->X_WLink[s->samples[i].link].linear().col(2);
     out->roll_torque_Nm -= scope_radius_m * n.cross(sc->sample_friction_W_N[i]).dot(axis);

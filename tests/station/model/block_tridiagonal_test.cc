@@ -60,17 +60,22 @@ TEST(BlockTridiagonal, SolvesTheSystemAndLeavesTheHeldPointsAlone) {
       for (int e = 0; e < 9; ++e) system.upper[e][i] = s.upper[i](e / 3, e % 3);
       for (int c = 0; c < 3; ++c) system.rhs[c][i] = s.rhs[i][c];
     }
+    // A mark in the solution's held points, which the solve must leave.
+    const Eigen::Vector3d held(7.0, -8.0, 9.0);
+    for (int i = 0; i < points; ++i) {
+      for (int c = 0; c < 3; ++c) system.solution[4 * i + c] = held[c];
+    }
     internal::SolveBlockTridiagonal(last, &system);
     std::vector<Eigen::Vector3d> x(points);
-    for (int i = 0; i < points; ++i) x[i] = system.Rhs(i);
+    for (int i = 0; i < points; ++i) x[i] = system.Solution(i);
     for (int i = 1; i <= last; ++i) {
       const Eigen::Vector3d residual = ApplyRow(s, x, i, last) - s.rhs[i];
       EXPECT_LT(residual.norm(), 1e-12 * s.rhs[i].norm() + 1e-14)
           << "point " << i << " of " << last;
     }
     // Point 0 and the points past `last` are not part of the solve.
-    EXPECT_EQ(x[0], s.rhs[0]);
-    for (int i = last + 1; i < static_cast<int>(x.size()); ++i) EXPECT_EQ(x[i], s.rhs[i]);
+    EXPECT_EQ(x[0], held);
+    for (int i = last + 1; i < static_cast<int>(x.size()); ++i) EXPECT_EQ(x[i], held);
   }
 }
 
