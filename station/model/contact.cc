@@ -249,7 +249,7 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
   const int samples = static_cast<int>(s->samples.size());
   const int last_point = static_cast<int>(params.colon.points.size()) - 1;
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
-  sc->ring_contact_count = 0;
+  int count = 0;  // (a local: the stores into each RingContact could alias the member)
   std::fill(sc->ring_held.begin(), sc->ring_held.end(), std::uint8_t{0});
   const double onset_rate = params.ring_onset_s > 0.0 ? params.dt_s / params.ring_onset_s : 1.0;
   for (int i = s->first_inside_sample; i + 1 < samples; ++i) {
@@ -270,7 +270,7 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
       if (!(penetration_m > 0.0) || d < 1e-12) continue;
       const WallResponse r =
           CalcWallResponse(ring.tissue, params.wall_hardening_ratio, penetration_m);
-      RingContact& rc = sc->ring_contacts[sc->ring_contact_count++];
+      RingContact& rc = sc->ring_contacts[count++];
       rc.point = m;
       rc.sample = i;
       rc.piece_t = t;
@@ -290,6 +290,7 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* s, Scratch* sc)
           onset * (r.slope_N_per_m + ring.tissue.wall_damping_N_s_per_m / params.dt_s);
     }
   }
+  sc->ring_contact_count = count;
   for (size_t m = 0; m < sc->ring_held.size(); ++m) {
     if (!sc->ring_held[m]) s->ring_onset[m] = 0.0;
   }

@@ -120,9 +120,12 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     out->wall_force_N[rc.point] += rc.force_N;
     s->wall_deformation_m[rc.point] = std::max(s->wall_deformation_m[rc.point], rc.penetration_m);
   }
-  out->peak_stretch_m = 0.0;
-  out->peak_stretch_arc_m = 0.0;
-  out->peak_wall_force_N = 0.0;
+  // The peaks in locals, written once after the loop: as members of *out they
+  // could be any of the doubles the loop stores, and each point would read
+  // them back from memory.
+  double peak_stretch_m = 0.0;
+  double peak_stretch_arc_m = 0.0;
+  double peak_wall_force_N = 0.0;
   double peak_fixed_moved2_m2 = 0.0;  // squared: one square root for the peak
   double colon_sum_m2 = 0.0;
   // The gap behind point i and the one ahead of it (0 past the ends, where
@@ -139,20 +142,23 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     const double stretch =
         std::max(0.0, s->colon_tether_distance_m[i] - constants.tether_length_m[i]);
     out->stretch_m[i] = stretch;
-    if (stretch > out->peak_stretch_m) {
-      out->peak_stretch_m = stretch;
-      out->peak_stretch_arc_m = pts[i].arc_m;
+    if (stretch > peak_stretch_m) {
+      peak_stretch_m = stretch;
+      peak_stretch_arc_m = pts[i].arc_m;
     }
     if (constants.mobile[i] == 0) {
       peak_fixed_moved2_m2 = std::max(peak_fixed_moved2_m2, moved2_m2);
     }
-    out->peak_wall_force_N = std::max(out->peak_wall_force_N, out->wall_force_N[i]);
+    peak_wall_force_N = std::max(peak_wall_force_N, out->wall_force_N[i]);
     // Pleat ratio: the tube's current length over its rest length around r_i.
     const double gap_ahead_m = i + 1 < N ? s->colon_gap_m[i] : 0.0;
     const double rest_m = constants.length_m[i];  // half of each neighbouring gap at rest
     out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
     gap_behind_m = gap_ahead_m;
   }
+  out->peak_stretch_m = peak_stretch_m;
+  out->peak_stretch_arc_m = peak_stretch_arc_m;
+  out->peak_wall_force_N = peak_wall_force_N;
   out->peak_fixed_displacement_m = std::sqrt(peak_fixed_moved2_m2);
   SampleContact tip = s->contact[samples - 1];
   if (tip.inside) {
