@@ -670,6 +670,21 @@ namespace {
   return {x0, x1, x2};
 }
 
+// The inverse of a symmetric 3x3 matrix (its upper triangle m, the inverse's
+// likewise): its adjugate over its determinant, one division. Inlined into
+// both builds of the sweep below.
+struct SymmetricInverse {
+  double i00, i01, i02, i11, i12, i22;
+};
+[[gnu::always_inline]] inline SymmetricInverse InvertSymmetric(double m00, double m01, double m02,
+                                                               double m11, double m12, double m22) {
+  const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
+               c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
+               c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
+  const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
+  return {c00 * inv_det, c01 * inv_det, c02 * inv_det, c11 * inv_det, c12 * inv_det, c22 * inv_det};
+}
+
 }  // namespace
 
 // Block Thomas over points 1..last (point 0 and the points past `last`
@@ -720,13 +735,7 @@ VES_BASELINE_BUILD void EliminateForward(int last, ColonSystem* system) {
       y1 -= (u01 * r0 + u11 * r1) + u21 * r2;
       y2 -= (u02 * r0 + u12 * r1) + u22 * r2;
     }
-    // The adjugate of the symmetric M over its determinant.
-    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
-                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
-                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
-    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det, i11 = c11 * inv_det,
-                 i12 = c12 * inv_det, i22 = c22 * inv_det;
+    const auto [i00, i01, i02, i11, i12, i22] = InvertSymmetric(m00, m01, m02, m11, m12, m22);
     double* g = G + 12 * i;
     for (int c = 0; c < 3; ++c) {
       if (i < last) {
@@ -769,12 +778,7 @@ VES_BASELINE_BUILD void EliminateForward(int last, ColonSystem* system) {
       y -= (u0 * x[0] + u1 * x[1]) + u2 * x[2];
     }
     const double m00 = m0[0], m01 = m0[1], m02 = m0[2], m11 = m1[1], m12 = m1[2], m22 = m2[2];
-    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22,
-                 c02 = m01 * m12 - m02 * m11, c11 = m00 * m22 - m02 * m02,
-                 c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-    const double inv_det = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
-    const double i00 = c00 * inv_det, i01 = c01 * inv_det, i02 = c02 * inv_det, i11 = c11 * inv_det,
-                 i12 = c12 * inv_det, i22 = c22 * inv_det;
+    const auto [i00, i01, i02, i11, i12, i22] = InvertSymmetric(m00, m01, m02, m11, m12, m22);
     if (i < last) {
       u0 = Lanes{U[0][i], U[1][i], U[2][i], 0.0};
       u1 = Lanes{U[3][i], U[4][i], U[5][i], 0.0};
