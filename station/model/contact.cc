@@ -5,7 +5,13 @@
 #include "station/model/internal.h"
 
 namespace ves::model::internal {
-namespace {
+
+LumenPlanes::LumenPlanes(const ModelState& state, Scratch* cache)
+    : state_(state),
+      normal_(cache->lumen_normal_W.data()),
+      known_(cache->lumen_normal_known.data()) {
+  std::fill(cache->lumen_normal_known.begin(), cache->lumen_normal_known.end(), std::uint8_t{0});
+}
 
 // Normal of the lumen's plane at point i for the contacts: the tube's
 // direction over two points each way (the chords i-1..i+1 and i-2..i+2), from
@@ -14,15 +20,21 @@ namespace {
 // apart and crossed inside the lumen; a scope sample there changed segment in
 // a 5-step cycle and a colon point held it as a ring with 14-16 N on two steps
 // of five (mobile-descending, 2026-12-02; docs/model.md, "Contact").
-Eigen::Vector3d LumenNormal(const ModelState& s, int i) {
-  const int N = static_cast<int>(s.p_WColon.size());
-  const Eigen::Vector3d chord = s.p_WColon[std::min(i + 1, N - 1)] - s.p_WColon[std::max(i - 1, 0)] +
-                                s.p_WColon[std::min(i + 2, N - 1)] - s.p_WColon[std::max(i - 2, 0)];
+Eigen::Vector3d LumenPlanes::Normal(int i) {
+  if (known_ != nullptr && known_[i] != 0) return normal_[i];
+  const auto& p = state_.p_WColon;
+  const int N = static_cast<int>(p.size());
+  const Eigen::Vector3d chord = p[std::min(i + 1, N - 1)] - p[std::max(i - 1, 0)] +
+                                p[std::min(i + 2, N - 1)] - p[std::max(i - 2, 0)];
   const double length = chord.norm();
-  return length > 1e-12 ? Eigen::Vector3d(chord / length) : s.colon_tangent[i];
+  const Eigen::Vector3d normal =
+      length > 1e-12 ? Eigen::Vector3d(chord / length) : state_.colon_tangent[i];
+  if (known_ != nullptr) {
+    normal_[i] = normal;
+    known_[i] = 1;
+  }
+  return normal;
 }
-
-}  // namespace
 
 WallResponse CalcWallResponse(const TissueParams& tissue, double hardening_ratio, double l_m) {
   WallResponse r;
@@ -44,18 +56,19 @@ WallResponse CalcWallResponse(const TissueParams& tissue, double hardening_ratio
   return r;
 }
 
-SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
+SegmentHit CalcSegmentHit(const ModelParams& params, LumenPlanes* planes, int k,
                           const Eigen::Vector3d& p) {
   // The lumen is the circles of radius R_i centred on the current r_i, in the
   // planes normal to the tube's current tangents (paper §3.3.2, with the
   // planes following the moving colon): measure the sample in the two planes
   // that bracket it and blend by its axial position between them.
+  const ModelState& s = planes->state();
   const auto& pts = params.colon.points;
   const int last = static_cast<int>(pts.size()) - 1;
   const Eigen::Vector3d pa = p - s.p_WColon[k];
   const Eigen::Vector3d pb = p - s.p_WColon[k + 1];
-  const Eigen::Vector3d ta = LumenNormal(s, k);
-  const Eigen::Vector3d tb = LumenNormal(s, k + 1);
+  const Eigen::Vector3d ta = planes->Normal(k);
+  const Eigen::Vector3d tb = planes->Normal(k + 1);
   const double da = pa.dot(ta);   // >= 0 past plane k
   const double db = pb.dot(tb);   // < 0 before plane k+1
   SegmentHit hit;
@@ -95,13 +108,14 @@ SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& s, int k,
 // otherwise changed segment every step, and with it which colon points took
 // its load as a ring (measured 2026-12-02: point 12 of standard-adult 14 N and
 // 3 N on alternate steps, the scope's thrust +-80 um, for 30 s of pulling).
-void TrackSegment(const ModelState& s, int window, const Eigen::Vector3d& p, SampleContact* c) {
+void TrackSegment(LumenPlanes* planes, int window, const Eigen::Vector3d& p, SampleContact* c) {
+  const ModelState& s = planes->state();
   const int segments = static_cast<int>(s.p_WColon.size()) - 1;
   int k = std::clamp(c->segment, 0, segments - 1);
   int direction = 0;
   for (int step = 0; step < window; ++step) {
-    const double past_next = (p - s.p_WColon[k + 1]).dot(LumenNormal(s, k + 1));
-    const double past_this = (p - s.p_WColon[k]).dot(LumenNormal(s, k));
+    const double past_next = (p - s.p_WColon[k + 1]).dot(planes->Normal(k + 1));
+    const double past_this = (p - s.p_WColon[k]).dot(planes->Normal(k));
     if (past_next >= kTrackingHysteresis_m && k + 1 < segments && direction >= 0) {
       ++k;
       direction = 1;
@@ -128,6 +142,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
   while (first < samples && !(s->samples[first].arc_from_tip_m < s->inserted_m)) ++first;
   const int from = std::min(first, s->first_inside_sample);
   s->first_inside_sample = first;
+  LumenPlanes planes(*s, sc);  // the colon points stay put until SolveColon
   for (int i = from; i < samples; ++i) {
     SampleContact& c = s->contact[i];
     const bool inside = i >= first;
@@ -146,7 +161,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
     }
     const Eigen::Vector3d& p = s->p_WSample[i];
     const int tracked_before = c.segment;
-    TrackSegment(*s, params.contact_search_window, p, &c);
+    TrackSegment(&planes, params.contact_search_window, p, &c);
     if (i > 0 && s->contact[i - 1].inside && sc->tracking_arc_ratio > 0.0) {
       // Continuity along the scope (ModelParams::tracking_arc_ratio): the
       // proximal neighbour was tracked first, this step.
@@ -163,7 +178,7 @@ void EvaluateContacts(const ModelParams& params, ModelState* s, Scratch* sc, Ste
         }
       }
     }
-    const SegmentHit hit = CalcSegmentHit(params, *s, c.segment, p);
+    const SegmentHit hit = CalcSegmentHit(params, &planes, c.segment, p);
     c.segment_t = hit.t;
     c.penetration_m = hit.penetration_m;
     sc->sample_normal_W[i] = hit.normal;

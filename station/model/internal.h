@@ -3,6 +3,7 @@
 // Internal pieces of Step (not part of the public API): each is O(n) or O(N)
 // and allocation-free.
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "station/model/model.h"
@@ -74,12 +75,36 @@ void UpdateColonTangents(int from, int to, ModelState* state);
 // colon_tether_distance_m).
 void UpdateColonDerived(const ModelParams& params, int from, int to, ModelState* state);
 
+// The lumen's planes through the colon's current points: their normals, the
+// tube's direction over two points each way (contact.cc says why). With a
+// cache (EvaluateContacts) each normal is computed once, when first read,
+// while the points stay where they are: a sample's tracking and its hit read
+// four, and neighbouring samples read mostly the same ones.
+class LumenPlanes {
+ public:
+  explicit LumenPlanes(const ModelState& state) : state_(state) {}
+  // Caches in scratch (sized by MakeScratch), forgetting what it held there.
+  LumenPlanes(const ModelState& state, Scratch* cache);
+  Eigen::Vector3d Normal(int point);
+  const ModelState& state() const { return state_; }
+
+ private:
+  const ModelState& state_;
+  Eigen::Vector3d* normal_{nullptr};
+  std::uint8_t* known_{nullptr};
+};
+
 // Moves a sample's tracked segment toward p by at most `window` segments,
 // plane by plane (the lumen planes of CalcSegmentHit); it crosses a
 // plane only once p is kTrackingHysteresis_m past it (contact.cc says why).
 constexpr double kTrackingHysteresis_m = 0.001;
-void TrackSegment(const ModelState& state, int window, const Eigen::Vector3d& p,
+void TrackSegment(LumenPlanes* planes, int window, const Eigen::Vector3d& p,
                   SampleContact* contact);
+inline void TrackSegment(const ModelState& state, int window, const Eigen::Vector3d& p,
+                         SampleContact* contact) {
+  LumenPlanes planes(state);
+  TrackSegment(&planes, window, p, contact);
+}
 
 // Normal force of the radial wall for a penetration l (eqs. 9, 10) and its slope.
 struct WallResponse {
@@ -97,7 +122,12 @@ struct SegmentHit {
   double radius_m{0.0};
   bool end_cap{false};           // the closed end past the deepest point
 };
-SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& state, int segment,
+SegmentHit CalcSegmentHit(const ModelParams& params, LumenPlanes* planes, int segment,
                           const Eigen::Vector3d& p_W);
+inline SegmentHit CalcSegmentHit(const ModelParams& params, const ModelState& state, int segment,
+                                 const Eigen::Vector3d& p_W) {
+  LumenPlanes planes(state);
+  return CalcSegmentHit(params, &planes, segment, p_W);
+}
 
 }  // namespace ves::model::internal

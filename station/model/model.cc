@@ -178,6 +178,8 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.sample_delta_m.assign(samples, Eigen::Vector3d::Zero());
   sc.ring_contacts.assign(params.colon.points.size(), RingContact{});
   sc.ring_held.assign(params.colon.points.size(), 0);
+  sc.lumen_normal_W.assign(params.colon.points.size(), Eigen::Vector3d::Zero());
+  sc.lumen_normal_known.assign(params.colon.points.size(), 0);
   const size_t N = params.colon.points.size();
   sc.colon_system.Resize(static_cast<int>(N));
   internal::PrepareColonSystem(params, &sc);

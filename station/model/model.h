@@ -344,6 +344,9 @@ struct Scratch {
   std::vector<RingContact> ring_contacts;  // first ring_contact_count valid, by sample
   int ring_contact_count{0};
   std::vector<std::uint8_t> ring_held;    // [point]: held as a ring this step
+  // [point]: the lumen plane's normal, once computed this step (contact.cc).
+  std::vector<Eigen::Vector3d> lumen_normal_W;
+  std::vector<std::uint8_t> lumen_normal_known;
   // The colon's system and the solver's per-coordinate arrays (SolveColon).
   ColonSystem colon_system;
   ColonSolverArrays colon_arrays;
