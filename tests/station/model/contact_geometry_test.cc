@@ -124,5 +124,37 @@ TEST(ContactGeometry, TheWallPushesAcrossTheScopesSideWhereItCrossesTheLumenAske
   EXPECT_GT(largest_axial_part(false), 0.05);
 }
 
+// The lumen planes' normals are kept for the step (internal::LumenPlanes,
+// docs/model.md, "Time step"): read through the cache they are the ones
+// computed afresh, and a cache made again after the colon moved forgets the
+// old ones (a stale plane would measure every sample there against where
+// the colon was).
+TEST(ContactGeometry, CachedLumenPlanesAreTheCurrentOnes) {
+  ModelParams params;
+  params.colon = testing::MakeStraightTube(0.5, 0.01, 0.02, TissueParams{});
+  ModelState state = MakeInitialState(params);
+  Scratch scratch = MakeScratch(params);
+  const int k = 10;
+  {
+    internal::LumenPlanes cached(state, &scratch);
+    internal::LumenPlanes fresh(state);
+    for (int i = k - 3; i <= k + 3; ++i) {
+      const Eigen::Vector3d first = cached.Normal(i);
+      EXPECT_EQ(first, fresh.Normal(i)) << "point " << i;
+      EXPECT_EQ(cached.Normal(i), first) << "point " << i << ", read again";
+    }
+  }
+  // Point k+1 moves 10 mm sideways: the planes of k-1..k+3 tilt.
+  const ColonPoint& moved = params.colon.points[k + 1];
+  state.colon_displacement_m[k + 1] = 0.01 * moved.plane_u;
+  state.p_WColon[k + 1] = moved.rest_position_m + state.colon_displacement_m[k + 1];
+  internal::LumenPlanes cached(state, &scratch);
+  internal::LumenPlanes fresh(state);
+  EXPECT_LT(fresh.Normal(k).dot(state.colon_tangent[k]), 1.0 - 1e-4);  // it did tilt
+  for (int i = k - 3; i <= k + 3; ++i) {
+    EXPECT_EQ(cached.Normal(i), fresh.Normal(i)) << "point " << i << " after the move";
+  }
+}
+
 }  // namespace
 }  // namespace ves::model
