@@ -96,6 +96,73 @@ double RingStep(const ColonMeshOptions& options, double distance_m) {
   return step;
 }
 
+// The cecum is a blind pouch: where the drawn window reaches the colon's
+// last point, the tube is closed by a dome (half an ellipsoid) this deep,
+// as a share of the last ring's radius, in this many rings of vertices. An
+// open end showed the view at the cecum, the goal of the procedure, as a
+// sharp black disc (the background behind the mesh).
+constexpr double kCecalPoleDepth = 0.6;
+constexpr int kCecalPoleRings = 6;
+
+// Appends the dome on the mesh's last ring: each vertex of that ring is
+// carried toward the pole along a quarter ellipse (its folds and dents
+// fading with it), so the dome meets the tube without a step. The pole's
+// vertices take the last ring's model index (damage, mucosa seen) and the
+// texture runs on along the dome's meridians.
+void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
+  const int sectors = mesh->sectors;
+  const int columns = sectors + 1;
+  const size_t last = mesh->ring_centers_m.size() - 1;
+  const Eigen::Vector3d& center = mesh->ring_centers_m[last];
+  const Eigen::Vector3d& tangent = mesh->ring_tangents[last];
+  const double depth_m = kCecalPoleDepth * mesh->ring_radius_m[last];
+  if (!(depth_m > 0.0)) return;
+  const auto rim = static_cast<std::uint32_t>(last * columns);
+  const std::uint32_t first = static_cast<std::uint32_t>(mesh->vertices.size());
+  mesh->vertices.resize(mesh->vertices.size() + kCecalPoleRings * columns);
+  const double mean_radius_m = mesh->ring_radius_m[last];
+  double meridian_m = 0.0;  // along the dome at the mean radius, for the texture
+  for (int m = 1; m <= kCecalPoleRings; ++m) {
+    const double phi = 0.5 * kPi * m / kCecalPoleRings;
+    const double previous_phi = 0.5 * kPi * (m - 1) / kCecalPoleRings;
+    meridian_m += std::hypot(mean_radius_m * (std::cos(previous_phi) - std::cos(phi)),
+                             depth_m * (std::sin(phi) - std::sin(previous_phi)));
+    for (int j = 0; j < columns; ++j) {
+      const ColonVertex& base = mesh->vertices[rim + j];
+      const Eigen::Vector3d out = Load(base.position_m) - center;  // in the ring's plane
+      const double radius_m = out.norm();
+      ColonVertex& v = mesh->vertices[first + (m - 1) * columns + j];
+      Store(center + std::cos(phi) * out + depth_m * std::sin(phi) * tangent, v.position_m);
+      // The ellipsoid's normal: (cos phi / a) a-direction + (sin phi / d) tangent.
+      Eigen::Vector3d normal = std::sin(phi) / depth_m * tangent;
+      if (radius_m > 1e-12) normal += std::cos(phi) / (radius_m * radius_m) * out;
+      Store(normal.normalized(), v.normal);
+      v.uv[0] = base.uv[0];
+      v.uv[1] = base.uv[1] + static_cast<float>(options.texture_length_m > 0.0
+                                                    ? meridian_m / options.texture_length_m
+                                                    : 0.0);
+      v.ring = base.ring;
+    }
+  }
+  const int sector_stride = std::max(1, options.wire_sector_stride);
+  for (int m = 0; m < kCecalPoleRings; ++m) {
+    const std::uint32_t row = m == 0 ? rim : first + (m - 1) * columns;
+    const std::uint32_t next = first + m * columns;
+    for (int j = 0; j < sectors; ++j) {
+      const std::uint32_t a = row + j, b = a + 1, c = next + j, d = c + 1;
+      mesh->triangles.insert(mesh->triangles.end(), {a, c, b, b, c, d});
+    }
+    // Wireframe: the dome's rings (not the pole itself, a point) and its meridians.
+    if (m + 1 < kCecalPoleRings) {
+      for (int j = 0; j < sectors; ++j)
+        mesh->lines.insert(mesh->lines.end(), {next + j, next + j + 1});
+    }
+    for (int j = 0; j < sectors; j += sector_stride) {
+      mesh->lines.insert(mesh->lines.end(), {row + j, next + static_cast<std::uint32_t>(j)});
+    }
+  }
+}
+
 }  // namespace
 
 void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m, double tip_arc_m,
@@ -247,6 +314,9 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       }
     }
   }
+
+  // 5. The cecum's closed end, when the window reaches it.
+  if (end >= last_arc - 1e-9 && end > start) AddCecalPole(options, mesh);
 }
 
 void BuildTubeMesh(const std::vector<Eigen::Vector3d>& points_m, double radius_m, int sectors,

@@ -41,12 +41,14 @@ void Build(const SceneGeometry& scene, const ColonMeshOptions& options, double t
 TEST(ColonMesh, SparseModelRingsAreResampledOnTheFineGrid) {
   // Model rings 1 cm apart over 0.1 m, mesh step 2.5 mm: rings at
   // 0, 2.5, ..., 100 mm, 41 of them; 10 mm is model ring 1, 15 mm is 1.5.
+  // The whole tube is drawn, so its end is closed by the cecal pole's six
+  // rings of vertices (TheColonsLastPointIsClosedByADome).
   const SceneGeometry scene = testing::StraightTube(0.10, 0.01);
   ColonMesh mesh;
   Build(scene, Uniform(), 0.0, &mesh);
   ASSERT_EQ(mesh.ring_centers_m.size(), 41u);
-  EXPECT_EQ(mesh.vertices.size(), 41u * 33u);
-  EXPECT_EQ(mesh.triangles.size(), 40u * 32u * 6u);
+  EXPECT_EQ(mesh.vertices.size(), (41u + 6u) * 33u);
+  EXPECT_EQ(mesh.triangles.size(), (40u + 6u) * 32u * 6u);
   EXPECT_NEAR(mesh.ring_index[4], 1.0, 1e-9);
   EXPECT_NEAR(mesh.ring_index[6], 1.5, 1e-9);
   EXPECT_NEAR(mesh.ring_centers_m[6].z(), 0.015, 1e-12);
@@ -199,6 +201,39 @@ TEST(ColonMesh, TubeMeshSurroundsThePolyline) {
   EXPECT_NEAR(p.norm(), 0.005, kLengthTolerance_m);
   BuildTubeMesh({{0, 0, 0}}, 0.005, 8, &positions, &triangles);
   EXPECT_TRUE(positions.empty());
+}
+
+// The cecum is a blind pouch (colon_mesh.cc): a window that reaches the
+// colon's last point closes the tube with a dome that ends in one point on
+// the axis beyond the last ring; a window short of it leaves the tube open.
+TEST(ColonMesh, TheColonsLastPointIsClosedByADome) {
+  constexpr double kLength_m = 0.5, kRadius_m = 0.025;
+  const SceneGeometry scene = testing::StraightTube(kLength_m, 0.005, kRadius_m);
+  const ColonMeshOptions options = NoFolds();
+  const size_t columns = static_cast<size_t>(options.sectors) + 1;
+  ColonMesh open;
+  Build(scene, options, 0.10, &open);  // drawn to 0.45 m
+  EXPECT_EQ(open.vertices.size(), open.ring_centers_m.size() * columns);
+
+  ColonMesh closed;
+  Build(scene, options, 0.30, &closed);  // drawn to the end
+  const size_t tube = closed.ring_centers_m.size() * columns;
+  ASSERT_GT(closed.vertices.size(), tube);
+  EXPECT_GT(closed.triangles.size(), (closed.ring_centers_m.size() - 1) * options.sectors * 6);
+  double pole_z = 0.0;
+  for (size_t i = tube; i < closed.vertices.size(); ++i) {
+    const float* p = closed.vertices[i].position_m;
+    EXPECT_LE(std::hypot(p[0], p[1]), kRadius_m + kLengthTolerance_m) << "vertex " << i;
+    EXPECT_GE(p[2], kLength_m - kLengthTolerance_m) << "vertex " << i;
+    pole_z = std::max(pole_z, static_cast<double>(p[2]));
+  }
+  // The last ring of the dome is its pole: one point, a real bulge ahead.
+  for (size_t i = closed.vertices.size() - columns; i < closed.vertices.size(); ++i) {
+    const float* p = closed.vertices[i].position_m;
+    EXPECT_NEAR(std::hypot(p[0], p[1]), 0.0, kLengthTolerance_m) << "vertex " << i;
+    EXPECT_NEAR(p[2], pole_z, kLengthTolerance_m) << "vertex " << i;
+  }
+  EXPECT_GT(pole_z, kLength_m + 0.25 * kRadius_m);
 }
 
 TEST(SceneGeometry, InconsistentScenesAreRejectedByName) {

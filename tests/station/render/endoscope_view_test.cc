@@ -41,6 +41,21 @@ TEST(EndoscopeView, DarkestRegionIsAtTheImageCentreOnTheAxisOfAStraightTube) {
   }
 }
 
+// At the cecum the view shows the colon's closed end, lit by the lens
+// 3.5 cm ahead, where an open tube left the black behind the mesh.
+TEST(EndoscopeView, TheCecumsPoleIsLitAtTheEndOfTheColon) {
+  GlContext context;
+  EndoscopeView view(&context, SmallView());
+  for (EndoscopeMode mode : {EndoscopeMode::kPolygon, EndoscopeMode::kTexture}) {
+    view.set_mode(mode);
+    const EndoscopeFrame frame = view.Render(testing::StraightTube(0.5, 0.005, 0.025, 0.48));
+    const cv::Mat centre = frame.image(cv::Rect(kWidth / 2 - 10, kHeight / 2 - 10, 20, 20));
+    EXPECT_GT(cv::mean(centre)[2], 60.0) << EndoscopeModeName(mode);
+    EXPECT_EQ(frame.red_out_share, 0.0) << EndoscopeModeName(mode);
+    EXPECT_FALSE(frame.lens_in_wall) << EndoscopeModeName(mode);
+  }
+}
+
 TEST(EndoscopeView, LightAtTheLensFallsOffWithDistance) {
   // Straight tube, R = 25 mm, no folds, camera on the axis. A ray at angle θ
   // meets the wall at d = R / sin θ with incidence cos = sin θ, so the red
