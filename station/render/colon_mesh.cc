@@ -96,6 +96,16 @@ double RingStep(const ColonMeshOptions& options, double distance_m) {
   return step;
 }
 
+// Two triangles per quad of the band between two rows of vertices (each
+// sectors + 1 long, the seam duplicated), the tube's and the dome's alike.
+void AppendQuadBand(std::uint32_t row, std::uint32_t next, int sectors,
+                    std::vector<std::uint32_t>* triangles) {
+  for (int j = 0; j < sectors; ++j) {
+    const std::uint32_t a = row + j, b = a + 1, c = next + j, d = c + 1;
+    triangles->insert(triangles->end(), {a, c, b, b, c, d});
+  }
+}
+
 // The cecum is a blind pouch: where the drawn window reaches the colon's
 // last point, the tube is closed by a dome (half an ellipsoid) this deep,
 // as a share of the last ring's radius, in this many rings of vertices. An
@@ -106,7 +116,7 @@ constexpr int kCecalPoleRings = 6;
 
 // Appends the dome on the mesh's last ring: each vertex of that ring is
 // carried toward the pole along a quarter ellipse (its folds and dents
-// fading with it), so the dome meets the tube without a step. The pole's
+// fading with it), so the dome meets the tube without a step. The dome's
 // vertices take the last ring's model index (damage, mucosa seen) and the
 // texture runs on along the dome's meridians.
 void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
@@ -115,12 +125,12 @@ void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
   const size_t last = mesh->ring_centers_m.size() - 1;
   const Eigen::Vector3d& center = mesh->ring_centers_m[last];
   const Eigen::Vector3d& tangent = mesh->ring_tangents[last];
-  const double depth_m = kCecalPoleDepth * mesh->ring_radius_m[last];
+  const double mean_radius_m = mesh->ring_radius_m[last];  // between the folds
+  const double depth_m = kCecalPoleDepth * mean_radius_m;
   if (!(depth_m > 0.0)) return;
   const auto rim = static_cast<std::uint32_t>(last * columns);
   const std::uint32_t first = static_cast<std::uint32_t>(mesh->vertices.size());
   mesh->vertices.resize(mesh->vertices.size() + kCecalPoleRings * columns);
-  const double mean_radius_m = mesh->ring_radius_m[last];
   double meridian_m = 0.0;  // along the dome at the mean radius, for the texture
   for (int m = 1; m <= kCecalPoleRings; ++m) {
     const double phi = 0.5 * kPi * m / kCecalPoleRings;
@@ -148,10 +158,7 @@ void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
   for (int m = 0; m < kCecalPoleRings; ++m) {
     const std::uint32_t row = m == 0 ? rim : first + (m - 1) * columns;
     const std::uint32_t next = first + m * columns;
-    for (int j = 0; j < sectors; ++j) {
-      const std::uint32_t a = row + j, b = a + 1, c = next + j, d = c + 1;
-      mesh->triangles.insert(mesh->triangles.end(), {a, c, b, b, c, d});
-    }
+    AppendQuadBand(row, next, sectors, &mesh->triangles);
     // Wireframe: the dome's rings (not the pole itself, a point) and its meridians.
     if (m + 1 < kCecalPoleRings) {
       for (int j = 0; j < sectors; ++j)
@@ -286,15 +293,11 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
   // 4. Topology: two triangles per quad; wireframe loops and lengthwise lines.
   mesh->triangles.clear();
   mesh->lines.clear();
-  mesh->triangles.reserve((rings - 1) * sectors * 6);
+  const bool closes_cecum = end >= last_arc - 1e-9 && end > start;
+  mesh->triangles.reserve((rings - 1 + (closes_cecum ? kCecalPoleRings : 0)) * sectors * 6);
   for (size_t k = 0; k + 1 < rings; ++k) {
-    for (int j = 0; j < sectors; ++j) {
-      const auto a = static_cast<std::uint32_t>(k * columns + j);
-      const auto b = a + 1;
-      const auto c = static_cast<std::uint32_t>(a + columns);
-      const auto d = c + 1;
-      mesh->triangles.insert(mesh->triangles.end(), {a, c, b, b, c, d});
-    }
+    const auto row = static_cast<std::uint32_t>(k * columns);
+    AppendQuadBand(row, row + static_cast<std::uint32_t>(columns), sectors, &mesh->triangles);
   }
   const int sector_stride = std::max(1, options.wire_sector_stride);
   for (size_t k = 0; k < rings; ++k) {
@@ -316,7 +319,7 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
   }
 
   // 5. The cecum's closed end, when the window reaches it.
-  if (end >= last_arc - 1e-9 && end > start) AddCecalPole(options, mesh);
+  if (closes_cecum) AddCecalPole(options, mesh);
 }
 
 void BuildTubeMesh(const std::vector<Eigen::Vector3d>& points_m, double radius_m, int sectors,
