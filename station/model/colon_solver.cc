@@ -12,12 +12,13 @@
 //
 // The loops over every point and every pair take four at a time ("lanes",
 // GCC and Clang vector extensions; docs/model.md, "Speed"), on arrays with
-// one coordinate each (Scratch::colon_arrays, Scratch::colon_system).
+// one coordinate each (Scratch::colon_arrays, Scratch::colon_system); they
+// are in colon_solver_lanes.inc, built once per instruction set.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #if defined(__x86_64__)
-#include <emmintrin.h>
+#include <immintrin.h>
 #endif
 
 #include "station/model/internal.h"
@@ -82,44 +83,11 @@ constexpr int kDiagEntry[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}
 constexpr int kDiagIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
 static_assert(kLanes <= kColonLanePadding, "the colon's arrays must hold a whole last group");
 
-// A vector loop is built twice, for AVX2 and for the baseline x86-64, and the
-// one the CPU runs is chosen when the program loads. No function takes or
-// returns Lanes: the two builds would pass them differently (Clang refuses
-// it), so these are macros. A lane function ends with no call either: GCC 12
-// left the AVX registers' upper halves in use before such a tail call
-// (no vzeroupper), and every SSE instruction after it, the elimination's
-// among them, ran about 2.4 times slower on the project's VM.
-// VES_MODEL_BASELINE_ONLY builds the baseline alone (and the elimination's
-// scalar sweep), to check on a CPU with AVX2 that it gives the same bits.
-#if defined(__x86_64__) && !defined(VES_MODEL_BASELINE_ONLY)
-#define VES_LANE_FUNCTION [[gnu::target_clones("avx2", "default")]]
-#else
-#define VES_LANE_FUNCTION
-#endif
 #define VES_LOAD(array, i) (Lanes(*reinterpret_cast<const LanesInMemory*>((array).data() + (i))))
-#define VES_STORE(array, i, value) \
-  (*reinterpret_cast<LanesInMemory*>((array).data() + (i)) = (value))
 #define VES_STORE_AT(pointer, value) (*reinterpret_cast<LanesInMemory*>(pointer) = (value))
+#define VES_STORE(array, i, value) VES_STORE_AT((array).data() + (i), value)
 // Lanes where mask is set take a, the others b.
 #define VES_SELECT(mask, a, b) ((Lanes)(((mask) & (LaneMask)(a)) | (~(mask) & (LaneMask)(b))))
-// Square roots (correctly rounded, as std::sqrt's), two lanes per SSE2
-// instruction; the AVX2 build encodes them in VEX.
-#if defined(__x86_64__)
-#define VES_SQRT(v)                                                 \
-  ({                                                                \
-    const Lanes ves_sqrt_in = (v);                                  \
-    __m128d ves_sqrt_half[2];                                       \
-    std::memcpy(ves_sqrt_half, &ves_sqrt_in, sizeof ves_sqrt_in);   \
-    ves_sqrt_half[0] = _mm_sqrt_pd(ves_sqrt_half[0]);               \
-    ves_sqrt_half[1] = _mm_sqrt_pd(ves_sqrt_half[1]);               \
-    Lanes ves_sqrt_out;                                             \
-    std::memcpy(&ves_sqrt_out, ves_sqrt_half, sizeof ves_sqrt_out); \
-    ves_sqrt_out;                                                   \
-  })
-#else
-#define VES_SQRT(v) \
-  (Lanes{std::sqrt((v)[0]), std::sqrt((v)[1]), std::sqrt((v)[2]), std::sqrt((v)[3])})
-#endif
 #define VES_ANY(mask) (((mask)[0] | (mask)[1] | (mask)[2] | (mask)[3]) != 0)
 
 // The stored upper triangle of D_i as a symmetric matrix, and back; a
@@ -144,39 +112,6 @@ void AddToUpper(const Eigen::Matrix3d& add, int i, ColonSystem* sys) {
 }
 void AddToRhs(const Eigen::Vector3d& add, int i, ColonSystem* sys) {
   for (int c = 0; c < 3; ++c) sys->rhs[c][i] += add[c];
-}
-
-// Points from..to of a list of 3-D points into one array per coordinate,
-// four points at a time while four remain.
-static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "points are read as plain doubles");
-VES_LANE_FUNCTION void SplitCoordinates(const std::vector<Eigen::Vector3d>& points, int from,
-                                        int to, CoordinateArrays* xyz) {
-  const double* p = points.data()->data();
-  int i = from;
-  for (; i + kLanes - 1 <= to; i += kLanes) {
-    const double* q = p + 3 * i;
-    for (int c = 0; c < 3; ++c) {
-      VES_STORE((*xyz)[c], i, (Lanes{q[c], q[3 + c], q[6 + c], q[9 + c]}));
-    }
-  }
-  for (; i <= to; ++i) {
-    for (int c = 0; c < 3; ++c) (*xyz)[c][i] = p[3 * i + c];
-  }
-}
-
-// The colon's state, one array per coordinate, for points 0..end (the
-// positions one further: the last tangent taken after the solve needs it).
-void CopyColonState(const ModelState& s, int end, ColonSolverArrays* a) {
-  const int N = static_cast<int>(s.p_WColon.size());
-  SplitCoordinates(s.p_WColon, 0, std::min(end + 1, N - 1), &a->position_m);
-  SplitCoordinates(s.colon_reference_m, 0, end, &a->reference_m);
-  SplitCoordinates(s.colon_tangent, 0, end, &a->tangent);
-  const auto copy = [end](const std::vector<double>& from, std::vector<double>* to, int at) {
-    std::copy(from.begin(), from.begin() + end + 1, to->begin() + at);
-  };
-  copy(s.colon_gap_m, &a->gap_m, 1);
-  copy(s.colon_pair_rest_gap_m, &a->rest_gap_m, 0);
-  copy(s.colon_tether_distance_m, &a->tether_distance_m, 0);
 }
 
 // The terms of point i's own that few points have at a time: the body wall
@@ -226,309 +161,78 @@ void AddOwnExtraTerms(const ModelParams& params, const StepInput& input, const M
   for (int c = 0; c < 3; ++c) sys->rhs[c][i] = rhs[c];
 }
 
-// Each point's own terms for points 0..end: damping, the paper's suspension
-// in its rest plane and the mesentery tether, four points at a time, then
-// the extra terms of the points that have any.
-VES_LANE_FUNCTION void AddOwnTerms(const ModelParams& params, const StepInput& input,
-                                   const ModelState& s, int end, Scratch* sc) {
-  const ColonSolverArrays& a = sc->colon_arrays;
-  ColonSystem& sys = sc->colon_system;
-  bool pressed = false;  // the hand's terms need the point's region: all go the scalar way
-  for (double pressure : input.abdominal_pressure) pressed = pressed || pressure > 0.0;
-  const double crossing_m = params.colon.mesentery_crossing_m;
-  const Eigen::Vector3d& box_min = params.colon.abdomen_min_m;
-  const Eigen::Vector3d& box_max = params.colon.abdomen_max_m;
-  const double shear_ratio = params.colon.mesentery_shear_ratio;
-  const double shear_term = shear_ratio * shear_ratio - 1.0;
-  const double dt = params.dt_s;
-  const Lanes zero{}, one = zero + 1.0;
-  for (int i = 0; i <= end; i += kLanes) {
-    // paper §3.3.2: K_c ||d_ri|| pulls the point home within its plane P_i
-    // (home: its reference, which may have settled since rest):
-    // rhs = -(dt K_c) (d - (t . d) t).
-    const Lanes x0 = VES_LOAD(a.position_m[0], i), x1 = VES_LOAD(a.position_m[1], i),
-                x2 = VES_LOAD(a.position_m[2], i);
-    const Lanes d0 = x0 - VES_LOAD(a.reference_m[0], i), d1 = x1 - VES_LOAD(a.reference_m[1], i),
-                d2 = x2 - VES_LOAD(a.reference_m[2], i);
-    const Lanes t0 = VES_LOAD(a.rest_tangent[0], i), t1 = VES_LOAD(a.rest_tangent[1], i),
-                t2 = VES_LOAD(a.rest_tangent[2], i);
-    const Lanes along = (t0 * d0 + t1 * d1) + t2 * d2;
-    const Lanes factor = VES_LOAD(a.suspension_rhs_factor, i);
-    Lanes rhs[3] = {factor * (d0 - along * t0), factor * (d1 - along * t1),
-                    factor * (d2 - along * t2)};
-    Lanes diag[6];
-    for (int e = 0; e < 6; ++e) diag[e] = VES_LOAD(a.own_diag[e], i);
-    // Mesentery: its reach is measured in the tether's metric, in which a
-    // move along the root c counts mesentery_shear_ratio (s) times:
-    // rho^2 = r^T G r with G = I + (s^2 - 1) c c^T. Taut (rho > L), it pulls
-    // with k (rho - L) G r / rho; its stiffness is
-    // k [g g^T + (1 - L/rho)(G - g g^T)] with g = G r / rho (positive
-    // semidefinite: G is). Where the reach gathers, a pleated run of
-    // mobile colon (its two gaps shorter than at rest) reaches only as far
-    // as it is long, down to the mesentery's length.
-    const Lanes r0 = x0 - VES_LOAD(a.tether_anchor_m[0], i),
-                r1 = x1 - VES_LOAD(a.tether_anchor_m[1], i),
-                r2 = x2 - VES_LOAD(a.tether_anchor_m[2], i);
-    const Lanes rho = VES_LOAD(a.tether_distance_m, i);
-    const Lanes length = VES_LOAD(a.tether_length_m, i);
-    const LaneMask gathers = VES_LOAD(a.reach_gathers, i) > 0.5;
-    Lanes reach = length;
-    if (VES_ANY(gathers)) {
-      const Lanes now = VES_LOAD(a.gap_m, i + 1) + VES_LOAD(a.gap_m, i);
-      const Lanes natural = VES_LOAD(a.natural_span_m, i);
-      const Lanes quotient = now / natural;
-      const Lanes ratio =
-          VES_SELECT(natural > 1e-12, VES_SELECT(quotient < 1.0, quotient, one), one);
-      const Lanes gathered = length * ratio;
-      const Lanes mesentery = VES_LOAD(a.mesentery_length_m, i);
-      const Lanes gathered_reach = VES_SELECT(mesentery < gathered, gathered, mesentery);
-      reach = VES_SELECT(gathers, gathered_reach, length);
-    }
-    const LaneMask taut = (rho > reach) & (rho > 1e-12);
-    if (VES_ANY(taut)) {
-      const Lanes c[3] = {VES_LOAD(a.tether_root_direction[0], i),
-                          VES_LOAD(a.tether_root_direction[1], i),
-                          VES_LOAD(a.tether_root_direction[2], i)};
-      Lanes G[3][3];
-      for (int row = 0; row < 3; ++row) {
-        const Lanes sheared = shear_term * c[row];
-        for (int col = 0; col < 3; ++col)
-          G[row][col] = (row == col ? one : zero) + sheared * c[col];
-      }
-      const Lanes g[3] = {((G[0][0] * r0 + G[0][1] * r1) + G[0][2] * r2) / rho,
-                          ((G[1][0] * r0 + G[1][1] * r1) + G[1][2] * r2) / rho,
-                          (G[2][0] * r0 + (G[2][1] * r1 + G[2][2] * r2)) / rho};
-      const Lanes across = 1.0 - reach / rho;
-      const Lanes dt_k = dt * VES_LOAD(sc->colon_tether_N_per_m, i);
-      const Lanes pull = dt_k * (rho - reach);
-      for (int e = 0; e < 3; ++e) rhs[e] = VES_SELECT(taut, rhs[e] - pull * g[e], rhs[e]);
-      for (int e = 0; e < 6; ++e) {
-        const int row = kDiagEntry[e][0], col = kDiagEntry[e][1];
-        const Lanes gg = g[row] * g[col];
-        diag[e] = VES_SELECT(taut, diag[e] + dt_k * (gg + across * (G[row][col] - gg)), diag[e]);
-      }
-    }
-    for (int e = 0; e < 6; ++e) VES_STORE(sys.diag[e], i, diag[e]);
-    for (int e = 0; e < 3; ++e) VES_STORE(sys.rhs[e], i, rhs[e]);
-    // The points with extra terms, by AddOwnExtraTerms' tests: ...
-    LaneMask extra{};
-    // ... a point swung through its root ...
-    const Lanes crossed =
-        -(((r0 * VES_LOAD(a.tether_side[0], i) + r1 * VES_LOAD(a.tether_side[1], i)) +
-           r2 * VES_LOAD(a.tether_side[2], i)) +
-          crossing_m);
-    extra |= (crossed > 0.0) & (VES_LOAD(a.has_tether_side, i) > 0.5);
-    // ... or out of the abdomen.
-    extra |= ((box_min[0] - x0) > 0.0) | ((x0 - box_max[0]) > 0.0) | ((box_min[1] - x1) > 0.0) |
-             ((x1 - box_max[1]) > 0.0) | ((box_min[2] - x2) > 0.0) | ((x2 - box_max[2]) > 0.0);
-    if (!pressed && !VES_ANY(extra)) continue;
-    for (int lane = 0; lane < kLanes && i + lane <= end; ++lane) {
-      if (pressed || extra[lane] != 0) AddOwnExtraTerms(params, input, s, i + lane, &sys);
-    }
-  }
-}
+}  // namespace
 
-// Each neighbour pair's (i, i+1, for i < end) axial link and kink tension,
-// four pairs at a time: its stiffness block dt C (the upper triangle into
-// Scratch::colon_arrays.pair_block, -dt C as U_i into the system; the last
-// group writes U past end - 1, which AddPairTerms clears at end) and its
-// impulse dt F (pair_impulse).
-VES_LANE_FUNCTION void CalcPairTerms(const ModelParams& params, int end, Scratch* sc) {
-  ColonSolverArrays& a = sc->colon_arrays;
-  ColonSystem& sys = sc->colon_system;
-  const double dt = params.dt_s;
-  const double soft = params.colon_pleat_stiffness_N;
-  const double tension = params.colon_tension_stiffness_N;
-  const double packed = params.colon_packed_stiffness_N;
-  // The wall's tension stiffness is reached over this onset strain (see
-  // kTensionOnsetStrain), through the toe up to colon_toe_strain.
-  const double e_b = std::min(kTensionOnsetStrain, params.colon_toe_strain);
-  const double e_t = params.colon_toe_strain;
-  const Lanes zero{}, one = zero + 1.0;
-  for (int i = 0; i < end; i += kLanes) {
-    const Lanes s0 = VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i);
-    const Lanes s1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
-    const Lanes s2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
-    const Lanes g = VES_LOAD(a.gap_m, i + 1);
-    const LaneMask apart = g > 1e-12;
-    const Lanes inv_g = VES_SELECT(apart, 1.0 / g, zero);
-    // Strain against the gap's rest length (shorter where folds have set);
-    // the folds pack at pleat_limit of the natural gap.
-    const Lanes inv_g0 = 1.0 / VES_LOAD(a.rest_gap_m, i);
-    const Lanes natural_gap_m = VES_LOAD(sc->colon_pair_gap_m, i);
-    const Lanes u0 = VES_SELECT(apart, s0 * inv_g, VES_LOAD(a.rest_tangent[0], i));
-    const Lanes u1 = VES_SELECT(apart, s1 * inv_g, VES_LOAD(a.rest_tangent[1], i));
-    const Lanes u2 = VES_SELECT(apart, s2 * inv_g, VES_LOAD(a.rest_tangent[2], i));
-    const Lanes pleat_limit = VES_LOAD(a.pair_pleat_limit, i) * natural_gap_m * inv_g0;
-    const Lanes limit = VES_SELECT(1.0 < pleat_limit, one, pleat_limit) - 1.0;  // <= 0
-    const Lanes strain = g * inv_g0 - 1.0;
-    // The axial force (+ pulls the pair together) and its slope per unit
-    // strain. Tension, J-shaped: the slope rises from `soft` to the toe's
-    // over the onset strain, stays there through the toe, then becomes EA
-    // (the wall's linear modulus; the toe's where the gap has no toe).
-    const Lanes toe = VES_LOAD(a.pair_toe_N, i);
-    const LaneMask stretched = strain >= 0.0, in_onset = strain <= e_b, in_toe = strain <= e_t;
-    Lanes onset_force = zero, onset_slope = zero;
-    if (VES_ANY(stretched & in_onset)) {  // two divisions, few pairs
-      onset_force = soft * strain + (toe - soft) * strain * strain / (2.0 * e_b);
-      onset_slope = soft + (toe - soft) * strain / e_b;
-    }
-    const Lanes at_onset_N = soft * e_b + (toe - soft) * e_b / 2.0;
-    const Lanes toe_force = at_onset_N + toe * (strain - e_b);
-    const Lanes linear_force = at_onset_N + toe * (e_t - e_b) + tension * (strain - e_t);
-    // Shortening: the wall folds onto the scope ("pleats", the accordion of
-    // real colonoscopy) until the gap is pleat_limit of its rest length;
-    // then the folds are packed.
-    const Lanes pleat_force = soft * strain;
-    const Lanes packed_force = soft * limit + packed * (strain - limit);
-    const LaneMask folding = strain >= limit;
-    const Lanes force = VES_SELECT(
-        stretched, VES_SELECT(in_onset, onset_force, VES_SELECT(in_toe, toe_force, linear_force)),
-        VES_SELECT(folding, pleat_force, packed_force));
-    const Lanes slope = VES_SELECT(
-        stretched, VES_SELECT(in_onset, onset_slope, VES_SELECT(in_toe, toe, zero + tension)),
-        VES_SELECT(folding, zero + soft, zero + packed));
-    // Kink tension: the pair is pulled toward the tube's local direction m,
-    // never along it, so the tube stays smooth and still pleats freely. m
-    // is the pair's rest direction turned by the smallest rotation that
-    // takes the pair's rest mean tangent onto the mean of its ends' tangents
-    // now (of the start of the step), so the colon at rest, or turned as a
-    // whole, feels no force. Rodrigues with the unnormalised sum of the
-    // tangents (length L): v + c x v + c x (c x v) / (1 + cos), with
-    // c' = L c and cos' = L cos, needs one division, 1 / (L (L + cos')).
-    const Lanes w0 = VES_LOAD(a.tangent[0], i) + VES_LOAD(a.tangent[0], i + 1);
-    const Lanes w1 = VES_LOAD(a.tangent[1], i) + VES_LOAD(a.tangent[1], i + 1);
-    const Lanes w2 = VES_LOAD(a.tangent[2], i) + VES_LOAD(a.tangent[2], i + 1);
-    const Lanes squared_length = (w0 * w0 + w1 * w1) + w2 * w2;
-    const Lanes length = VES_SQRT(squared_length);
-    const Lanes q0 = VES_LOAD(a.pair_rest_mean_tangent[0], i);
-    const Lanes q1 = VES_LOAD(a.pair_rest_mean_tangent[1], i);
-    const Lanes q2 = VES_LOAD(a.pair_rest_mean_tangent[2], i);
-    const Lanes c0 = q1 * w2 - q2 * w1, c1 = q2 * w0 - q0 * w2, c2 = q0 * w1 - q1 * w0;
-    const Lanes cos_sum = (q0 * w0 + q1 * w1) + q2 * w2;
-    const Lanes inv = 1.0 / (length * (length + cos_sum));
-    const Lanes v0 = VES_LOAD(a.pair_rest_direction[0], i);
-    const Lanes v1 = VES_LOAD(a.pair_rest_direction[1], i);
-    const Lanes v2 = VES_LOAD(a.pair_rest_direction[2], i);
-    const Lanes cv0 = c1 * v2 - c2 * v1, cv1 = c2 * v0 - c0 * v2, cv2 = c0 * v1 - c1 * v0;
-    const Lanes ccv0 = c1 * cv2 - c2 * cv1, ccv1 = c2 * cv0 - c0 * cv2, ccv2 = c0 * cv1 - c1 * cv0;
-    const Lanes turn = (length + cos_sum) * inv;
-    // No smallest rotation when the tangents cancel or have turned about
-    // half a turn: the pair's own direction then.
-    const LaneMask rotates = ~(length < 1e-6) & ~(cos_sum < -0.99 * length);
-    const Lanes m0 = VES_SELECT(rotates, (v0 + turn * cv0) + inv * ccv0, u0);
-    const Lanes m1 = VES_SELECT(rotates, (v1 + turn * cv1) + inv * ccv1, u1);
-    const Lanes m2 = VES_SELECT(rotates, (v2 + turn * cv2) + inv * ccv2, u2);
-    // Tension also resists the pair turning (a taut string); compression
-    // does not push it sideways (dropping that term keeps the matrix
-    // definite). C = (slope/g0) u u^T + (f/g)(I - u u^T) [taut only]
-    // + k (I - m m^T), k = T over the natural gap.
-    const Lanes k = VES_LOAD(a.pair_kink_N_per_m, i);
-    const Lanes taut = VES_SELECT(force > 0.0, force * inv_g, zero);
-    const Lanes on_diagonal = dt * (taut + k);
-    const Lanes along = dt * (slope * inv_g0 - taut);
-    const Lanes across = dt * k;
-    const Lanes au0 = along * u0, au1 = along * u1, au2 = along * u2;
-    const Lanes km0 = across * m0, km1 = across * m1, km2 = across * m2;
-    const Lanes off_diagonal = on_diagonal * 0.0;
-    // Entry (r, c) is (on_diagonal I_rc + (along u_r) u_c) - (across m_r) m_c:
-    // not quite symmetric in its last bit, so all nine are kept.
-    const Lanes u[3] = {u0, u1, u2}, au[3] = {au0, au1, au2}, m[3] = {m0, m1, m2};
-    const Lanes km[3] = {km0, km1, km2};
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        const Lanes block = ((r == c ? on_diagonal : off_diagonal) + au[r] * u[c]) - km[r] * m[c];
-        VES_STORE(sys.upper[3 * r + c], i, -block);  // U_i = -dt C
-        if (r <= c) VES_STORE(a.pair_block[kDiagIndex[r][c]], i, block);
-      }
-    }
-    // F = f u + k (seg - (m . seg) m) on point i; -F on i+1.
-    const Lanes m_seg = (m0 * s0 + m1 * s1) + m2 * s2;
-    VES_STORE(a.pair_impulse[0], i, dt * (force * u0 + k * (s0 - m_seg * m0)));
-    VES_STORE(a.pair_impulse[1], i, dt * (force * u1 + k * (s1 - m_seg * m1)));
-    VES_STORE(a.pair_impulse[2], i, dt * (force * u2 + k * (s2 - m_seg * m2)));
-  }
-}
+// The loops that take four points at a time (colon_solver_lanes.inc) are
+// built twice, for AVX2 and for the baseline x86-64, and the one the CPU runs
+// is chosen when the program loads (function multiversioning, as for
+// EliminateForward below; outside the anonymous namespace for the same
+// reason). No function takes or returns Lanes: the two builds would pass
+// them differently (Clang refuses it), so these are macros. A lane function
+// ends with no call either: GCC 12 left the AVX registers' upper halves in
+// use before such a tail call (no vzeroupper), and every SSE instruction
+// after it, the elimination's among them, ran about 2.4 times slower on the
+// project's VM. VES_MODEL_BASELINE_ONLY builds the baseline alone (and the
+// elimination's scalar sweep), to check on a CPU with AVX2 that it gives the
+// same bits.
+//
+// Square roots (VES_SQRT) are correctly rounded, as std::sqrt's, in every
+// build, so the builds differ only in speed: with AVX2 four lanes are one
+// instruction, on the baseline two SSE2 ones. On the project's VM (AMD
+// EPYC) a four-lane square root takes as long as a two-lane one (2.2 ns
+// each, one after another in a loop; docs/model.md, "Speed").
+#if defined(__x86_64__)
+#define VES_SQRT_SSE2(v)                                            \
+  ({                                                                \
+    const Lanes ves_sqrt_in = (v);                                  \
+    __m128d ves_sqrt_half[2];                                       \
+    std::memcpy(ves_sqrt_half, &ves_sqrt_in, sizeof ves_sqrt_in);   \
+    ves_sqrt_half[0] = _mm_sqrt_pd(ves_sqrt_half[0]);               \
+    ves_sqrt_half[1] = _mm_sqrt_pd(ves_sqrt_half[1]);               \
+    Lanes ves_sqrt_out;                                             \
+    std::memcpy(&ves_sqrt_out, ves_sqrt_half, sizeof ves_sqrt_out); \
+    ves_sqrt_out;                                                   \
+  })
+#endif
+namespace lanes {
+#if defined(__x86_64__) && !defined(VES_MODEL_BASELINE_ONLY)
+#define VES_LANE_FUNCTION [[gnu::target("avx2")]]
+#define VES_SQRT(v) ((Lanes)_mm256_sqrt_pd((__m256d)(v)))
+#include "station/model/colon_solver_lanes.inc"
+#undef VES_LANE_FUNCTION
+#undef VES_SQRT
+#define VES_LANE_FUNCTION [[gnu::target("default")]]
+#define VES_SQRT(v) VES_SQRT_SSE2(v)
+#include "station/model/colon_solver_lanes.inc"
+#elif defined(__x86_64__)
+#define VES_LANE_FUNCTION
+#define VES_SQRT(v) VES_SQRT_SSE2(v)
+#include "station/model/colon_solver_lanes.inc"
+#else
+#define VES_LANE_FUNCTION
+#define VES_SQRT(v) \
+  (Lanes{std::sqrt((v)[0]), std::sqrt((v)[1]), std::sqrt((v)[2]), std::sqrt((v)[3])})
+#include "station/model/colon_solver_lanes.inc"
+#endif
+#undef VES_LANE_FUNCTION
+#undef VES_SQRT
+}  // namespace lanes
 
-// Each pair's block and impulse into the system (U_i = -dt C_i is already
-// there): D_i gets dt C of the pair behind it and then of the pair ahead,
-// and the impulses push the pair's ends apart (in the order the pairs were
-// once added one by one, so the sums are the same to the bit).
-VES_LANE_FUNCTION void AddPairTerms(int end, Scratch* sc) {
-  const ColonSolverArrays& a = sc->colon_arrays;
-  ColonSystem& sys = sc->colon_system;
-  // The groups of four run past end - 1 into the padding: the entries at
-  // end are kept aside and done last, those past it are never read.
-  for (int e = 0; e < 6; ++e) {
-    auto& d = sys.diag[e];
-    const auto& c = a.pair_block[e];
-    const double at_end = d[end];
-    d[0] += c[0];
-    for (int i = 1; i < end; i += kLanes) {
-      VES_STORE(d, i, (VES_LOAD(d, i) + VES_LOAD(c, i - 1)) + VES_LOAD(c, i));
-    }
-    d[end] = at_end + c[end - 1];
-  }
-  for (auto& u : sys.upper) u[end] = 0.0;  // (CalcPairTerms' last group wrote past end - 1)
-  for (int e = 0; e < 3; ++e) {
-    auto& r = sys.rhs[e];
-    const auto& f = a.pair_impulse[e];
-    const double at_end = r[end];
-    r[0] += f[0];
-    for (int i = 1; i < end; i += kLanes) {
-      VES_STORE(r, i, (VES_LOAD(r, i) - VES_LOAD(f, i - 1)) + VES_LOAD(f, i));
-    }
-    r[end] = at_end - f[end - 1];
-  }
-}
+namespace {
 
-// After the solve, from the solved positions (colon_arrays.position_m), four
-// at a time: the tether distances of points 1..last (CalcTetherDistance)
-// into colon_arrays.tether_distance_m, the gaps of pairs 0..last_gap into
-// colon_arrays.gap_m (one entry later).
-VES_LANE_FUNCTION void CalcSolvedDistances(const ModelParams& params, int last, int last_gap,
-                                           Scratch* sc) {
-  ColonSolverArrays& a = sc->colon_arrays;
-  const double shear_ratio = params.colon.mesentery_shear_ratio;
-  const double shear_term = shear_ratio * shear_ratio - 1.0;
-  const Lanes zero{};
-  // |r|^2 + (s^2 - 1) (r . c)^2, at least 0, rooted.
-  for (int i = 1; i <= last; i += kLanes) {
-    const Lanes r0 = VES_LOAD(a.position_m[0], i) - VES_LOAD(a.tether_anchor_m[0], i);
-    const Lanes r1 = VES_LOAD(a.position_m[1], i) - VES_LOAD(a.tether_anchor_m[1], i);
-    const Lanes r2 = VES_LOAD(a.position_m[2], i) - VES_LOAD(a.tether_anchor_m[2], i);
-    const Lanes along = (r0 * VES_LOAD(a.tether_root_direction[0], i) +
-                         r1 * VES_LOAD(a.tether_root_direction[1], i)) +
-                        r2 * VES_LOAD(a.tether_root_direction[2], i);
-    const Lanes squared = ((r0 * r0 + r1 * r1) + r2 * r2) + shear_term * along * along;
-    const Lanes at_least_zero = VES_SELECT(zero < squared, squared, zero);
-    VES_STORE(a.tether_distance_m, i, VES_SQRT(at_least_zero));
-  }
-  for (int i = 0; i <= last_gap; i += kLanes) {
-    const Lanes d0 = VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i);
-    const Lanes d1 = VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i);
-    const Lanes d2 = VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i);
-    const Lanes squared = (d0 * d0 + d1 * d1) + d2 * d2;
-    VES_STORE(a.gap_m, i + 1, VES_SQRT(squared));
-  }
-}
-
-// The tangents of the inner points 1..to (UpdateColonTangents' rule) from
-// the solved positions, four at a time, into colon_arrays.tangent (which
-// holds the old ones: a point whose neighbours coincide keeps its own).
-VES_LANE_FUNCTION void CalcSolvedTangents(int to, Scratch* sc) {
-  ColonSolverArrays& a = sc->colon_arrays;
-  for (int i = 1; i <= to; i += kLanes) {
-    const Lanes chord[3] = {VES_LOAD(a.position_m[0], i + 1) - VES_LOAD(a.position_m[0], i - 1),
-                            VES_LOAD(a.position_m[1], i + 1) - VES_LOAD(a.position_m[1], i - 1),
-                            VES_LOAD(a.position_m[2], i + 1) - VES_LOAD(a.position_m[2], i - 1)};
-    const Lanes squared = (chord[0] * chord[0] + chord[1] * chord[1]) + chord[2] * chord[2];
-    const Lanes length = VES_SQRT(squared);
-    const LaneMask apart = length > 1e-12;
-    for (int c = 0; c < 3; ++c) {
-      VES_STORE(a.tangent[c], i, VES_SELECT(apart, chord[c] / length, VES_LOAD(a.tangent[c], i)));
-    }
-  }
+// The colon's state, one array per coordinate, for points 0..end (the
+// positions one further: the last tangent taken after the solve needs it).
+void CopyColonState(const ModelState& s, int end, ColonSolverArrays* a) {
+  const int N = static_cast<int>(s.p_WColon.size());
+  lanes::SplitCoordinates(s.p_WColon, 0, std::min(end + 1, N - 1), &a->position_m);
+  lanes::SplitCoordinates(s.colon_reference_m, 0, end, &a->reference_m);
+  lanes::SplitCoordinates(s.colon_tangent, 0, end, &a->tangent);
+  const auto copy = [end](const std::vector<double>& from, std::vector<double>* to, int at) {
+    std::copy(from.begin(), from.begin() + end + 1, to->begin() + at);
+  };
+  copy(s.colon_gap_m, &a->gap_m, 1);
+  copy(s.colon_pair_rest_gap_m, &a->rest_gap_m, 0);
+  copy(s.colon_tether_distance_m, &a->tether_distance_m, 0);
 }
 
 }  // namespace
@@ -822,10 +526,10 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   CopyColonState(*s, end, &sc->colon_arrays);
   // Each point's own terms: damping, the paper's suspension in its rest plane,
   // the mesentery tether and the walls.
-  AddOwnTerms(params, input, *s, end, sc);
+  lanes::AddOwnTerms(params, input, *s, end, sc);
   // Neighbour pairs (i, i+1): the axial link and the kink tension.
-  CalcPairTerms(params, end, sc);
-  AddPairTerms(end, sc);
+  lanes::CalcPairTerms(params, end, sc);
+  lanes::AddPairTerms(end, sc);
   // Contacts: the scope (at its new shape) presses the wall outward along n;
   // the wall's friction reaction is the opposite of the scope's friction, in
   // every direction (along the scope it drags the colon: pleating).
@@ -910,7 +614,7 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   const int last_gap = std::min(last, N - 2);
   const int tangents_to = std::min(last + 1, N - 1);
   const int inner_tangents_to = std::min(tangents_to, N - 2);
-  CalcSolvedDistances(params, last, last_gap, sc);
+  lanes::CalcSolvedDistances(params, last, last_gap, sc);
   std::copy(arrays.tether_distance_m.begin() + 1, arrays.tether_distance_m.begin() + last + 1,
             s->colon_tether_distance_m.begin() + 1);
   std::copy(arrays.gap_m.begin() + 1, arrays.gap_m.begin() + last_gap + 2, s->colon_gap_m.begin());
@@ -950,7 +654,7 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   for (int i = last + 1; i < N; ++i) s->colon_velocity_m_per_s[i].setZero();
   // The tangents: the inner points four at a time, the ends by
   // UpdateColonTangents itself.
-  CalcSolvedTangents(inner_tangents_to, sc);
+  lanes::CalcSolvedTangents(inner_tangents_to, sc);
   UpdateColonTangents(0, 0, s);
   for (int i = 1; i <= inner_tangents_to; ++i) {
     s->colon_tangent[i] =

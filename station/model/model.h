@@ -271,7 +271,7 @@ inline constexpr int kColonLanePadding = 4;
 struct ColonSystem {
   std::array<std::vector<double>, 6> diag;   // D_i's upper triangle: 00, 01, 02, 11, 12, 22
   std::array<std::vector<double>, 9> upper;  // U_i, the block (i, i+1): entry (r, c) at 3 r + c
-  CoordinateArrays rhs;
+  CoordinateArrays rhs;                      // r_i, the impulses dt F of the step (per coordinate)
   // The elimination's gains G_i and its solution x_i (the increments of
   // r_i), four entries a row (the fourth unused) so that a row is one vector
   // in the elimination: G_i's (r, c) at 12 i + 4 r + c, x_i's c at 4 i + c.
