@@ -106,6 +106,16 @@ void AppendQuadBand(std::uint32_t row, std::uint32_t next, int sectors,
   }
 }
 
+// The wireframe's loop round one row of vertices, and its lengthwise lines
+// from a row to the next every `stride` sectors (the tube's and the dome's).
+void AppendWireLoop(std::uint32_t row, int sectors, std::vector<std::uint32_t>* lines) {
+  for (int j = 0; j < sectors; ++j) lines->insert(lines->end(), {row + j, row + j + 1});
+}
+void AppendWireMeridians(std::uint32_t row, std::uint32_t next, int sectors, int stride,
+                         std::vector<std::uint32_t>* lines) {
+  for (int j = 0; j < sectors; j += stride) lines->insert(lines->end(), {row + j, next + j});
+}
+
 // The cecum is a blind pouch: where the drawn window reaches the colon's
 // last point, the tube is closed by a dome (half an ellipsoid) this deep,
 // as a share of the last ring's radius, in this many rings of vertices. An
@@ -160,13 +170,8 @@ void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
     const std::uint32_t next = first + m * columns;
     AppendQuadBand(row, next, sectors, &mesh->triangles);
     // Wireframe: the dome's rings (not the pole itself, a point) and its meridians.
-    if (m + 1 < kCecalPoleRings) {
-      for (int j = 0; j < sectors; ++j)
-        mesh->lines.insert(mesh->lines.end(), {next + j, next + j + 1});
-    }
-    for (int j = 0; j < sectors; j += sector_stride) {
-      mesh->lines.insert(mesh->lines.end(), {row + j, next + static_cast<std::uint32_t>(j)});
-    }
+    if (m + 1 < kCecalPoleRings) AppendWireLoop(next, sectors, &mesh->lines);
+    AppendWireMeridians(row, next, sectors, sector_stride, &mesh->lines);
   }
 }
 
@@ -307,14 +312,11 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
     const double wire_phase =
         options.wire_ring_spacing_m > 0.0 ? arc[k] / options.wire_ring_spacing_m : 0.0;
     if (std::abs(wire_phase - std::round(wire_phase)) < 1e-6) {
-      for (int j = 0; j < sectors; ++j)
-        mesh->lines.insert(mesh->lines.end(), {base + j, base + j + 1});
+      AppendWireLoop(base, sectors, &mesh->lines);
     }
     if (k + 1 < rings) {
-      for (int j = 0; j < sectors; j += sector_stride) {
-        mesh->lines.insert(mesh->lines.end(),
-                           {base + j, base + j + static_cast<std::uint32_t>(columns)});
-      }
+      AppendWireMeridians(base, base + static_cast<std::uint32_t>(columns), sectors, sector_stride,
+                          &mesh->lines);
     }
   }
 
