@@ -215,6 +215,9 @@ void CheckTissue(const ves::v1::TissueParams& t, int i, double min_radius_m, Che
     check.Add(f + "pleat_limit", i, Num(t.pleat_limit()),
               "must be 0 (the region's default) or in [" + Num(kMinPleatLimit) + ", 1]");
   }
+  if (t.has_gathered_reserve()) {
+    check.InRange(f + "gathered_reserve", i, t.gathered_reserve(), 0.0, kMaxGatheredReserve, "");
+  }
 }
 
 void CheckRegions(const ColonCase& c, double length_m, bool length_known, bool radius_usable,

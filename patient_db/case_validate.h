@@ -29,6 +29,7 @@ inline constexpr double kMaxNeighborTension_N = 1e4;
 inline constexpr double kMaxMesenteryLength_m = 0.5;
 inline constexpr double kMaxMesenteryStiffness_N_per_m2 = 1e7;
 inline constexpr double kMinPleatLimit = 0.05;
+inline constexpr double kMaxGatheredReserve = 0.6;  // as station/model's
 inline constexpr int kMinProvenanceYear = 1900;
 inline constexpr int kMaxProvenanceYear = 2100;
 

@@ -129,7 +129,8 @@ int main(int argc, char** argv) {
     tag += a + " ";
   }
   auto get = [&](const char* k, double fallback) { return kv.count(k) ? kv[k] : fallback; };
-  const auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
+  auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
+  ves::bench::ApplyCaseOverrides(get, &colon_case);
   ves::training::CaseModelOptions options;
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);

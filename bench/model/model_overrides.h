@@ -6,6 +6,7 @@
 #include <functional>
 #include <string>
 
+#include "ves/v1/case.pb.h"
 #include "station/model/model.h"
 #include "station/training/scripted_operator.h"
 
@@ -25,6 +26,22 @@
 namespace ves::bench {
 
 using OverrideGetter = std::function<double(const char* key, double fallback)>;
+
+// The settings that shape the colon at rest, set on the case before it is
+// resampled: reserve_sig, reserve_trans (TissueParams::gathered_reserve of
+// the sigmoid and transverse colon; a mobile descending colon takes the
+// sigmoid's).
+inline void ApplyCaseOverrides(const OverrideGetter& get, ves::v1::ColonCase* colon_case) {
+  for (auto& span : *colon_case->mutable_regions()) {
+    const bool transverse = span.region() == ves::v1::REGION_TRANSVERSE;
+    const bool sigmoid_like =
+        span.region() == ves::v1::REGION_SIGMOID || span.region() == ves::v1::REGION_DESCENDING;
+    const double reserve = get(transverse ? "reserve_trans" : "reserve_sig", -1.0);
+    if (reserve >= 0.0 && (transverse || sigmoid_like)) {
+      span.mutable_tissue()->set_gathered_reserve(reserve);
+    }
+  }
+}
 
 inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* params) {
   for (auto& point : params->colon.points) {
@@ -63,6 +80,7 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   if (const double dt_ms = get("dt_ms", 0.0); dt_ms > 0.0) params->dt_s = dt_ms * 1e-3;
   params->colon_pleat_stiffness_N = get("pleat_k", params->colon_pleat_stiffness_N);
   params->colon_toe_stiffness_N = get("toe_k", params->colon_toe_stiffness_N);
+  params->colon_straighten_stiffness_N = get("straighten_k", params->colon_straighten_stiffness_N);
   params->colon_toe_strain = get("toe_strain", params->colon_toe_strain);
   params->colon_toe_regions =
       static_cast<std::uint32_t>(get("toe_regions", params->colon_toe_regions));

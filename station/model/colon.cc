@@ -22,6 +22,35 @@ bool InRange(double x, double lo, double hi) { return std::isfinite(x) && x >= l
 // A mobile point hanging less than this far from its root has no side.
 constexpr double kMinHang_m = 0.01;
 
+// Rotation-minimising plane bases, so (u, v) turn smoothly along the colon.
+void CalcPlaneBases(ColonSpec* colon) {
+  Eigen::Vector3d u = colon->points[0].rest_tangent.unitOrthogonal();
+  for (ColonPoint& p : colon->points) {
+    u -= u.dot(p.rest_tangent) * p.rest_tangent;
+    if (u.norm() < 1e-6) u = p.rest_tangent.unitOrthogonal();
+    u.normalize();
+    p.plane_u = u;
+    p.plane_v = p.rest_tangent.cross(u);
+  }
+}
+
+// The path through points [a, b] with those in (a, b) drawn toward their
+// anchors: anchor + scale (rest - anchor).
+double GatheredPathLength(const ColonSpec& colon, int a, int b, double scale) {
+  const auto& pts = colon.points;
+  auto at = [&](int k) -> Eigen::Vector3d {
+    if (k == a || k == b) return pts[k].rest_position_m;
+    return pts[k].tether_anchor_m + scale * (pts[k].rest_position_m - pts[k].tether_anchor_m);
+  };
+  double length_m = 0.0;
+  for (int k = a; k < b; ++k) length_m += (at(k + 1) - at(k)).norm();
+  return length_m;
+}
+
+// A gathered run's path is at least this much longer than its root: drawn
+// onto the root it would have no room to fold.
+constexpr double kMinGatheredPathOverRoot = 1.05;
+
 }  // namespace
 
 bool IsMobileByDefault(Region region) {
@@ -35,15 +64,21 @@ MobilityDefaults DefaultMobility(Region region, bool mobile) {
     return {.mesentery_length_m = 0.0,
             .mesentery_stiffness_N_per_m2 = 1.0e5,
             .pleat_limit = 0.9,
-            .suspension_relaxation_s = 0.0};
+            .suspension_relaxation_s = 0.0,
+            .gathered_reserve = 0.0};
   }
   // Mesocolon height 6.3 cm (sigmoid) and 7.4 cm (transverse); a persistent
   // descending mesocolon is taken as the sigmoid's.
   const double length_m = region == Region::kTransverse ? 0.074 : 0.063;
+  // No gathered reserve by default: with the sigmoid's at 0.3 and the
+  // transverse's at 0.2 loops form under a push, but the scripted expert
+  // does not yet reach every shipped cecum (docs/model.md, "The gathered
+  // reserve"); a case sets it per region.
   return {.mesentery_length_m = length_m,
           .mesentery_stiffness_N_per_m2 = 1000.0,
           .pleat_limit = 0.3,
-          .suspension_relaxation_s = 10.0};
+          .suspension_relaxation_s = 10.0,
+          .gathered_reserve = 0.0};
 }
 
 void ValidateTissue(const TissueParams& t) {
@@ -72,6 +107,8 @@ void ValidateTissue(const TissueParams& t) {
           "must be in [0.05, 1]");
   Require(InRange(t.suspension_relaxation_s, 0.0, 1.0e6), "suspension_relaxation_s",
           t.suspension_relaxation_s, "must be in [0, 1e6] s (0: never)");
+  Require(InRange(t.gathered_reserve, 0.0, kMaxGatheredReserve), "gathered_reserve",
+          t.gathered_reserve, "must be in [0, 0.6]");
 }
 
 void ValidateColon(const ColonSpec& colon) {
@@ -126,19 +163,12 @@ ColonSpec MakeColonFromPoints(const std::vector<Eigen::Vector3d>& positions_m, d
     p.rest_tangent = chord.normalized();
     p.length_m = 0.5 * ((positions_m[b] - positions_m[i]).norm() +
                         (positions_m[i] - positions_m[a]).norm());
+    p.material_gap_m = i + 1 < n ? (positions_m[i + 1] - positions_m[i]).norm() : 0.0;
     p.radius_m = radius_m;
     p.region = region;
     p.tissue = tissue;
   }
-  // Rotation-minimising plane bases, so (u, v) turn smoothly along the colon.
-  Eigen::Vector3d u = colon.points[0].rest_tangent.unitOrthogonal();
-  for (ColonPoint& p : colon.points) {
-    u -= u.dot(p.rest_tangent) * p.rest_tangent;
-    if (u.norm() < 1e-6) u = p.rest_tangent.unitOrthogonal();
-    u.normalize();
-    p.plane_u = u;
-    p.plane_v = p.rest_tangent.cross(u);
-  }
+  CalcPlaneBases(&colon);
   CalcMesenteryAnchors(&colon);
   ValidateColon(colon);
   return colon;
@@ -198,6 +228,53 @@ void CalcMesenteryAnchors(ColonSpec* colon) {
   }
 }
 
+void GatherMobileColon(ColonSpec* colon) {
+  auto& pts = colon->points;
+  const int n = static_cast<int>(pts.size());
+  bool moved = false;
+  int i = 0;
+  while (i < n) {
+    if (!pts[i].tissue.mobile) {
+      ++i;
+      continue;
+    }
+    int end = i;  // the run of mobile points is [i, end)
+    double reserve_sum = 0.0;
+    while (end < n && pts[end].tissue.mobile) reserve_sum += pts[end++].tissue.gathered_reserve;
+    // Its path runs from the fixed point before it to the one after it (or
+    // its own ends at the colon's ends), which stay.
+    const int a = std::max(i - 1, 0);
+    const int b = std::min(end, n - 1);
+    const double reserve = reserve_sum / (end - i);
+    const double material_m = GatheredPathLength(*colon, a, b, 1.0);
+    const double root_m = GatheredPathLength(*colon, a, b, 0.0);
+    const double target_m = std::max((1.0 - reserve) * material_m, kMinGatheredPathOverRoot * root_m);
+    i = end;
+    if (reserve <= 0.0 || b - a < 2 || target_m >= material_m) continue;
+    // The path grows with the scale: bisect for the target.
+    double lo = 0.0, hi = 1.0;
+    for (int iteration = 0; iteration < 60; ++iteration) {
+      const double mid = 0.5 * (lo + hi);
+      (GatheredPathLength(*colon, a, b, mid) < target_m ? lo : hi) = mid;
+    }
+    const double scale = 0.5 * (lo + hi);
+    for (int k = a + 1; k < b; ++k) {
+      ColonPoint& p = pts[k];
+      p.rest_position_m = p.tether_anchor_m + scale * (p.rest_position_m - p.tether_anchor_m);
+    }
+    moved = true;
+  }
+  if (!moved) return;
+  for (int k = 0; k < n; ++k) {
+    const int a = std::max(k - 1, 0);
+    const int b = std::min(k + 1, n - 1);
+    pts[k].rest_tangent = (pts[b].rest_position_m - pts[a].rest_position_m).normalized();
+  }
+  CalcPlaneBases(colon);
+  CalcMesenteryAnchors(colon);
+  ValidateColon(*colon);
+}
+
 void MakeSuspensionStiff(ColonSpec* colon) {
   double stiffest = kStiffSuspension_N_per_m2;
   for (const ColonPoint& p : colon->points) {
@@ -210,6 +287,11 @@ void MakeSuspensionStiff(ColonSpec* colon) {
     p.tissue.mesentery_stiffness_N_per_m2 = stiffest;
     p.tissue.pleat_limit = 1.0;
     p.tissue.suspension_relaxation_s = 0.0;
+    p.tissue.gathered_reserve = 0.0;  // the shape stays as gathered, now taut
+  }
+  auto& pts = colon->points;
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    pts[i].material_gap_m = (pts[i + 1].rest_position_m - pts[i].rest_position_m).norm();
   }
   CalcMesenteryAnchors(colon);
 }

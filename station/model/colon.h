@@ -27,6 +27,9 @@ enum class Region : std::uint8_t {
   kCecum = 8,
 };
 
+// The most of a region's material that may lie gathered at rest.
+inline constexpr double kMaxGatheredReserve = 0.6;
+
 // Mechanical parameters of a region (paper eqs. 9, 10, 16, 17, and the
 // shortening colon of docs/model.md). Suspension, coupling and mesentery are
 // per metre of colon, so behaviour does not depend on N: a point standing for
@@ -58,6 +61,11 @@ struct TissueParams {
   // time constant (0: never, the paper's fixed rest). Soft tissue relaxes
   // under a held deformation; a reduced loop stays reduced.
   double suspension_relaxation_s{0.0};
+  // The share of the colon's material length that lies gathered at rest
+  // (a deflated mobile colon telescoped on itself, docs/model.md "The
+  // gathered reserve"): the rest path is that much shorter than the
+  // material, and straightens at low tension before the wall itself strains.
+  double gathered_reserve{0.0};
   bool operator==(const TissueParams&) const = default;
 };
 
@@ -73,6 +81,7 @@ struct MobilityDefaults {
   double mesentery_stiffness_N_per_m2;
   double pleat_limit;
   double suspension_relaxation_s;
+  double gathered_reserve;
 };
 MobilityDefaults DefaultMobility(Region region, bool mobile);
 
@@ -86,6 +95,10 @@ struct ColonPoint {
   Eigen::Vector3d plane_v{Eigen::Vector3d::UnitY()};
   double arc_m{0.0};        // rest arc length from the anus
   double length_m{0.0};     // length of colon this point stands for (h_i)
+  // Material length of the colon from this point to the next (0 at the
+  // last): the rest gap, or more where the colon lies gathered at rest
+  // (GatherMobileColon).
+  double material_gap_m{0.0};
   double radius_m{0.025};   // R_i
   Region region{Region::kUnspecified};
   TissueParams tissue;
@@ -183,6 +196,16 @@ void ValidateColon(const ColonSpec& colon);
 // straight scope, and hurts when a loop is pushed beyond its mesentery.
 // Called by the builders above; call it again after changing tissue.
 void CalcMesenteryAnchors(ColonSpec* colon);
+
+// The gathered reserve (TissueParams::gathered_reserve; docs/model.md):
+// every run of mobile points with a reserve is drawn toward its mesentery
+// root (each point toward its tether anchor, by one factor for the run)
+// until its path is (1 - reserve) of its material length, the arc it keeps
+// (arc_m, length_m). A run that lies almost on its root cannot gather: its
+// path stays at least 5 % longer than its root. Rest tangents, plane bases
+// and tethers are then taken from the gathered shape. ResampleColon calls it
+// after the regions are known; call it again only on a fresh resampling.
+void GatherMobileColon(ColonSpec* colon);
 
 // Distance of r (from a point's anchor) in its tether's metric: the part
 // along the root direction counts shear_ratio times. Inline: the colon solve

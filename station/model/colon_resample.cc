@@ -126,6 +126,7 @@ ColonSpec ResampleColon(const ColonCurve& curve, int segment_count) {
     p.tissue = span.tissue;
   }
   CalcMesenteryAnchors(&colon);  // the regions' mobility is known only now
+  GatherMobileColon(&colon);
   ValidateColon(colon);
   return colon;
 }

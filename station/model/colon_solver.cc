@@ -44,8 +44,17 @@ constexpr int kActiveMargin = 4;     // points solved past the last disturbed on
 // The wall's tension stiffness is reached over this much strain, so that a
 // gap passing from folding to tension does not switch stiffness in one step.
 constexpr double kTensionOnsetStrain = 0.002;
+// A gap whose material is less than this longer than its rest gap has no
+// reserve to straighten (a resampled curve's chord is a little shorter than
+// its arc everywhere).
+constexpr double kMinReserveStrain = 0.01;
 
-int LastActivePoint(const ModelState& s, int N) {
+int LastActivePoint(const StepInput& input, const ModelState& s, int N) {
+  // A turned patient's weight and the assistant's hand move colon the scope
+  // has not reached: all of it is solved.
+  bool loaded = input.patient_position != PatientPosition::kSupine;
+  for (double pressure : input.abdominal_pressure) loaded = loaded || pressure > 0.0;
+  if (loaded) return N - 1;
   int last = 0;
   const int samples = static_cast<int>(s.samples.size());
   for (int i = s.first_inside_sample; i < samples; ++i) {
@@ -114,6 +123,18 @@ void AddToRhs(const Eigen::Vector3d& add, int i, ColonSystem* sys) {
   for (int c = 0; c < 3; ++c) sys->rhs[c][i] += add[c];
 }
 
+// Gravity in the patient frame with the patient in `position`, less
+// gravity supine (ModelParams::gravity_W_m_per_s2): lying on the left side
+// (+x is the patient's right) gravity points to -x.
+Eigen::Vector3d GravityChangeFromSupine(const ModelParams& params, PatientPosition position) {
+  const double g = params.gravity_W_m_per_s2.norm();
+  const Eigen::Vector3d turned =
+      position == PatientPosition::kLeftLateral    ? Eigen::Vector3d(-g, 0.0, 0.0)
+      : position == PatientPosition::kRightLateral ? Eigen::Vector3d(g, 0.0, 0.0)
+                                                   : params.gravity_W_m_per_s2;
+  return turned - params.gravity_W_m_per_s2;
+}
+
 // The terms of point i's own that few points have at a time: the body wall
 // behind its mesentery's root, the assistant's hand and the abdomen's walls
 // (added after its suspension and tether, in that order).
@@ -146,6 +167,12 @@ void AddOwnExtraTerms(const ModelParams& params, const StepInput& input, const M
       rhs -= (dt * k * (d - slack)) * g;
       diag += (dt * k) * (g * g.transpose() + (1.0 - slack / d) * (I - g * g.transpose()));
     }
+  }
+  // The patient turned from supine: the mobile colon's weight changes
+  // direction (explicit: a constant load).
+  if (input.patient_position != PatientPosition::kSupine && p.tissue.mobile) {
+    rhs += (dt * params.colon_linear_mass_kg_per_m * p.length_m) *
+           GravityChangeFromSupine(params, input.patient_position);
   }
   // The abdominal cavity (ColonSpec::abdomen_*): a wall on each face.
   for (int axis = 0; axis < 3; ++axis) {
@@ -262,6 +289,9 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   std::fill(a.natural_span_m.begin(), a.natural_span_m.end(), 1.0);
   a.pair_pleat_limit.assign(size, 1.0);
   a.pair_toe_N.assign(size, params.colon_tension_stiffness_N);
+  a.pair_toe_strain.assign(size, params.colon_toe_strain);
+  a.inverse_material_gap.assign(size, 0.0);
+  a.pair_reserve_end_m.assign(size, 0.0);
   for (CoordinateArrays* xyz : {&a.pair_rest_direction, &a.pair_rest_mean_tangent}) {
     (*xyz)[0].assign(size, 0.0);
     (*xyz)[1].assign(size, 0.0);
@@ -270,6 +300,8 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
   sc->colon_tether_N_per_m.assign(size, 0.0);
   sc->colon_relax_factor.assign(size, 0.0);
   sc->colon_pair_gap_m.assign(size, 1.0);
+  // The least rest gap over material gap times pleat limit: how much
+  // material a pleated colon can pack onto a metre of scope.
   double smallest_pleat_limit = 1.0;
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   for (int i = 0; i < N; ++i) {
@@ -299,7 +331,6 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     a.mesentery_length_m[i] = t.mesentery_length_m;
     a.reach_gathers[i] =
         params.mesentery_reach_gathers && t.mobile && i > 0 && i < N - 1 ? 1.0 : 0.0;
-    smallest_pleat_limit = std::min(smallest_pleat_limit, t.pleat_limit);
   }
   const auto has_toe = [&](Region r) {
     return ((params.colon_toe_regions >> static_cast<unsigned>(r)) & 1u) != 0;
@@ -314,6 +345,21 @@ void PrepareColonSystem(const ModelParams& params, Scratch* sc) {
     if (has_toe(pts[i].region) && has_toe(pts[i + 1].region)) {
       a.pair_toe_N[i] = params.colon_toe_stiffness_N;
     }
+    // The gathered reserve: the gap's material length is its rest arc,
+    // longer than the gathered rest gap; it straightens up to it softly.
+    const double material_m = std::max(pts[i].material_gap_m, gap);
+    const double reserve_strain = material_m / gap - 1.0;
+    double rest_over_material = 1.0;
+    if (pts[i].tissue.gathered_reserve > 0.0 && pts[i + 1].tissue.gathered_reserve > 0.0 &&
+        reserve_strain > kMinReserveStrain) {
+      a.pair_toe_N[i] = params.colon_straighten_stiffness_N;
+      a.pair_toe_strain[i] = reserve_strain;
+      a.pair_reserve_end_m[i] = material_m;
+      rest_over_material = gap / material_m;
+    }
+    a.inverse_material_gap[i] = 1.0 / material_m;
+    smallest_pleat_limit =
+        std::min(smallest_pleat_limit, a.pair_pleat_limit[i] * rest_over_material);
     const Eigen::Vector3d direction = (pts[i + 1].rest_position_m - pts[i].rest_position_m) / gap;
     const Eigen::Vector3d mean = pts[i].rest_tangent + pts[i + 1].rest_tangent;
     const Eigen::Vector3d mean_tangent =
@@ -519,7 +565,7 @@ void SolveBlockTridiagonal(int last, ColonSystem* system) {
   const int N = static_cast<int>(pts.size());
   const double dt = params.dt_s;
   ColonSystem& sys = sc->colon_system;
-  const int last = LastActivePoint(*s, N);
+  const int last = LastActivePoint(input, *s, N);
   const int end = std::min(last + 1, N - 1);  // first point past the solved ones (or the last)
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
 

@@ -58,6 +58,11 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, colon_tension_stiffness_N]");
   Require(InRange(p.colon_toe_strain, 0.0, 2.0), "colon_toe_strain", p.colon_toe_strain,
           "must be in [0, 2]");
+  Require(InRange(p.colon_linear_mass_kg_per_m, 0.0, 10.0), "colon_linear_mass_kg_per_m",
+          p.colon_linear_mass_kg_per_m, "must be in [0, 10] kg/m");
+  Require(InRange(p.colon_straighten_stiffness_N, 0.0, p.colon_tension_stiffness_N),
+          "colon_straighten_stiffness_N", p.colon_straighten_stiffness_N,
+          "must be in [0, colon_tension_stiffness_N]");
   Require(InRange(p.ring_onset_s, 0.0, 1.0), "ring_onset_s", p.ring_onset_s, "must be in [0, 1] s");
   Require(InRange(p.colon_pleat_stiffness_N, 0.0, p.colon_tension_stiffness_N),
           "colon_pleat_stiffness_N", p.colon_pleat_stiffness_N,

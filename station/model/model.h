@@ -27,6 +27,16 @@ enum class ThrustMode : std::uint8_t {
   kForce,     // push_force_N applied at the base (the paper's constant-force run)
 };
 
+// The patient's position on the couch (docs/model.md, "Position and
+// pressure"): gravity turns with it in the patient frame W, and the mobile
+// colon's weight moves it. Supine: back down (-y); left lateral: left side
+// down; right lateral: right side down.
+enum class PatientPosition : std::uint8_t {
+  kSupine = 0,
+  kLeftLateral = 1,
+  kRightLateral = 2,
+};
+
 struct ModelParams {
   ColonSpec colon;
   EndoscopeParams scope;
@@ -60,6 +70,11 @@ struct ModelParams {
   // (docs/model-shortening-notes.md, "A sigmoid that stretches").
   std::uint32_t colon_toe_regions{~0u};
   double colon_tension_stiffness_N{500.0};
+  // A gap with a gathered reserve (TissueParams::gathered_reserve) lengthens
+  // from its rest length to its material length at this stiffness per unit
+  // strain (the telescoped folds straighten), then the wall strains at
+  // colon_tension_stiffness_N (docs/model.md, "The gathered reserve").
+  double colon_straighten_stiffness_N{2.0};
   double colon_pleat_stiffness_N{1.0};
   double colon_packed_stiffness_N{500.0};
   // Folds set: a gap held shortened takes its length as its rest length with
@@ -80,6 +95,10 @@ struct ModelParams {
   // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
   // full pressure a pressed region's points are held within the slack of
   // their mesentery root with this stiffness per metre of colon.
+  // The mobile colon's weight per metre (wall and contents, estimate): on
+  // turning the patient (StepInput::patient_position) the change of gravity
+  // from supine acts on it, so the mobile colon sags toward the lower side.
+  double colon_linear_mass_kg_per_m{0.3};
   double abdominal_pressure_stiffness_N_per_m2{2000.0};
   double abdominal_pressure_slack_m{0.03};
   // Experiment (docs/model-shortening-notes.md): a mobile point's tether reach shrinks with the
@@ -119,6 +138,7 @@ struct StepInput {
   // flattens that region's mobile colon onto its mesentery root, so a
   // straightened loop cannot bow out again (docs/model.md).
   std::array<double, 9> abdominal_pressure{};
+  PatientPosition patient_position{PatientPosition::kSupine};
 };
 
 // A point along the scope where contact and gravity act (fixed at creation).
@@ -235,6 +255,10 @@ struct StepOutput {
   double peak_stretch_arc_m{0.0};
   double peak_wall_force_N{0.0};
   double peak_fixed_displacement_m{0.0};  // largest |d_i| of a fixed (retroperitoneal) point
+  // The wall's own strain, largest over the gaps: a gap's length over its
+  // material length (its rest arc), less 1; the gathered reserve is spent
+  // before it rises above 0.
+  double peak_wall_strain{0.0};
   std::vector<Contact> contacts;     // first contact_count entries are valid
   int contact_count{0};
   double velocity_norm_m_per_s{0.0};  // sqrt(sum |v_sample|^2 + sum |v_colon|^2)
@@ -318,6 +342,11 @@ struct ColonSolverArrays {
   std::vector<double> pair_kink_N_per_m;         // [i]: T / gap of pair (i, i+1)
   std::vector<double> pair_pleat_limit;          // [i]: smaller pleat_limit of i, i+1
   std::vector<double> pair_toe_N;                // [i]: the toe's stiffness of gap i
+  std::vector<double> pair_toe_strain;           // [i]: where gap i's toe ends, as a strain
+  // [i]: gap i's material length where it has a gathered reserve (its toe
+  // then ends there, also after its folds have set), else 0.
+  std::vector<double> pair_reserve_end_m;
+  std::vector<double> inverse_material_gap;      // [i]: 1 / gap i's material length
   CoordinateArrays pair_rest_direction;          // [i]: unit, i -> i+1 at rest
   CoordinateArrays pair_rest_mean_tangent;       // [i]: mean of i's, i+1's
 };

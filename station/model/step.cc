@@ -127,6 +127,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   double peak_stretch_arc_m = 0.0;
   double peak_wall_force_N = 0.0;
   double peak_fixed_moved2_m2 = 0.0;  // squared: one square root for the peak
+  double peak_material_ratio = 1.0;  // a gap over its material length, the largest
   double colon_sum_m2 = 0.0;
   // The gap behind point i and the one ahead of it (0 past the ends, where
   // the point's own is used).
@@ -152,6 +153,8 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     peak_wall_force_N = std::max(peak_wall_force_N, out->wall_force_N[i]);
     // Pleat ratio: the tube's current length over its rest length around r_i.
     const double gap_ahead_m = i + 1 < N ? s->colon_gap_m[i] : 0.0;
+    peak_material_ratio =
+        std::max(peak_material_ratio, gap_ahead_m * constants.inverse_material_gap[i]);
     const double rest_m = constants.length_m[i];  // half of each neighbouring gap at rest
     out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
     gap_behind_m = gap_ahead_m;
@@ -160,6 +163,7 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   out->peak_stretch_arc_m = peak_stretch_arc_m;
   out->peak_wall_force_N = peak_wall_force_N;
   out->peak_fixed_displacement_m = std::sqrt(peak_fixed_moved2_m2);
+  out->peak_wall_strain = peak_material_ratio - 1.0;
   SampleContact tip = s->contact[samples - 1];
   if (tip.inside) {
     // Where the tip is now, along the colon's material (a copy: the contact

@@ -38,6 +38,8 @@ m::TissueParams TissueFromProto(const ves::v1::TissueParams& t, m::Region region
       Or(t.mesentery_stiffness_n_per_m2(), defaults.mesentery_stiffness_N_per_m2);
   out.pleat_limit = Or(t.pleat_limit(), defaults.pleat_limit);
   out.suspension_relaxation_s = defaults.suspension_relaxation_s;
+  out.gathered_reserve =
+      t.has_gathered_reserve() ? t.gathered_reserve() : defaults.gathered_reserve;
   return out;
 }
 
