@@ -80,6 +80,39 @@ TEST(CaseCommand, ConvertCsvNeedsARegionWhenTheTableHasNone) {
   EXPECT_EQ(LoadCaseFile(out).regions(0).region(), ves::v1::REGION_SIGMOID);
 }
 
+TEST(CaseCommand, GenerateWritesTheSeedsColonOrPrintsIt) {
+  ScratchDir dir;
+  const std::string out = (dir / "g.textproto").string();
+  const auto run = RunAdmin("case generate --seed 3 --out " + out);
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_EQ(RunAdmin("case validate " + out).status, 0);
+  const std::string expected = FormatCaseTextproto(GenerateColonCase(3));
+  EXPECT_EQ(ReadFileBytes(out), expected);
+  const auto printed = RunAdmin("case generate --seed 3");
+  EXPECT_EQ(printed.status, 0);
+  EXPECT_EQ(printed.out, expected);
+  const std::string bundle = (dir / "g.vescase").string();
+  EXPECT_EQ(RunAdmin("case generate --seed 3 --sigmoid redundant --out " + bundle).status, 0);
+  const auto c = DecodeCaseBundle(ReadFileBytes(bundle), bundle);
+  EXPECT_GE(c.regions(1).end_arc_m() - c.regions(1).start_arc_m(), 0.50);
+}
+
+TEST(CaseCommand, GenerateRefusesBadArgumentsNamingThem) {
+  for (const char* args : {"--seed -1", "--seed 1x", "--seed 18446744073709551616", ""}) {
+    const auto run = RunAdmin(std::string("case generate ") + args);
+    EXPECT_EQ(run.status, 2) << args << ": " << run.out;
+    EXPECT_NE(run.out.find("seed"), std::string::npos) << args << ": " << run.out;
+  }
+  const auto sigmoid = RunAdmin("case generate --seed 1 --sigmoid long");
+  EXPECT_EQ(sigmoid.status, 2);
+  EXPECT_NE(sigmoid.out.find("--sigmoid must be redundant or common"), std::string::npos)
+      << sigmoid.out;
+  EXPECT_EQ(RunAdmin("case generate --seed 1 --out g.csv").status, 2);
+  const auto id = RunAdmin("case generate --seed 1 --id 'Bad Id'");
+  EXPECT_EQ(id.status, 2);
+  EXPECT_NE(id.out.find("id"), std::string::npos) << id.out;
+}
+
 TEST(CaseCommand, BadArgumentsExitTwo) {
   EXPECT_EQ(RunAdmin("case").status, 2);
   EXPECT_EQ(RunAdmin("case frobnicate").status, 2);
