@@ -19,10 +19,19 @@ using Vec = std::array<double, 3>;
 
 constexpr int kRegionCount = 8;
 constexpr std::array<Region, kRegionCount> kRegionOrder = {
-    ves::v1::REGION_RECTUM,     ves::v1::REGION_SIGMOID,         ves::v1::REGION_DESCENDING,
+    ves::v1::REGION_RECTUM,          ves::v1::REGION_SIGMOID,    ves::v1::REGION_DESCENDING,
     ves::v1::REGION_SPLENIC_FLEXURE, ves::v1::REGION_TRANSVERSE, ves::v1::REGION_HEPATIC_FLEXURE,
-    ves::v1::REGION_ASCENDING,  ves::v1::REGION_CECUM};
-enum RegionIndex { kRectum, kSigmoid, kDescending, kSplenic, kTransverse, kHepatic, kAscending, kCecum };
+    ves::v1::REGION_ASCENDING,       ves::v1::REGION_CECUM};
+enum RegionIndex {
+  kRectum,
+  kSigmoid,
+  kDescending,
+  kSplenic,
+  kTransverse,
+  kHepatic,
+  kAscending,
+  kCecum
+};
 
 // Draw ranges (docs/case-generator.md has each one's source).
 constexpr std::array<GeneratedLengthRange, kRegionCount> kLengthRanges = {{
@@ -67,46 +76,48 @@ constexpr int kMaxAttempts = 200;
 // The shipped cases' anatomy in W (patient_db/cases/generate_cases.py, x
 // toward the patient's right): each region's template is stretched to its
 // drawn length.
-const std::vector<Vec> kRectumShape = {{0.0, 0.0, 0.0},       {0.0, -0.012, 0.028},
-                                  {0.0, -0.028, 0.055},  {-0.001, -0.040, 0.080},
-                                  {-0.003, -0.044, 0.103}, {-0.005, -0.040, 0.125}};
+const std::vector<Vec> kRectumShape = {{0.0, 0.0, 0.0},         {0.0, -0.012, 0.028},
+                                       {0.0, -0.028, 0.055},    {-0.001, -0.040, 0.080},
+                                       {-0.003, -0.044, 0.103}, {-0.005, -0.040, 0.125}};
 // The common sigmoid: forward and to the right out of the pelvis, back to the
 // left iliac fossa.
 const std::vector<Vec> kSigmoidShape = {
-    {-0.005, -0.040, 0.125}, {0.008, -0.022, 0.145}, {0.027, -0.001, 0.160},
-    {0.042, 0.024, 0.172},   {0.047, 0.052, 0.188},  {0.040, 0.076, 0.208},
-    {0.018, 0.088, 0.225},   {-0.010, 0.089, 0.233}, {-0.040, 0.080, 0.233},
-    {-0.066, 0.060, 0.226},  {-0.086, 0.034, 0.217}, {-0.098, 0.008, 0.210},
+    {-0.005, -0.040, 0.125}, {0.008, -0.022, 0.145}, {0.027, -0.001, 0.160}, {0.042, 0.024, 0.172},
+    {0.047, 0.052, 0.188},   {0.040, 0.076, 0.208},  {0.018, 0.088, 0.225},  {-0.010, 0.089, 0.233},
+    {-0.040, 0.080, 0.233},  {-0.066, 0.060, 0.226}, {-0.086, 0.034, 0.217}, {-0.098, 0.008, 0.210},
     {-0.106, -0.018, 0.212}, {-0.112, -0.035, 0.225}};
 // A redundant sigmoid: rises out of the pelvis, comes back down and swings
 // across in front of its own start (where an alpha loop forms).
 const std::vector<Vec> kRedundantSigmoidShape = {
-    {-0.005, -0.040, 0.125}, {0.010, -0.026, 0.158}, {0.032, -0.010, 0.180},
-    {0.052, 0.015, 0.198},   {0.060, 0.045, 0.215},  {0.052, 0.072, 0.235},
-    {0.030, 0.088, 0.250},   {0.000, 0.095, 0.256},  {-0.030, 0.092, 0.250},
-    {-0.052, 0.082, 0.235},  {-0.056, 0.070, 0.212}, {-0.040, 0.062, 0.192},
-    {-0.015, 0.062, 0.174},  {0.005, 0.075, 0.155},  {0.000, 0.095, 0.135},
-    {-0.030, 0.105, 0.125},  {-0.062, 0.095, 0.135}, {-0.088, 0.072, 0.155},
-    {-0.104, 0.042, 0.175},  {-0.112, 0.010, 0.195}, {-0.114, -0.018, 0.208},
-    {-0.112, -0.035, 0.225}};
-const std::vector<Vec> kDescendingShape = {{-0.112, -0.035, 0.225}, {-0.118, -0.042, 0.280},
-                                      {-0.124, -0.045, 0.340}, {-0.128, -0.043, 0.400},
-                                      {-0.128, -0.038, 0.455}};
-const std::vector<Vec> kSplenicShape = {{-0.128, -0.038, 0.455}, {-0.124, -0.024, 0.485},
-                                   {-0.110, -0.004, 0.497}, {-0.097, 0.016, 0.488}};
+    {-0.005, -0.040, 0.125}, {0.010, -0.026, 0.158}, {0.032, -0.010, 0.180}, {0.052, 0.015, 0.198},
+    {0.060, 0.045, 0.215},   {0.052, 0.072, 0.235},  {0.030, 0.088, 0.250},  {0.000, 0.095, 0.256},
+    {-0.030, 0.092, 0.250},  {-0.052, 0.082, 0.235}, {-0.056, 0.070, 0.212}, {-0.040, 0.062, 0.192},
+    {-0.015, 0.062, 0.174},  {0.005, 0.075, 0.155},  {0.000, 0.095, 0.135},  {-0.030, 0.105, 0.125},
+    {-0.062, 0.095, 0.135},  {-0.088, 0.072, 0.155}, {-0.104, 0.042, 0.175}, {-0.112, 0.010, 0.195},
+    {-0.114, -0.018, 0.208}, {-0.112, -0.035, 0.225}};
+const std::vector<Vec> kDescendingShape = {{-0.112, -0.035, 0.225},
+                                           {-0.118, -0.042, 0.280},
+                                           {-0.124, -0.045, 0.340},
+                                           {-0.128, -0.043, 0.400},
+                                           {-0.128, -0.038, 0.455}};
+const std::vector<Vec> kSplenicShape = {{-0.128, -0.038, 0.455},
+                                        {-0.124, -0.024, 0.485},
+                                        {-0.110, -0.004, 0.497},
+                                        {-0.097, 0.016, 0.488}};
 const std::vector<Vec> kTransverseShape = {
-    {-0.097, 0.016, 0.488}, {-0.090, 0.040, 0.462}, {-0.080, 0.062, 0.428},
-    {-0.066, 0.082, 0.392}, {-0.048, 0.097, 0.356}, {-0.026, 0.106, 0.325},
-    {0.000, 0.110, 0.308},  {0.026, 0.108, 0.306},  {0.052, 0.102, 0.318},
-    {0.074, 0.092, 0.340},  {0.092, 0.078, 0.366},  {0.106, 0.060, 0.392},
+    {-0.097, 0.016, 0.488}, {-0.090, 0.040, 0.462}, {-0.080, 0.062, 0.428}, {-0.066, 0.082, 0.392},
+    {-0.048, 0.097, 0.356}, {-0.026, 0.106, 0.325}, {0.000, 0.110, 0.308},  {0.026, 0.108, 0.306},
+    {0.052, 0.102, 0.318},  {0.074, 0.092, 0.340},  {0.092, 0.078, 0.366},  {0.106, 0.060, 0.392},
     {0.114, 0.040, 0.414},  {0.118, 0.020, 0.428}};
-const std::vector<Vec> kHepaticShape = {{0.118, 0.020, 0.428}, {0.124, 0.000, 0.434},
-                                   {0.128, -0.018, 0.425}, {0.128, -0.026, 0.405}};
-const std::vector<Vec> kAscendingShape = {{0.128, -0.026, 0.405}, {0.126, -0.028, 0.365},
-                                     {0.122, -0.026, 0.320}, {0.118, -0.022, 0.278},
-                                     {0.114, -0.016, 0.238}};
-const std::vector<Vec> kCecumShape = {{0.114, -0.016, 0.238}, {0.112, -0.008, 0.210},
-                                 {0.110, 0.004, 0.185}};
+const std::vector<Vec> kHepaticShape = {
+    {0.118, 0.020, 0.428}, {0.124, 0.000, 0.434}, {0.128, -0.018, 0.425}, {0.128, -0.026, 0.405}};
+const std::vector<Vec> kAscendingShape = {{0.128, -0.026, 0.405},
+                                          {0.126, -0.028, 0.365},
+                                          {0.122, -0.026, 0.320},
+                                          {0.118, -0.022, 0.278},
+                                          {0.114, -0.016, 0.238}};
+const std::vector<Vec> kCecumShape = {
+    {0.114, -0.016, 0.238}, {0.112, -0.008, 0.210}, {0.110, 0.004, 0.185}};
 // Where the sigmoid meets the descending colon (left iliac fossa).
 constexpr Vec kSigmoidDescendingJunction = {-0.112, -0.035, 0.225};
 constexpr double kHepaticFlexureX_m = 0.118;
@@ -172,7 +183,8 @@ struct Draw {
 
 Draw DrawColon(Rng& rng, const ColonGeneratorOptions& options) {
   Draw d;
-  d.redundant_sigmoid = options.redundant_sigmoid.value_or(rng.Chance(kRedundantSigmoidProbability));
+  d.redundant_sigmoid =
+      options.redundant_sigmoid.value_or(rng.Chance(kRedundantSigmoidProbability));
   d.mobile_descending =
       options.mobile_descending.value_or(rng.Chance(kMobileDescendingProbability));
   const auto uniform = [&](int r) {
@@ -252,7 +264,8 @@ std::vector<Vec> StretchedFrom(const std::vector<Vec>& shape, const Vec& from, d
 
 // Waypoints of every region (each starting where the previous ends) for the
 // fitted size parameters `size` (one per region, each monotone in its length).
-std::vector<std::vector<Vec>> Waypoints(const Draw& d, const std::array<double, kRegionCount>& size) {
+std::vector<std::vector<Vec>> Waypoints(const Draw& d,
+                                        const std::array<double, kRegionCount>& size) {
   std::vector<std::vector<Vec>> regions(kRegionCount);
   regions[kRectum] = ScaledFrom(kRectumShape, {0.0, 0.0, 0.0}, size[kRectum]);
   const Vec rectosigmoid = regions[kRectum].back();
@@ -262,8 +275,8 @@ std::vector<std::vector<Vec>> Waypoints(const Draw& d, const std::array<double, 
   const double chord_m = Distance(rectosigmoid, junction);
   const double max_chord_m = 0.75 * d.length_m[kSigmoid];
   if (chord_m > max_chord_m) junction = Lerp(rectosigmoid, junction, max_chord_m / chord_m);
-  regions[kSigmoid] = LoopBetween(d.redundant_sigmoid ? kRedundantSigmoidShape : kSigmoidShape, rectosigmoid,
-                                  junction, Scale(d.sigmoid_shape, size[kSigmoid]));
+  regions[kSigmoid] = LoopBetween(d.redundant_sigmoid ? kRedundantSigmoidShape : kSigmoidShape,
+                                  rectosigmoid, junction, Scale(d.sigmoid_shape, size[kSigmoid]));
   regions[kDescending] = StretchedFrom(kDescendingShape, junction, size[kDescending]);
   if (d.descending_medial_m > 0.0) {
     // A persistent descending mesocolon lets the colon lie toward the midline (+x).
@@ -276,9 +289,8 @@ std::vector<std::vector<Vec>> Waypoints(const Draw& d, const std::array<double, 
   const Vec splenic_end = regions[kSplenic].back();
   // The hepatic flexure below the splenic, high enough that the ascending
   // colon and cecum stay out of the pelvis.
-  const double hepatic_z_m =
-      std::max(splenic_end[2] - d.hepatic_drop_m,
-               0.20 + d.length_m[kAscending] + d.length_m[kCecum]);
+  const double hepatic_z_m = std::max(splenic_end[2] - d.hepatic_drop_m,
+                                      0.20 + d.length_m[kAscending] + d.length_m[kCecum]);
   const Vec hepatic_start = {kHepaticFlexureX_m, kHepaticFlexureY_m, hepatic_z_m};
   // The sag deepens with the size; it comes forward less.
   const double k = size[kTransverse];
@@ -327,7 +339,8 @@ std::vector<Vec> SmoothCurve(const std::vector<Vec>& points) {
 // `curve` resampled at equal arc steps of about kControlPointStep_m, ends kept.
 std::vector<Vec> Resample(const std::vector<Vec>& curve) {
   std::vector<double> arcs = {0.0};
-  for (size_t i = 1; i < curve.size(); ++i) arcs.push_back(arcs.back() + Distance(curve[i - 1], curve[i]));
+  for (size_t i = 1; i < curve.size(); ++i)
+    arcs.push_back(arcs.back() + Distance(curve[i - 1], curve[i]));
   const int n = std::max(2, static_cast<int>(std::lround(arcs.back() / kControlPointStep_m)));
   std::vector<Vec> out;
   size_t j = 0;
@@ -464,8 +477,7 @@ std::optional<ves::v1::ColonCase> BuildCase(const Draw& d,
                             Format("%.3f m", d.length_m[kSigmoid]) +
                             (d.redundant_sigmoid ? " (redundant)" : "") + ", transverse " +
                             Format("%.3f m", d.length_m[kTransverse]) + ", descending colon " +
-                            (d.mobile_descending ? "mobile (persistent mesocolon)" : "fixed") +
-                            ".";
+                            (d.mobile_descending ? "mobile (persistent mesocolon)" : "fixed") + ".";
   c.set_description(description);
   auto* provenance = c.mutable_provenance();
   provenance->set_source("synthetic (ves case generator)");

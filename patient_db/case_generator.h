@@ -37,7 +37,6 @@ inline constexpr double kGeneratedMaxLength_m = 2.00;
 
 // Throws CaseError only if no valid colon was found in a bounded number of
 // draws for this seed (never seen: every seed tried in the tests succeeds).
-ves::v1::ColonCase GenerateColonCase(std::uint64_t seed,
-                                     const ColonGeneratorOptions& options = {});
+ves::v1::ColonCase GenerateColonCase(std::uint64_t seed, const ColonGeneratorOptions& options = {});
 
 }  // namespace ves::patient_db

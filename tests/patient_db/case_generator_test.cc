@@ -17,10 +17,10 @@ using testing::ScratchDir;
 // The ranges docs/case-generator.md documents, written out here so the test
 // checks the document, not the generator's own constants.
 const std::map<ves::v1::Region, std::pair<double, double>> kDocumentedRange_m = {
-    {ves::v1::REGION_RECTUM, {0.12, 0.15}},          {ves::v1::REGION_SIGMOID, {0.15, 0.70}},
-    {ves::v1::REGION_DESCENDING, {0.20, 0.28}},      {ves::v1::REGION_SPLENIC_FLEXURE, {0.06, 0.10}},
-    {ves::v1::REGION_TRANSVERSE, {0.30, 0.65}},      {ves::v1::REGION_HEPATIC_FLEXURE, {0.05, 0.08}},
-    {ves::v1::REGION_ASCENDING, {0.15, 0.20}},       {ves::v1::REGION_CECUM, {0.05, 0.08}},
+    {ves::v1::REGION_RECTUM, {0.12, 0.15}},     {ves::v1::REGION_SIGMOID, {0.15, 0.70}},
+    {ves::v1::REGION_DESCENDING, {0.20, 0.28}}, {ves::v1::REGION_SPLENIC_FLEXURE, {0.06, 0.10}},
+    {ves::v1::REGION_TRANSVERSE, {0.30, 0.65}}, {ves::v1::REGION_HEPATIC_FLEXURE, {0.05, 0.08}},
+    {ves::v1::REGION_ASCENDING, {0.15, 0.20}},  {ves::v1::REGION_CECUM, {0.05, 0.08}},
 };
 const std::vector<ves::v1::Region> kAnusToCecum = {
     ves::v1::REGION_RECTUM,          ves::v1::REGION_SIGMOID,    ves::v1::REGION_DESCENDING,
