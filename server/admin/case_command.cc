@@ -79,6 +79,13 @@ std::optional<po::variables_map> ParseArgs(const CommandArgs& args,
   return vm;
 }
 
+// What an import changed on its own (a reversed centreline), on stderr;
+// clears `warnings`.
+void PrintWarnings(std::vector<pdb::CaseProblem>& warnings) {
+  for (const auto& warning : warnings) std::cerr << "warning: " << warning.ToString() << "\n";
+  warnings.clear();
+}
+
 std::string Identify(const ves::v1::ColonCase& colon_case) {
   return colon_case.id() + " v" + std::to_string(colon_case.version()) +
          " sha256=" + pdb::CasePayloadSha256Hex(colon_case);
@@ -108,12 +115,16 @@ int RunValidate(const CommandArgs& args) {
   }
   const auto files = (*vm)["file"].as<std::vector<std::string>>();
   int invalid = 0;
+  std::vector<pdb::CaseProblem> warnings;
+  import.warnings = &warnings;
   for (const auto& file : files) {
     try {
       const auto colon_case = pdb::LoadCaseFile(file, import);
+      PrintWarnings(warnings);
       std::cout << "OK " << file << " " << Identify(colon_case) << "\n";
     } catch (const pdb::CaseError& e) {
       ++invalid;
+      PrintWarnings(warnings);
       for (const auto& problem : e.problems()) std::cout << problem.ToString() << "\n";
     }
   }
@@ -142,12 +153,17 @@ int RunConvert(const CommandArgs& args) {
                             &status);
   if (!vm) return status;
   ves::v1::ColonCase colon_case;
+  std::vector<pdb::CaseProblem> warnings;
   try {
-    colon_case = pdb::LoadCaseFile((*vm)["in"].as<std::string>(), ReadImportOptions(*vm));
+    auto import = ReadImportOptions(*vm);
+    import.warnings = &warnings;
+    colon_case = pdb::LoadCaseFile((*vm)["in"].as<std::string>(), import);
+    PrintWarnings(warnings);
   } catch (const po::error& e) {
     std::cerr << "ves-admin case convert: " << e.what() << "\n";
     return kInvalid;
   } catch (const pdb::CaseError& e) {
+    PrintWarnings(warnings);
     for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
     return kInvalid;
   }

@@ -80,6 +80,16 @@ int RunImportCaseCommand(const CommandArgs& args) {
   try {
     sync::CaseCache cache(Paths(vm).cases());
     int failures = 0;
+    // What the import changed on its own (a centreline reversed to start at
+    // the anus), said whether or not the file is then refused.
+    std::vector<patient_db::CaseProblem> warnings;
+    import.warnings = &warnings;
+    const auto say_warnings = [&warnings] {
+      for (const auto& warning : warnings) {
+        std::cerr << "ves-station: warning: " << warning.ToString() << "\n";
+      }
+      warnings.clear();
+    };
     for (const auto& file : vm["file"].as<std::vector<std::string>>()) {
       try {
         // A bundle is stored as it is (its hash checked); every other format
@@ -87,9 +97,11 @@ int RunImportCaseCommand(const CommandArgs& args) {
         const auto entry = patient_db::CaseFileKindOf(file) == patient_db::CaseFileKind::kBundle
                                ? cache.ImportBundleFile(file)
                                : cache.Put(patient_db::LoadCaseFile(file, import));
+        say_warnings();
         std::cout << "imported " << entry.id << " v" << entry.version << " sha256=" << entry.sha256_hex
                   << "\n";
       } catch (const std::exception& error) {
+        say_warnings();
         std::cerr << "ves-station: import refused: " << error.what() << "\n";
         ++failures;
       }
