@@ -5,6 +5,7 @@
 #include <string>
 
 #include "patient_db/case_bundle.h"
+#include "patient_db/case_generator.h"
 #include "patient_db/case_geometry.h"
 #include "patient_db/case_import.h"
 #include "patient_db/case_problem.h"

@@ -3,7 +3,9 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "patient_db/case_problem.h"
 #include "ves/v1/case.pb.h"
 
 // Import of centerlines exported by segmentation tools (docs/case-format.md):
@@ -26,7 +28,14 @@ struct ImportOptions {
   std::optional<ves::v1::Region> region;  // used when the file names no regions
   std::string id;                         // default: derived from the file name
   std::string title;                      // default: "Imported centerline <file name>"
+  // Receives what the import changed on its own (a centreline that ran
+  // cecum first, reversed); also recorded in the case's provenance notes.
+  std::vector<CaseProblem>* warnings = nullptr;
 };
+
+// The longest a region can plausibly be: a centreline given one region
+// (--region) that is longer is a whole colon and refused.
+double MaxPlausibleRegionLength_m(ves::v1::Region region);
 
 // Throws CaseError (parse errors with their line, or validation problems).
 ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::string& file_label,

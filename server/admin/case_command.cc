@@ -2,6 +2,8 @@
 // Actions are a table below; the server work adds upload/list/download here.
 #include <boost/program_options.hpp>
 
+#include <charconv>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -77,6 +79,13 @@ std::optional<po::variables_map> ParseArgs(const CommandArgs& args,
   return vm;
 }
 
+// What an import changed on its own (a reversed centreline), on stderr;
+// clears `warnings`.
+void PrintWarnings(std::vector<pdb::CaseProblem>& warnings) {
+  for (const auto& warning : warnings) std::cerr << "warning: " << warning.ToString() << "\n";
+  warnings.clear();
+}
+
 std::string Identify(const ves::v1::ColonCase& colon_case) {
   return colon_case.id() + " v" + std::to_string(colon_case.version()) +
          " sha256=" + pdb::CasePayloadSha256Hex(colon_case);
@@ -106,12 +115,16 @@ int RunValidate(const CommandArgs& args) {
   }
   const auto files = (*vm)["file"].as<std::vector<std::string>>();
   int invalid = 0;
+  std::vector<pdb::CaseProblem> warnings;
+  import.warnings = &warnings;
   for (const auto& file : files) {
     try {
       const auto colon_case = pdb::LoadCaseFile(file, import);
+      PrintWarnings(warnings);
       std::cout << "OK " << file << " " << Identify(colon_case) << "\n";
     } catch (const pdb::CaseError& e) {
       ++invalid;
+      PrintWarnings(warnings);
       for (const auto& problem : e.problems()) std::cout << problem.ToString() << "\n";
     }
   }
@@ -140,12 +153,17 @@ int RunConvert(const CommandArgs& args) {
                             &status);
   if (!vm) return status;
   ves::v1::ColonCase colon_case;
+  std::vector<pdb::CaseProblem> warnings;
   try {
-    colon_case = pdb::LoadCaseFile((*vm)["in"].as<std::string>(), ReadImportOptions(*vm));
+    auto import = ReadImportOptions(*vm);
+    import.warnings = &warnings;
+    colon_case = pdb::LoadCaseFile((*vm)["in"].as<std::string>(), import);
+    PrintWarnings(warnings);
   } catch (const po::error& e) {
     std::cerr << "ves-admin case convert: " << e.what() << "\n";
     return kInvalid;
   } catch (const pdb::CaseError& e) {
+    PrintWarnings(warnings);
     for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
     return kInvalid;
   }
@@ -206,12 +224,89 @@ int RunInfo(const CommandArgs& args) {
   return kOk;
 }
 
+int RunGenerate(const CommandArgs& args) {
+  po::options_description options("options");
+  options.add_options()
+      ("seed", po::value<std::string>()->required(), "seed, 0 to 2^64-1: the same seed gives "
+                                                     "the same colon")
+      ("out", po::value<std::string>(), "output (.textproto or .vescase); default: textproto "
+                                        "on standard output")
+      ("sigmoid", po::value<std::string>(), "redundant or common (default: drawn)")
+      ("descending", po::value<std::string>(), "mobile or fixed (default: drawn)")
+      ("id", po::value<std::string>(), "case id (default: generated-<seed>)");
+  po::positional_options_description positional;
+  int status = kOk;
+  const auto vm = ParseArgs(args, options, positional,
+                            "usage: ves-admin case generate --seed N [--out FILE] "
+                            "[--sigmoid redundant|common] [--descending mobile|fixed] [--id ID]\n"
+                            "Generates a plausible colon: region lengths, radii and mesentery "
+                            "heights drawn from\npublished distributions "
+                            "(docs/case-generator.md); valid for import.",
+                            &status);
+  if (!vm) return status;
+  pdb::ColonGeneratorOptions generator;
+  const auto choice = [&](const char* name, const char* yes, const char* no,
+                          std::optional<bool>& out) {
+    if (!vm->count(name)) return true;
+    const auto value = (*vm)[name].as<std::string>();
+    if (value != yes && value != no) {
+      std::cerr << "ves-admin case generate: --" << name << " must be " << yes << " or " << no
+                << ", not '" << value << "'\n";
+      return false;
+    }
+    out = value == yes;
+    return true;
+  };
+  if (!choice("sigmoid", "redundant", "common", generator.redundant_sigmoid) ||
+      !choice("descending", "mobile", "fixed", generator.mobile_descending)) {
+    return kInvalid;
+  }
+  if (vm->count("id")) generator.id = (*vm)["id"].as<std::string>();
+  // Digits only: a lexical cast would wrap "-1" round to 2^64-1.
+  const auto seed_text = (*vm)["seed"].as<std::string>();
+  std::uint64_t seed = 0;
+  const auto [end, error] =
+      std::from_chars(seed_text.data(), seed_text.data() + seed_text.size(), seed);
+  if (seed_text.empty() || error != std::errc() || end != seed_text.data() + seed_text.size()) {
+    std::cerr << "ves-admin case generate: --seed '" << seed_text
+              << "' is not a whole number in 0..18446744073709551615\n";
+    return kInvalid;
+  }
+  const std::string out = vm->count("out") ? (*vm)["out"].as<std::string>() : "";
+  if (!out.empty() && pdb::CaseFileKindOf(out) != pdb::CaseFileKind::kTextproto &&
+      pdb::CaseFileKindOf(out) != pdb::CaseFileKind::kBundle) {
+    std::cerr << "ves-admin case generate: output '" << out
+              << "' must end in .textproto or .vescase\n";
+    return kInvalid;
+  }
+  ves::v1::ColonCase colon_case;
+  try {
+    colon_case = pdb::GenerateColonCase(seed, generator);
+  } catch (const pdb::CaseError& e) {
+    for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
+    return kInvalid;
+  }
+  if (out.empty()) {
+    std::cout << pdb::FormatCaseTextproto(colon_case);
+    return kOk;
+  }
+  try {
+    pdb::WriteCaseFile(colon_case, out);
+  } catch (const pdb::CaseError& e) {
+    for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
+    return kFailed;
+  }
+  std::cout << "wrote " << out << " " << Identify(colon_case) << "\n";
+  return kOk;
+}
+
 // Actions of `ves-admin case`; the server work appends upload, list, download.
 const std::vector<CaseAction>& CaseActions() {
   static const std::vector<CaseAction> kActions = {
       {"validate", "check case files; exit 0 only when all are valid", RunValidate},
       {"convert", "convert IN OUT between textproto, bundle, CSV/markups import", RunConvert},
       {"info", "print a case's identity, length and regions", RunInfo},
+      {"generate", "generate a plausible colon from a seed (--seed N [--out FILE])", RunGenerate},
       {"upload", "upload FILE to the server (admin)", RunCaseUpload},
       {"list", "list the server's cases", RunCaseList},
       {"download", "download ID -o FILE.vescase from the server", RunCaseDownload},

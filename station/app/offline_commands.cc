@@ -1,14 +1,16 @@
 // ves-station import-case / export-case / status: the station's offline case
 // library (the paper's CD-ROM), its pending uploads and lesson verdicts.
 #include <boost/program_options.hpp>
-
+#include <filesystem>
 #include <iostream>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string_view>
 
 #include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
 #include "patient_db/limits.h"
+#include "station/app/case_preview.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/sync/case_cache.h"
@@ -41,6 +43,26 @@ sync::StationPaths Paths(const po::variables_map& vm) {
 
 }  // namespace
 
+namespace {
+
+// The import's preview (docs/case-format.md); a station without GL still
+// imports, and says why there is no picture.
+void WritePreview(const ves::v1::ColonCase& colon_case, const std::filesystem::path& dir) {
+  constexpr int kWidth = 640;
+  constexpr int kHeight = 720;
+  const std::filesystem::path path = dir / (colon_case.id() + ".png");
+  try {
+    std::filesystem::create_directories(dir);
+    const cv::Mat image = RenderCasePreview(colon_case, kWidth, kHeight);
+    if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write the file");
+    std::cout << "preview " << path.string() << "\n";
+  } catch (const std::exception& error) {
+    std::cerr << "ves-station: no preview " << path.string() << ": " << error.what() << "\n";
+  }
+}
+
+}  // namespace
+
 int RunImportCaseCommand(const CommandArgs& args) {
   po::options_description options("options");
   options.add_options()("file", po::value<std::vector<std::string>>()->required(),
@@ -49,18 +71,22 @@ int RunImportCaseCommand(const CommandArgs& args) {
       "region", po::value<std::string>(),
       "CSV/markups: region of the whole centerline (rectum, sigmoid, ..., cecum)")(
       "id", po::value<std::string>(), "CSV/markups: case id (default: from the file name)")(
-      "title", po::value<std::string>(), "CSV/markups: title");
+      "title", po::value<std::string>(), "CSV/markups: title")(
+      "preview", po::value<std::string>(),
+      "write DIR/<id>.png for each imported case: AP fluoroscopy of the colon at rest with its "
+      "regions labelled");
   po::positional_options_description positional;
   positional.add("file", -1);
   po::variables_map vm;
   if (auto stop = ParseOfflineArgs(
           "ves-station import-case",
           "usage: ves-station import-case FILE... [--radius-mm R] [--region NAME] [--id ID]\n"
-          "                               [--title T] [--data-dir DIR]\n\n"
+          "                               [--title T] [--preview DIR] [--data-dir DIR]\n\n"
           "Puts cases into the station's offline cache. FILE is any format `ves-admin case\n"
           "convert` reads (docs/case-format.md): a bundle (.vescase, the paper's CD-ROM), a\n"
           "textproto, a centerline CSV or a 3D Slicer markups file (.mrk.json, its Radius\n"
-          "measurement or a <stem>.radius.csv sidecar, region landmarks in <stem>.regions.mrk.json).",
+          "measurement or a <stem>.radius.csv sidecar, region landmarks in "
+          "<stem>.regions.mrk.json).",
           args, options, positional, &vm)) {
     return *stop;
   }
@@ -80,16 +106,31 @@ int RunImportCaseCommand(const CommandArgs& args) {
   try {
     sync::CaseCache cache(Paths(vm).cases());
     int failures = 0;
+    // What the import changed on its own (a centreline reversed to start at
+    // the anus), said whether or not the file is then refused.
+    std::vector<patient_db::CaseProblem> warnings;
+    import.warnings = &warnings;
+    const auto say_warnings = [&warnings] {
+      for (const auto& warning : warnings) {
+        std::cerr << "ves-station: warning: " << warning.ToString() << "\n";
+      }
+      warnings.clear();
+    };
     for (const auto& file : vm["file"].as<std::vector<std::string>>()) {
       try {
         // A bundle is stored as it is (its hash checked); every other format
         // is read, validated and stored as a bundle.
-        const auto entry = patient_db::CaseFileKindOf(file) == patient_db::CaseFileKind::kBundle
-                               ? cache.ImportBundleFile(file)
-                               : cache.Put(patient_db::LoadCaseFile(file, import));
+        const bool bundle = patient_db::CaseFileKindOf(file) == patient_db::CaseFileKind::kBundle;
+        const auto entry = bundle ? cache.ImportBundleFile(file)
+                                  : cache.Put(patient_db::LoadCaseFile(file, import));
+        say_warnings();
         std::cout << "imported " << entry.id << " v" << entry.version << " sha256=" << entry.sha256_hex
                   << "\n";
+        if (vm.count("preview")) {
+          WritePreview(cache.Load(entry.sha256_hex), vm["preview"].as<std::string>());
+        }
       } catch (const std::exception& error) {
+        say_warnings();
         std::cerr << "ves-station: import refused: " << error.what() << "\n";
         ++failures;
       }

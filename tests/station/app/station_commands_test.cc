@@ -11,8 +11,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -116,6 +118,50 @@ TEST(Snapshot, TheCarmAngleAndZoomGiveAnotherImageAndBadValuesAreRefused) {
   const ProcessResult tilt = with({"--tilt-deg", "10"}, dir / "tilt");
   EXPECT_EQ(tilt.exit_code, 2);
   EXPECT_NE(tilt.err.find("--c-arm-deg"), std::string::npos) << tilt.err;
+  fs::remove_all(dir);
+}
+
+// import-case --preview: the colon at rest on AP fluoroscopy with its
+// regions named (yellow, the only colour on the grey X-ray); a file written
+// cecum first previews the same as the same colon written anus first.
+TEST(ImportCase, APreviewShowsTheColonWithItsRegionsNamed) {
+  const fs::path dir = MakeTempDir("preview");
+  const std::string rows[] = {"0,0,0,13,rectum",     "0,-10,30,20,rectum",  "0,-15,60,22,rectum",
+                              "5,-10,90,18,sigmoid", "15,0,120,16,sigmoid", "25,10,150,16,sigmoid"};
+  std::string forward = "x_mm,y_mm,z_mm,radius_mm,region\n";
+  std::string backward = forward;
+  for (int i = 0; i < 6; ++i) {
+    forward += rows[i] + "\n";
+    backward += rows[5 - i] + "\n";
+  }
+  {
+    std::ofstream(dir / "forward.csv") << forward;
+    std::ofstream(dir / "backward.csv") << backward;
+  }
+  const fs::path previews = dir / "previews";
+  const ProcessResult imported = RunProgram(
+      {kStationBin, "import-case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+       (dir / "forward.csv").string(), (dir / "backward.csv").string(), "--preview",
+       previews.string(), "--data-dir", (dir / "data").string()},
+      (dir / "log").string());
+  ASSERT_EQ(imported.exit_code, 0) << imported.out << imported.err;
+  EXPECT_NE(imported.out.find("preview " + (previews / "standard-adult.png").string()),
+            std::string::npos)
+      << imported.out << imported.err;
+  EXPECT_NE(imported.err.find("runs cecum first"), std::string::npos) << imported.err;
+  const cv::Mat colon = cv::imread((previews / "standard-adult.png").string());
+  ASSERT_FALSE(colon.empty()) << imported.err;
+  EXPECT_EQ(colon.cols, 640);
+  EXPECT_EQ(colon.rows, 720);
+  int yellow = 0;
+  for (int y = 0; y < colon.rows; ++y) {
+    for (int x = 0; x < colon.cols; ++x) {
+      const cv::Vec3b bgr = colon.at<cv::Vec3b>(y, x);
+      yellow += bgr[0] < 80 && bgr[1] > 150 && bgr[2] > 180;
+    }
+  }
+  EXPECT_GT(yellow, 500);  // nine names and dots: rectum ... cecum and the anus
+  EXPECT_EQ(ReadFile(previews / "forward.png"), ReadFile(previews / "backward.png"));
   fs::remove_all(dir);
 }
 
