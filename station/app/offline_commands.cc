@@ -9,6 +9,7 @@
 #include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
 #include "patient_db/limits.h"
+#include "station/app/case_argument.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/sync/case_cache.h"
@@ -115,7 +116,7 @@ int RunExportCaseCommand(const CommandArgs& args) {
     return *stop;
   }
   try {
-    sync::CaseCache cache(Paths(vm).cases());
+    sync::CaseCache cache = OpenCaseCache(Paths(vm), std::cout);
     const auto entry =
         cache.ExportBundleFile(vm["case"].as<std::string>(), vm["out"].as<std::string>());
     std::cout << "exported " << entry.id << " v" << entry.version << " to "
@@ -137,7 +138,7 @@ int RunStatusCommand(const CommandArgs& args) {
   }
   try {
     const auto paths = Paths(vm);
-    sync::CaseCache cache(paths.cases());
+    sync::CaseCache cache = OpenCaseCache(paths, std::cout);
     std::vector<std::string> damaged;
     const auto cases = cache.List(&damaged);
     std::cout << "data folder: " << paths.root.string() << "\n";

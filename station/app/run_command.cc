@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "patient_db/limits.h"
+#include "station/app/case_argument.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
@@ -692,7 +693,7 @@ int Run(RunOptions o) {
   ves::v1::EndoscopeSpec scope;
   training::CaseRun run;
   try {
-    sync::CaseCache cache(paths.cases());
+    sync::CaseCache cache = OpenCaseCache(paths, std::cout);
     if (!o.lesson.empty()) {  // LessonRefused: no lesson, or its case fails verification
       sync::LessonCache lesson_cache(paths.lessons());
       o.lesson_plan = ObtainNextLesson(o.server, o.trainee_id, lesson_cache, std::cerr);
@@ -707,8 +708,8 @@ int Run(RunOptions o) {
       obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
     }
     if (!obtained) {
-      std::cerr << kName << ": case '" << o.case_id << "' is not in the offline cache"
-                << (o.server ? " and the server did not provide it" : " (no --server given)")
+      std::cerr << kName << ": " << UnknownCaseMessage(o.case_id, cache)
+                << (o.server ? " (and the server did not provide it)" : " (no --server given)")
                 << "\n";
       return kExitUsage;
     }
