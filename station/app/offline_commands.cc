@@ -2,6 +2,8 @@
 // library (the paper's CD-ROM), its pending uploads and lesson verdicts.
 #include <boost/program_options.hpp>
 
+#include <cstdio>
+#include <ctime>
 #include <iostream>
 #include <optional>
 #include <string_view>
@@ -17,6 +19,7 @@
 #include "station/sync/outbox.h"
 #include "station/sync/session_journal.h"
 #include "station/sync/station_paths.h"
+#include "station/training/session.h"
 
 namespace ves::station {
 namespace po = boost::program_options;
@@ -35,6 +38,20 @@ std::optional<int> ParseOfflineArgs(std::string_view name, std::string_view usag
 
 // Text from the outbox or the server, safe for the terminal.
 std::string Shown(const std::string& text) { return patient_db::PrintableExcerpt(text, 256); }
+
+// How many of the stored sessions `status` lists (the newest).
+constexpr std::size_t kStatusSessions = 50;
+
+// "2026-12-07 14:31" in the station's local time.
+std::string LocalTime(int64_t unix_ms) {
+  const std::time_t seconds = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm local{};
+  char text[32] = "-";
+  if (localtime_r(&seconds, &local) != nullptr) {
+    std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M", &local);
+  }
+  return text;
+}
 
 sync::StationPaths Paths(const po::variables_map& vm) {
   return sync::ResolveStationPaths(vm["data-dir"].as<std::string>());
@@ -149,6 +166,26 @@ int RunStatusCommand(const CommandArgs& args) {
     }
     for (const auto& problem : damaged) std::cout << "  DAMAGED " << problem << "\n";
     sync::Outbox outbox(paths.outbox_db());
+    // The station's sessions, delivered or not: when, who, what, how it went.
+    const std::size_t stored_count = outbox.StoredCount();
+    std::cout << "sessions stored: " << stored_count;
+    if (stored_count > kStatusSessions) std::cout << " (the last " << kStatusSessions << ")";
+    std::cout << "\n";
+    for (const auto& stored : outbox.Stored(kStatusSessions)) {
+      std::cout << "  ";
+      if (!stored.readable) {
+        std::cout << Shown(stored.uuid) << "  unreadable  " << stored.state << "\n";
+        continue;
+      }
+      const ves::v1::SessionRecord& record = stored.record;
+      char score[32];
+      std::snprintf(score, sizeof(score), "%.1f", record.score());
+      std::cout << LocalTime(record.start_unix_ms()) << "  trainee=" << Shown(record.trainee_id())
+                << "  case=" << Shown(record.case_id()) << "  outcome="
+                << training::OutcomeName(static_cast<training::Outcome>(record.outcome()))
+                << "  score=" << score << "  " << stored.state << "  " << Shown(stored.uuid)
+                << "\n";
+    }
     const auto pending = outbox.Pending();
     std::cout << "pending uploads: " << pending.size() << "\n";
     for (const auto& upload : pending) {
