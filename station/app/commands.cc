@@ -8,7 +8,7 @@ const std::vector<Command>& AllCommands() {
       {"replay", "re-run a session file's input log and recompute its metrics", RunReplayCommand},
       {"import-case", "import case bundles (*.vescase) into the offline cache", RunImportCaseCommand},
       {"export-case", "write a cached case to a bundle file", RunExportCaseCommand},
-      {"status", "list cached cases and pending uploads", RunStatusCommand},
+      {"status", "list cached cases, stored sessions and pending uploads", RunStatusCommand},
       {"haptic-check", "run the haptic device's free/spring experiment", RunHapticCheckCommand},
       {"sim", "run the endoscope-colon model on a case, write a CSV", RunSimCommand},
       {"snapshot", "insert the scope into a case, write the endoscope and X-ray views",

@@ -1,5 +1,6 @@
 #include "station/app/haptic_session.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -28,7 +29,18 @@ void SessionModelSource::Start(std::int64_t start_unix_ms, double device_inserti
   insertion_offset_m_ = runner_->state().inserted_m - device_insertion_m;
   roll_offset_rad_ = runner_->state().roll_rad - device_roll_rad;
   have_previous_ = false;
+  armed_ = false;
   runner_->Start(start_unix_ms);
+}
+
+void SessionModelSource::Arm(double device_insertion_m, double device_roll_rad) {
+  if (runner_->session().state() != training::SessionState::kReady) {
+    throw std::logic_error("SessionModelSource::Arm: the session is not ready");
+  }
+  insertion_offset_m_ = runner_->state().inserted_m - device_insertion_m;
+  roll_offset_rad_ = runner_->state().roll_rad - device_roll_rad;
+  have_previous_ = false;
+  armed_ = true;
 }
 
 haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll_rad,
@@ -37,6 +49,18 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   haptics::BaseResponse response;
   response.update_count = ++updates_;
   stepped_ = false;
+  if (armed_ && std::isfinite(insertion_m) &&
+      insertion_m + insertion_offset_m_ - runner_->state().inserted_m >= kStartInsertion_m) {
+    // The first insertion past the anus: the session's clock starts now.
+    armed_ = false;
+    const std::int64_t start_unix_ms =
+        now_unix_ms_ ? now_unix_ms_()
+                     : std::chrono::duration_cast<std::chrono::milliseconds>(
+                           std::chrono::system_clock::now().time_since_epoch())
+                           .count();
+    runner_->Start(start_unix_ms);
+    if (on_start_) on_start_(start_unix_ms);
+  }
   if (runner_->session().state() != training::SessionState::kRunning) return response;
   if (!std::isfinite(insertion_m) || !std::isfinite(roll_rad)) {
     response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();

@@ -53,9 +53,29 @@ class SessionModelSource final : public haptics::BaseResponseSource {
                      const haptics::SeqLock<ModelControls>* controls,
                      double coupling_stiffness_N_per_m = kCouplingStiffness_N_per_m);
 
+  // How far past the anus the scope must first go in for an armed session
+  // to start: 2 mm, far above the encoders' noise (micrometres) and a
+  // fraction of one push (the keyboard's is 5 mm).
+  static constexpr double kStartInsertion_m = 0.002;
+
   // Starts the runner's session (it must be ready) with the model's insertion
   // and roll mapped onto the device's present readings.
   void Start(std::int64_t start_unix_ms, double device_insertion_m, double device_roll_rad);
+  // The interactive start (docs/station-run.md, "A sitting"): the model is
+  // mapped onto the device's present readings as by Start, but the session
+  // (it must be ready) starts only at the first insertion past the anus, when
+  // the device has moved the scope kStartInsertion_m in from there; until
+  // then Update steps nothing, logs nothing and renders no force, so the
+  // clock does not run while the window opens or the trainee reads. The
+  // session then starts at `now_unix_ms()` and on_start (if set) is called,
+  // both on the loop thread.
+  void Arm(double device_insertion_m, double device_roll_rad);
+  bool armed() const { return armed_; }
+  // Set before the loop starts. The clock defaults to the system's.
+  void set_clock(std::function<std::int64_t()> now_unix_ms) { now_unix_ms_ = std::move(now_unix_ms); }
+  void set_on_start(std::function<void(std::int64_t start_unix_ms)> hook) {
+    on_start_ = std::move(hook);
+  }
 
   // Loop thread. While the session runs: one model step. Otherwise an idle
   // response (no force) whose update count still advances: the model thread
@@ -88,6 +108,9 @@ class SessionModelSource final : public haptics::BaseResponseSource {
   double roll_offset_rad_{0.0};
   std::function<void(double, double)> before_update_;
   std::function<void(const training::SessionRunner&)> after_step_;
+  std::function<std::int64_t()> now_unix_ms_;
+  std::function<void(std::int64_t)> on_start_;
+  bool armed_{false};
   std::uint64_t updates_{0};
   std::uint64_t model_steps_{0};
   bool stepped_{false};

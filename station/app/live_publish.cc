@@ -163,12 +163,16 @@ void InteractiveLive::OnPublication(const std::string& session_uuid, bool runnin
       ending_.push_back(std::move(current_));
     }
     current_uuid_ = session_uuid;
-    // A session over before its first publication has nothing to show.
-    if (running && !session_uuid.empty()) {
-      current_ = std::make_unique<LivePublisher>(server_, session_uuid, trainee_id_, case_id_,
-                                                 case_version_);
-      ++sessions_;
-    }
+    current_streamed_ = false;
+  }
+  // Its stream opens with its first running publication: a session is
+  // published ready (armed, before its first insertion) first, and one over
+  // before it ran has nothing to show.
+  if (!current_ && !current_streamed_ && running && !session_uuid.empty()) {
+    current_ = std::make_unique<LivePublisher>(server_, session_uuid, trainee_id_, case_id_,
+                                               case_version_);
+    current_streamed_ = true;
+    ++sessions_;
   }
   if (!current_) return;
   current_->OnState(t_s, make, running ? jpeg : std::function<std::string()>{});

@@ -109,6 +109,7 @@ class InteractiveLive {
   std::string case_id_;
   uint32_t case_version_;
   std::string current_uuid_;
+  bool current_streamed_{false};  // current_uuid_'s stream was opened (it may have ended)
   std::unique_ptr<LivePublisher> current_;
   std::vector<std::unique_ptr<LivePublisher>> ending_;
   int sessions_{0};

@@ -1,6 +1,9 @@
 // ves-station import-case / export-case / status: the station's offline case
 // library (the paper's CD-ROM), its pending uploads and lesson verdicts.
 #include <boost/program_options.hpp>
+
+#include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
@@ -10,6 +13,7 @@
 #include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
 #include "patient_db/limits.h"
+#include "station/app/case_argument.h"
 #include "station/app/case_preview.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
@@ -18,6 +22,7 @@
 #include "station/sync/outbox.h"
 #include "station/sync/session_journal.h"
 #include "station/sync/station_paths.h"
+#include "station/training/session.h"
 
 namespace ves::station {
 namespace po = boost::program_options;
@@ -36,6 +41,20 @@ std::optional<int> ParseOfflineArgs(std::string_view name, std::string_view usag
 
 // Text from the outbox or the server, safe for the terminal.
 std::string Shown(const std::string& text) { return patient_db::PrintableExcerpt(text, 256); }
+
+// How many of the stored sessions `status` lists (the newest).
+constexpr std::size_t kStatusSessions = 50;
+
+// "2026-12-07 14:31" in the station's local time.
+std::string LocalTime(int64_t unix_ms) {
+  const std::time_t seconds = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm local{};
+  char text[32] = "-";
+  if (localtime_r(&seconds, &local) != nullptr) {
+    std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M", &local);
+  }
+  return text;
+}
 
 sync::StationPaths Paths(const po::variables_map& vm) {
   return sync::ResolveStationPaths(vm["data-dir"].as<std::string>());
@@ -156,7 +175,7 @@ int RunExportCaseCommand(const CommandArgs& args) {
     return *stop;
   }
   try {
-    sync::CaseCache cache(Paths(vm).cases());
+    sync::CaseCache cache = OpenCaseCache(Paths(vm), std::cout);
     const auto entry =
         cache.ExportBundleFile(vm["case"].as<std::string>(), vm["out"].as<std::string>());
     std::cout << "exported " << entry.id << " v" << entry.version << " to "
@@ -178,7 +197,7 @@ int RunStatusCommand(const CommandArgs& args) {
   }
   try {
     const auto paths = Paths(vm);
-    sync::CaseCache cache(paths.cases());
+    sync::CaseCache cache = OpenCaseCache(paths, std::cout);
     std::vector<std::string> damaged;
     const auto cases = cache.List(&damaged);
     std::cout << "data folder: " << paths.root.string() << "\n";
@@ -189,6 +208,26 @@ int RunStatusCommand(const CommandArgs& args) {
     }
     for (const auto& problem : damaged) std::cout << "  DAMAGED " << problem << "\n";
     sync::Outbox outbox(paths.outbox_db());
+    // The station's sessions, delivered or not: when, who, what, how it went.
+    const std::size_t stored_count = outbox.StoredCount();
+    std::cout << "sessions stored: " << stored_count;
+    if (stored_count > kStatusSessions) std::cout << " (the last " << kStatusSessions << ")";
+    std::cout << "\n";
+    for (const auto& stored : outbox.Stored(kStatusSessions)) {
+      std::cout << "  ";
+      if (!stored.readable) {
+        std::cout << Shown(stored.uuid) << "  unreadable  " << stored.state << "\n";
+        continue;
+      }
+      const ves::v1::SessionRecord& record = stored.record;
+      char score[32];
+      std::snprintf(score, sizeof(score), "%.1f", record.score());
+      std::cout << LocalTime(record.start_unix_ms()) << "  trainee=" << Shown(record.trainee_id())
+                << "  case=" << Shown(record.case_id()) << "  outcome="
+                << training::OutcomeName(static_cast<training::Outcome>(record.outcome()))
+                << "  score=" << score << "  " << stored.state << "  " << Shown(stored.uuid)
+                << "\n";
+    }
     const auto pending = outbox.Pending();
     std::cout << "pending uploads: " << pending.size() << "\n";
     for (const auto& upload : pending) {

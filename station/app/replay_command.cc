@@ -10,6 +10,7 @@
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/training/case_run.h"
+#include "station/training/debrief.h"
 #include "station/training/input_log.h"
 #include "station/training/session_file.h"
 
@@ -18,9 +19,11 @@ namespace po = boost::program_options;
 namespace {
 
 constexpr char kUsage[] =
-    "usage: ves-station replay SESSION_FILE [--csv OUT]\n\n"
+    "usage: ves-station replay SESSION_FILE [--csv OUT] [--debrief]\n\n"
     "Re-runs the model from the session's input log alone and prints\n"
     "outcome=... time_to_cecum_s=... pain_s=... loop_s=... peak_force_N=... xray_s=... score=...\n"
+    "With --debrief, then the score's weighed parts, one a line, with where and when each\n"
+    "cost points (docs/scoring.md, \"Debrief\"), as the station prints them at the quit.\n"
     "A truncated or corrupted file is refused (exit status 2).";
 
 void WriteCsvHeader(std::ostream& out) {
@@ -48,7 +51,8 @@ int RunReplayCommand(const CommandArgs& args) {
   po::options_description options("options");
   options.add_options()("help,h", "show this help")("session", po::value<std::string>(),
                                                     "session file (*.session)")(
-      "csv", po::value<std::string>(), "write the replayed run, one row per model step, to OUT");
+      "csv", po::value<std::string>(), "write the replayed run, one row per model step, to OUT")(
+      "debrief", "also print the score's weighed parts (docs/scoring.md, \"Debrief\")");
   po::positional_options_description positional;
   positional.add("session", 1);
   po::variables_map vm;
@@ -92,6 +96,7 @@ int RunReplayCommand(const CommandArgs& args) {
                 << " (recorded with build '" << record.software_version() << "')\n";
     }
     std::cout << training::SummaryLine(result) << "\n";
+    if (vm.count("debrief")) std::cout << training::DebriefText(result.debrief, "  ");
   } catch (const training::SessionFileError& e) {
     std::cerr << "ves-station replay: " << path << ": " << e.what() << "\n";
     return 2;

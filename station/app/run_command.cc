@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "patient_db/limits.h"
+#include "station/app/case_argument.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/haptic_session.h"
@@ -43,6 +44,7 @@
 #include "station/haptics/candump_log.h"
 #include "station/haptics/sim_rig.h"
 #include "station/render/model_scene.h"
+#include "station/render/render_error.h"
 #include "station/sync/session_journal.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_run.h"
@@ -50,6 +52,7 @@
 #include "station/training/scripted_operator.h"
 #include "station/training/session_file.h"
 #include "station/training/session_runner.h"
+#include "station/training/sitting.h"
 #include "station/training/uuid.h"
 
 namespace ves::station {
@@ -432,7 +435,9 @@ class SittingRecords {
                  sync::LessonCache* lessons)
       : o_(o), paths_(paths), lessons_(lessons) {}
 
-  void Keep(ves::v1::SessionRecord record) {
+  void Keep(EndedSession ended) {
+    ves::v1::SessionRecord& record = ended.record;
+    sitting_.Add(record, ended.result);
     // Every repeat is an attempt. The aids were enforced: a wireframe-free
     // lesson cannot have used the wireframe view.
     if (o_.lesson_plan) {
@@ -464,6 +469,8 @@ class SittingRecords {
     return true;
   }
   const std::vector<std::string>& uuids() const { return uuids_; }
+  // Every session kept, with its result: the sitting's summary.
+  const training::Sitting& sitting() const { return sitting_; }
 
  private:
   // The record is in the outbox: its journal is no longer needed.
@@ -477,6 +484,7 @@ class SittingRecords {
   sync::LessonCache* lessons_;
   std::vector<std::string> uuids_;
   std::vector<ves::v1::SessionRecord> held_;
+  training::Sitting sitting_;
 };
 
 // Writes `line` and a newline to `path`; false when that fails.
@@ -692,7 +700,7 @@ int Run(RunOptions o) {
   ves::v1::EndoscopeSpec scope;
   training::CaseRun run;
   try {
-    sync::CaseCache cache(paths.cases());
+    sync::CaseCache cache = OpenCaseCache(paths, std::cout);
     if (!o.lesson.empty()) {  // LessonRefused: no lesson, or its case fails verification
       sync::LessonCache lesson_cache(paths.lessons());
       o.lesson_plan = ObtainNextLesson(o.server, o.trainee_id, lesson_cache, std::cerr);
@@ -707,8 +715,8 @@ int Run(RunOptions o) {
       obtained = ObtainCase(o.server, o.case_id, cache, std::cerr);
     }
     if (!obtained) {
-      std::cerr << kName << ": case '" << o.case_id << "' is not in the offline cache"
-                << (o.server ? " and the server did not provide it" : " (no --server given)")
+      std::cerr << kName << ": " << UnknownCaseMessage(o.case_id, cache)
+                << (o.server ? " (and the server did not provide it)" : " (no --server given)")
                 << "\n";
       return kExitUsage;
     }
@@ -762,15 +770,22 @@ int Run(RunOptions o) {
           run, obtained->colon_case, o.seconds, std::move(device),
           o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
           o.lesson_plan ? nullptr : &choices, &live,
-          [&sitting](ves::v1::SessionRecord record) { sitting.Keep(std::move(record)); },
+          [&sitting](EndedSession ended) { sitting.Keep(std::move(ended)); },
           paths.journal());
+    } catch (const render::RenderError& error) {  // no EGL/OpenGL ES here
+      // One line that says what to do (the error names what is missing).
+      std::cerr << kName << ": the views cannot render (" << error.what()
+                << "): install the GPU's or Mesa's EGL and OpenGL ES 3 drivers "
+                   "(deploy/install-deps.sh), or run --headless\n";
+      if (sitting.uuids().empty()) return kExitFailed;
+      break;
     } catch (const std::exception& error) {  // no display, the device did not come up
       std::cerr << kName << ": " << error.what() << "\n";
       if (sitting.uuids().empty()) return kExitFailed;
       break;  // what the earlier runs recorded is already committed
     }
     std::cout << interactive.device_report << "\n" << interactive.live_report;
-    for (auto& record : interactive.records) sitting.Keep(std::move(record));
+    for (auto& ended : interactive.records) sitting.Keep(std::move(ended));
     if (!interactive.next_case || !interactive.next_scope) break;
     try {
       choices.current_case = *interactive.next_case;
@@ -794,7 +809,7 @@ int Run(RunOptions o) {
     }
   }
   if (sitting.uuids().empty()) {
-    std::cout << "quit before the session started: nothing to record\n";
+    std::cout << sitting.sitting().Report();
     return kExitOk;
   }
   if (!sitting.CommitHeld()) return kExitFailed;
@@ -804,7 +819,9 @@ int Run(RunOptions o) {
     CollectServerVerdicts(*o.server, *lessons, sitting.uuids().back(), o.verdict_wait_s,
                           std::cout);
   }
-  std::cout << training::SummaryLine(interactive.result) << "\n";
+  // Every session of the sitting, not only the last (the summary lines as
+  // `ves-station replay` prints them), then the best and the last.
+  std::cout << sitting.sitting().Report();
   if (interactive.result.diverged) {
     std::cerr << kName << ": the model diverged: the session did not run to its end\n";
     return kExitFailed;

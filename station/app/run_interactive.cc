@@ -238,6 +238,9 @@ class LoopSession {
         published_mutex_(published_mutex),
         published_(published) {
     source_.set_before_update([this](double insertion_m, double roll_rad) {
+      // An armed session does not step: it is shown ready once the UI is not
+      // reading (try_lock), with the model back at the anus.
+      if (ready_publication_due_) ready_publication_due_ = !Publish();
       const bool finished = runner_.session().state() == training::SessionState::kFinished;
       // A session that just ended is shown as over (once the UI is not
       // reading: try_lock), though no model step publishes it any more.
@@ -259,7 +262,13 @@ class LoopSession {
       ended_.store(false, std::memory_order_release);
       session_uuid_ = training::NewUuidV4();  // a one-off, like KeepRecord's record
       final_published_ = false;
-      source_.Start(start_ms_ = NowUnixMs(), insertion_m, roll_rad);
+      // Clean: the new session starts at its first insertion (on_start).
+      source_.Arm(insertion_m, roll_rad);
+      ready_publication_due_ = true;
+    });
+    source_.set_clock(NowUnixMs);
+    source_.set_on_start([this](std::int64_t start_unix_ms) {
+      start_ms_ = start_unix_ms;
       JournalStart();
     });
     source_.set_after_step([this](const training::SessionRunner& runner) {
@@ -277,10 +286,10 @@ class LoopSession {
     health_source_ = std::move(source);
     health_to_record_ = std::move(to_record);
   }
+  // The first session, armed: it starts at the first insertion past the anus.
   void Start(double device_insertion_m, double device_roll_rad) {
-    source_.Start(start_ms_ = NowUnixMs(), device_insertion_m, device_roll_rad);
-    JournalStart();
-    Publish();
+    source_.Arm(device_insertion_m, device_roll_rad);
+    ready_publication_due_ = !Publish();
   }
   // UI thread, each frame: what the journal is to hold since the last call.
   void DrainJournal(JournalKeeper* keeper) {
@@ -293,8 +302,8 @@ class LoopSession {
   void RequestRepeat() { repeat_requests_.fetch_add(1, std::memory_order_acq_rel); }
   // UI thread, each frame: the records of the sessions that ended since the
   // last call, oldest first (usually none).
-  std::vector<ves::v1::SessionRecord> TakeEndedRecords() {
-    std::vector<ves::v1::SessionRecord> taken;
+  std::vector<EndedSession> TakeEndedRecords() {
+    std::vector<EndedSession> taken;
     if (!ended_.load(std::memory_order_acquire) && !handed_over_.load(std::memory_order_acquire)) {
       return taken;
     }
@@ -369,7 +378,7 @@ class LoopSession {
     ves::v1::SessionRecord record = session.ToRecord(session_uuid_, start_ms_ + duration_ms);
     *record.mutable_replay_setup() = training::MakeReplaySetup(colon_case_, {}, time_limit_s_);
     if (health_to_record_) *record.mutable_station_health() = health_to_record_(health);
-    ready_.push_back(std::move(record));
+    ready_.push_back(EndedSession{std::move(record), last_result_});
     handed_over_.store(true, std::memory_order_release);
   }
 
@@ -384,6 +393,7 @@ class LoopSession {
   std::uint32_t repeats_done_{0};
   int steps_since_publish_{0};
   bool final_published_{false};
+  bool ready_publication_due_{false};
   std::int64_t start_ms_{0};
   std::string session_uuid_{training::NewUuidV4()};
   std::function<HealthFigures()> health_source_;
@@ -394,7 +404,7 @@ class LoopSession {
   std::atomic<bool> handed_over_{false};  // ready_ has records
   std::mutex record_mutex_;
   bool kept_{false};  // the current session's record is in ready_ (or it had no step)
-  std::vector<ves::v1::SessionRecord> ready_;
+  std::vector<EndedSession> ready_;
   training::RunResult last_result_;
   haptics::SpscRing<JournalEntry> journal_ring_{kJournalRingEntries};
 };
@@ -594,7 +604,7 @@ class CoupledLoop {
     }
   }
   // UI thread: the records of sessions that ended since the last call.
-  std::vector<ves::v1::SessionRecord> TakeEndedRecords() { return session_.TakeEndedRecords(); }
+  std::vector<EndedSession> TakeEndedRecords() { return session_.TakeEndedRecords(); }
   // UI thread: the running session's new inputs to the journal (null: none kept).
   void DrainJournal(JournalKeeper* keeper) { session_.DrainJournal(keeper); }
   // After Stop().
@@ -657,7 +667,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
                              ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
                              haptics::SeqLock<HandTarget>* hand, InteractiveLive* live,
                              JournalKeeper* journal,
-                             const std::function<void(ves::v1::SessionRecord)>& keep) {
+                             const std::function<void(EndedSession)>& keep) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
   auto enforce_aids = [lesson_aids](ui::ControlState* c) {
@@ -692,7 +702,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
     const bool fresh =
         loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
     loop->DrainJournal(journal);  // before the records: an ended session's inputs are all in
-    for (auto& record : loop->TakeEndedRecords()) keep(std::move(record));
+    for (auto& session : loop->TakeEndedRecords()) keep(std::move(session));
     if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
@@ -738,8 +748,11 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       return {controls.case_choice, controls.scope_choice};
     }
     if (controls.repeat_requested) {
-      // The hand stays where it is; the new session maps the model onto it.
+      // The hand stays where it is; the new session maps the model onto it
+      // and starts clean (X-ray off, C-arm home) at its first insertion.
       controls.repeat_requested = false;
+      ui::StartClean(&controls);
+      enforce_aids(&controls);
       loop->Repeat(snapshot.fault);
     }
     hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
@@ -770,14 +783,14 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   CoupledLoop loop(run, colon_case, time_limit_s, &rig);
   // Records of sessions that end while the screen runs: to the caller at
   // once (its journal locked until then), or kept for the result.
-  std::vector<ves::v1::SessionRecord> ended;
-  const auto keep = [&](ves::v1::SessionRecord record) {
+  std::vector<EndedSession> ended;
+  const auto keep = [&](EndedSession session) {
     if (on_session_ended) {
-      const std::string uuid = record.uuid();
-      on_session_ended(std::move(record));
+      const std::string uuid = session.record.uuid();
+      on_session_ended(std::move(session));
       if (journal) journal->Release(uuid);
     } else {
-      ended.push_back(std::move(record));
+      ended.push_back(std::move(session));
     }
   };
   const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
@@ -787,7 +800,7 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   InteractiveResult result = loop.Finish();
   if (on_session_ended) {
     // The last session's too, while the journal keeper still holds its lock.
-    for (auto& record : result.records) keep(std::move(record));
+    for (auto& session : result.records) keep(std::move(session));
     result.records.clear();
   }
   result.records.insert(result.records.begin(), std::make_move_iterator(ended.begin()),

@@ -9,6 +9,7 @@
 #include "station/haptics/can_bus.h"
 #include "station/sync/server_client.h"
 #include "station/training/case_run.h"
+#include "station/training/replay.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
 #include "ves/v1/session.pb.h"
@@ -19,11 +20,19 @@
 // moves the simulated hand (docs/station-run.md).
 namespace ves::station {
 
+// A session that ran (went in past the anus): its record and its result
+// (what the summary line and the debrief show).
+struct EndedSession {
+  ves::v1::SessionRecord record;
+  training::RunResult result;
+};
+
 struct InteractiveResult {
   // Every session that ran at least one step and was not handed to the
   // caller's SessionEndedCallback, oldest first: each "repeat" finishes the
-  // current one (aborted if still running) and starts another.
-  std::vector<ves::v1::SessionRecord> records;
+  // current one (aborted if still running) and starts another. A session
+  // that never went in past the anus did not start: it is none of them.
+  std::vector<EndedSession> records;
   training::RunResult result;  // of the last one
   std::string device_report;   // DeviceReportLine of the run
   std::string live_report;     // "live: ..." when it streamed; "" otherwise
@@ -60,7 +69,7 @@ struct InteractiveLiveTarget {
 // Called on the UI thread with each session's record as soon as the session
 // ends (cecum, time limit, or a repeat), with the station's health as it
 // ended, so that the caller can commit it at once.
-using SessionEndedCallback = std::function<void(ves::v1::SessionRecord)>;
+using SessionEndedCallback = std::function<void(EndedSession)>;
 
 // Runs until the trainee quits (q / Esc) or the time limit of a session
 // passes and the trainee quits. Throws std::runtime_error when there is no

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "patient_db/case_format.h"
+#include "station/app/case_argument.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/run_sync.h"
@@ -33,14 +34,14 @@ constexpr char kName[] = "ves-station sim";
 constexpr double kRowPeriod_s = 0.010;
 
 constexpr char kUsage[] =
-    "usage: ves-station sim --case FILE [--scope FILE] (--push-force-N F | --insert-speed-mm-s V)\n"
+    "usage: ves-station sim --case FILE|ID [--scope FILE] (--push-force-N F | --insert-speed-mm-s V)\n"
     "                       --seconds T [--segments N] [--links n] [--stiff-colon] [--dt-ms DT]\n"
-    "                       --csv OUT\n"
+    "                       --csv OUT [--data-dir DIR]\n"
     "   or: ves-station sim --case FILE|ID --operator novice|expert --seconds T\n"
     "                       [--session-out FILE.session [--trainee ID] [--station-id S]]\n"
     "                       [--csv OUT] [--segments N] [--data-dir DIR] ...\n\n"
     "--case: a case file (.textproto, .vescase, .csv, .mrk.json) or the id of a case in the\n"
-    "station's offline cache. A --session-out file can be queued for upload with\n"
+    "station's offline cache (the shipped cases are there from the first start). A --session-out file can be queued for upload with\n"
     "`ves-station sync --add FILE.session` (it needs --trainee).\n"
     "Runs the endoscope-colon model (paper §3) on a case and writes one row per 10 ms:\n"
     "t_s,inserted_m,tip_arc_m,base_force_N,base_torque_Nm,peak_stretch_m,peak_stretch_arc_m,"
@@ -68,18 +69,11 @@ struct SimOptions {
   std::string data_dir;       // the offline cache, for --case ID
 };
 
-// --case FILE, or the newest cached version of --case ID. Throws CaseError or
-// std::runtime_error (not cached).
+// --case FILE, or the newest cached version of --case ID (the shipped cases
+// among them). Throws CaseError or UnknownCaseError.
 ves::v1::ColonCase LoadSimCase(const SimOptions& o) {
-  if (IsCaseFileArgument(o.case_path)) return patient_db::LoadCaseFile(o.case_path);
-  const sync::CaseCache cache(sync::ResolveStationPaths(o.data_dir).cases());
-  const auto entry = cache.FindLatest(o.case_path);
-  if (!entry) {
-    throw std::runtime_error("--case '" + o.case_path +
-                             "' is neither a case file (.textproto, .vescase, .csv, .mrk.json) "
-                             "nor a case in the offline cache " + cache.dir().string());
-  }
-  return cache.Load(entry->sha256_hex);
+  // Notes on stderr: stdout is the summary line.
+  return LoadCaseArgument(o.case_path, sync::ResolveStationPaths(o.data_dir), std::cerr);
 }
 
 struct UsageError : std::runtime_error {
@@ -88,7 +82,7 @@ struct UsageError : std::runtime_error {
 
 SimOptions ParseSimOptions(const po::variables_map& vm) {
   SimOptions o;
-  if (!vm.count("case")) throw UsageError("--case FILE is required");
+  if (!vm.count("case")) throw UsageError("--case FILE|ID is required");
   if (!vm.count("seconds")) throw UsageError("--seconds T is required");
   if (!vm.count("csv") && !vm.count("operator")) throw UsageError("--csv OUT is required");
   o.case_path = vm["case"].as<std::string>();

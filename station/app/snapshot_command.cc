@@ -12,6 +12,7 @@
 #include <string>
 
 #include "patient_db/case_format.h"
+#include "station/app/case_argument.h"
 #include "station/app/command_line.h"
 #include "station/app/commands.h"
 #include "station/app/run_views.h"
@@ -21,6 +22,7 @@
 #include "station/render/fluoroscopy_view.h"
 #include "station/render/model_scene.h"
 #include "station/render/mucosa_texture.h"
+#include "station/sync/station_paths.h"
 #include "station/training/case_model.h"
 
 namespace ves::station {
@@ -33,9 +35,12 @@ constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 constexpr double kSettle_s = 0.5;  // knobs turned and the model settled after inserting
 
 constexpr char kUsage[] =
-    "usage: ves-station snapshot --case FILE --insert-mm L [--knob-ud DEG --knob-lr DEG]\n"
+    "usage: ves-station snapshot --case FILE|ID --insert-mm L [--knob-ud DEG --knob-lr DEG]\n"
     "                            [--c-arm-deg A [--tilt-deg T]] [--zoom Z]\n"
-    "                            [--width W --height H] [--segments N] --out DIR\n\n"
+    "                            [--width W --height H] [--segments N] [--data-dir DIR]\n"
+    "                            --out DIR\n\n"
+    "--case: a case file (.textproto, .vescase, .csv, .mrk.json) or the id of a case in the\n"
+    "station's offline cache (the shipped cases are there from the first start), as for run.\n"
     "Inserts the scope L mm with the model (position-driven), turns the knobs, and writes\n"
     "endoscope_wireframe.png, endoscope_polygon.png, endoscope_texture.png,\n"
     "fluoroscopy_ap.png and fluoroscopy_lateral.png into DIR; with --c-arm-deg also\n"
@@ -49,6 +54,7 @@ struct UsageError : std::runtime_error {
 
 struct SnapshotOptions {
   std::string case_path;
+  std::string data_dir;  // the offline cache, for --case ID
   double insert_m{0.0};
   double insert_speed_m_per_s{0.1};
   double knob_up_rad{0.0};
@@ -73,10 +79,11 @@ double Checked(const po::variables_map& vm, const char* name, double low, double
 
 SnapshotOptions ParseOptions(const po::variables_map& vm) {
   SnapshotOptions o;
-  if (!vm.count("case")) throw UsageError("--case FILE is required");
+  if (!vm.count("case")) throw UsageError("--case FILE|ID is required");
   if (!vm.count("insert-mm")) throw UsageError("--insert-mm L is required");
   if (!vm.count("out")) throw UsageError("--out DIR is required");
   o.case_path = vm["case"].as<std::string>();
+  o.data_dir = vm["data-dir"].as<std::string>();
   o.insert_m = Checked(vm, "insert-mm", 0.0, 2000.0) * 1e-3;
   o.insert_speed_m_per_s = Checked(vm, "insert-speed-mm-s", 1.0, 1000.0) * 1e-3;
   o.knob_up_rad = Checked(vm, "knob-ud", -180.0, 180.0) * kDegToRad;
@@ -134,7 +141,8 @@ int RunSnapshot(const SnapshotOptions& o) {
   model::ModelParams params;
   cv::Mat case_texture;
   try {
-    colon_case = patient_db::LoadCaseFile(o.case_path);
+    colon_case =
+        LoadCaseArgument(o.case_path, sync::ResolveStationPaths(o.data_dir), std::cerr);
     training::CaseModelOptions case_options;
     case_options.segments = o.segments;
     params = training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(), case_options);
@@ -142,7 +150,7 @@ int RunSnapshot(const SnapshotOptions& o) {
       case_texture = render::DecodeMucosaTexture(colon_case.mucosa_texture().image());
     }
     std::filesystem::create_directories(o.out_dir);
-  } catch (const std::exception& e) {  // CaseError, invalid_argument, filesystem_error
+  } catch (const std::exception& e) {  // CaseError, UnknownCaseError, invalid_argument, filesystem_error
     std::cerr << kName << ": " << e.what() << "\n";
     return 2;
   }
@@ -200,7 +208,7 @@ int RunSnapshot(const SnapshotOptions& o) {
 int RunSnapshotCommand(const CommandArgs& args) {
   po::options_description desc("options");
   desc.add_options()("help,h", "show this help")("case", po::value<std::string>(),
-                                                 "colon case file (.textproto, .vescase, ...)")(
+                                                 "colon case file (.textproto, .vescase, .csv, .mrk.json) or cached case id")(
       "insert-mm", po::value<double>(), "inserted length past the anus, mm")(
       "insert-speed-mm-s", po::value<double>()->default_value(100.0), "insertion speed, mm/s")(
       "knob-ud", po::value<double>()->default_value(0.0), "up/down knob, degrees (+ up)")(
@@ -214,6 +222,8 @@ int RunSnapshotCommand(const CommandArgs& args) {
       "tilt-deg", po::value<double>()->default_value(0.0), "with --c-arm-deg: tilt, degrees")(
       "zoom", po::value<double>()->default_value(1.0),
       "fluoroscopy enlargement, 0.25..8, centred on the scope's tip")(
+      "data-dir", po::value<std::string>()->default_value(""),
+      "station data folder, for --case ID (default $VES_STATION_DIR or ~/.ves-station)")(
       "out", po::value<std::string>(), "output directory (created)");
   po::variables_map vm;
   if (auto stop = ParseCommandLine(kName, kUsage, args, desc, &vm)) return *stop;

@@ -3,6 +3,7 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace ves::sync {
@@ -179,6 +180,32 @@ std::vector<Outbox::SetAsideRecord> Outbox::SetAside() const {
     out.push_back({select.Text(0), static_cast<int>(select.Int(1)), select.Text(2)});
   }
   return out;
+}
+
+std::vector<Outbox::StoredSession> Outbox::Stored(std::size_t limit) const {
+  std::lock_guard lock(mutex_);
+  Statement select(db_,
+                   "SELECT uuid, record, state FROM outbox ORDER BY committed_seq DESC LIMIT ?",
+                   path_);
+  select.Bind(1, static_cast<int64_t>(limit));
+  std::vector<StoredSession> out;
+  while (select.Step()) {
+    StoredSession stored;
+    stored.uuid = select.Text(0);
+    stored.readable = stored.record.ParseFromString(select.Text(1));
+    const std::string state = select.Text(2);
+    stored.state = state == "acked" ? "delivered" : state == "rejected" ? "set aside" : "pending";
+    out.push_back(std::move(stored));
+  }
+  std::reverse(out.begin(), out.end());
+  return out;
+}
+
+std::size_t Outbox::StoredCount() const {
+  std::lock_guard lock(mutex_);
+  Statement count(db_, "SELECT COUNT(*) FROM outbox", path_);
+  count.Step();
+  return static_cast<std::size_t>(count.Int(0));
 }
 
 std::size_t Outbox::PendingCount() const {

@@ -60,6 +60,20 @@ class Outbox {
   };
   std::vector<SetAsideRecord> SetAside() const;
 
+  // Every stored session, pending, delivered or set aside: the station's
+  // own history, which `ves-station status` lists. The newest `limit` by
+  // commit, oldest first (a record carries its input log, megabytes for a
+  // long session: status reads a bounded number). A record that no longer
+  // parses is listed with readable false.
+  struct StoredSession {
+    std::string uuid;
+    std::string state;  // "pending", "delivered" or "set aside"
+    bool readable{true};
+    ves::v1::SessionRecord record;
+  };
+  std::vector<StoredSession> Stored(std::size_t limit) const;
+  std::size_t StoredCount() const;
+
   // The server acknowledged the record: it leaves the pending set (it is
   // kept, marked with the time, as the station's own history).
   void MarkAcknowledged(const std::string& uuid, int64_t acked_unix_ms);

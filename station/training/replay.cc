@@ -21,6 +21,11 @@ RunResult ResultOf(const SessionRunner& runner) {
   r.steps = s.steps();
   r.diverged = runner.diverged();
   r.deepest_region = RegionNameAt(runner.params().colon, r.metrics.max_tip_arc_m);
+  const SessionConfig& config = s.config();
+  r.debrief = CalcDebrief(r.metrics, r.events, config.difficulty, config.thresholds.cecum_arc_m,
+                          config.score, [&runner](double arc_m) {
+                            return RegionNameAt(runner.params().colon, arc_m);
+                          });
   return r;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "station/model/model.h"
+#include "station/training/debrief.h"
 #include "station/training/session_runner.h"
 #include "ves/v1/session.pb.h"
 
@@ -34,6 +35,7 @@ struct RunResult {
   std::uint64_t steps{0};
   bool diverged{false};
   std::string deepest_region;  // the region at metrics.max_tip_arc_m ("sigmoid", ...)
+  Debrief debrief;             // the score split into its weighed parts, with places
 
   bool operator==(const RunResult&) const = default;
 };

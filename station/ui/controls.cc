@@ -96,4 +96,12 @@ void ApplyFluoroWheel(int steps, ControlState* state) {
                                   kFluoroMinZoom, kFluoroMaxZoom);
 }
 
+void StartClean(ControlState* state) {
+  const ControlState home;
+  state->fluoroscopy_visible = home.fluoroscopy_visible;
+  state->fluoro_yaw_rad = home.fluoro_yaw_rad;
+  state->fluoro_pitch_rad = home.fluoro_pitch_rad;
+  state->fluoro_zoom = home.fluoro_zoom;
+}
+
 }  // namespace ves::ui

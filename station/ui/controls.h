@@ -34,6 +34,12 @@ struct ControlState {
   bool operator==(const ControlState&) const = default;
 };
 
+// A repeated session starts clean (docs/station-ui.md): the X-ray off and the
+// C-arm home (AP, no tilt, zoom 1), so no X-ray time is counted before the
+// trainee asks for it. The hand, the knobs, the view mode, the damage display
+// and the case and scope choices stay as they are.
+void StartClean(ControlState* state);
+
 // Step sizes and limits of the keyboard hand.
 struct KeyboardHand {
   double insertion_step_m{0.005};

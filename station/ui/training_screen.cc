@@ -319,7 +319,7 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
   std::string clock = Format("Session %.1f s", model.elapsed_s);
   if (model.time_limit_s > 0.0) clock += Format(" of %.0f s", model.time_limit_s);
   switch (model.phase) {
-    case SessionPhase::kReady: clock += "  - ready"; break;
+    case SessionPhase::kReady: clock += "  - ready: push the scope in to start"; break;
     case SessionPhase::kRunning: clock += "  - running"; break;
     case SessionPhase::kOver: clock += "  - over: " + model.outcome; break;
   }

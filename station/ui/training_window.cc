@@ -15,7 +15,8 @@ cv::Size ScreenSize() {
   if (display == nullptr) {
     const char* name = std::getenv("DISPLAY");
     throw std::runtime_error(std::string("cannot open the X display '") + (name ? name : "") +
-                             "' (run under X11, or use --headless, or xvfb-run)");
+                             "': start the station in its graphical session (docs/operations.md), "
+                             "under xvfb-run, or with --headless");
   }
   const int screen = DefaultScreen(display);
   const cv::Size size(DisplayWidth(display, screen), DisplayHeight(display, screen));
@@ -27,7 +28,8 @@ TrainingWindow::TrainingWindow(KeyboardHand hand) : hand_(hand) {
   const char* display = std::getenv("DISPLAY");
   if (display == nullptr || *display == '\0') {
     throw std::runtime_error(
-        "no display: DISPLAY is not set (run under X11, or use --headless, or xvfb-run)");
+        "no display (DISPLAY is not set): start the station in its graphical session "
+        "(docs/operations.md), under xvfb-run, or with --headless");
   }
   layout_ = MakeScreenLayout(ScreenSize());
   try {

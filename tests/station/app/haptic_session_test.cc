@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <stdexcept>
 #include <vector>
 
 #include "station/training/replay.h"
@@ -105,6 +107,53 @@ TEST_F(SessionModelSourceTest, TheLogAloneReplaysTheModelExactly) {
   EXPECT_EQ(replay.state().inserted_m, runner_.state().inserted_m);
   EXPECT_EQ(replay.state().roll_rad, runner_.state().roll_rad);
   EXPECT_EQ(replay.session().metrics(), runner_.session().metrics());
+}
+
+// Issue #48: the clock started when the window opened. An armed session
+// starts at the first insertion past the anus: until the device has moved
+// the scope kStartInsertion_m in from where it was armed, nothing is
+// stepped, logged or rendered, however long the trainee waits, turns the
+// scope or pulls it back.
+TEST_F(SessionModelSourceTest, AnArmedSessionStartsAtTheFirstInsertionPastTheAnus) {
+  std::int64_t clock_ms = 1000;
+  std::vector<std::int64_t> starts;
+  source_.set_clock([&] { return clock_ms; });
+  source_.set_on_start([&](std::int64_t start_unix_ms) { starts.push_back(start_unix_ms); });
+  const double armed_at_m = 0.30;  // wherever the hand holds the device
+  const double model_start_m = runner_.state().inserted_m;
+  source_.Arm(armed_at_m, 0.1);
+  EXPECT_TRUE(source_.armed());
+  EXPECT_EQ(runner_.session().state(), training::SessionState::kReady);
+  const double just_short_m = SessionModelSource::kStartInsertion_m - 0.0002;
+  for (int i = 0; i < 3000; ++i) {  // 3 s of waiting, turning, pulling back, almost pushing
+    clock_ms += 1;
+    const double insertion_m = armed_at_m + (i < 1500 ? -0.01 : just_short_m);
+    const haptics::BaseResponse idle = source_.Update(insertion_m, 0.1 + 0.001 * i, params_.dt_s);
+    ASSERT_EQ(idle.thrust_force_N, 0.0) << i;
+    ASSERT_EQ(idle.roll_torque_Nm, 0.0) << i;
+    ASSERT_FALSE(source_.stepped()) << i;
+  }
+  EXPECT_EQ(runner_.session().steps(), 0u);
+  EXPECT_EQ(runner_.session().state(), training::SessionState::kReady);
+  EXPECT_TRUE(starts.empty());
+  // In past the anus: the session starts with this very reading, its clock at 0.
+  clock_ms = 4321;
+  source_.Update(armed_at_m + SessionModelSource::kStartInsertion_m + 0.0001, 0.1, params_.dt_s);
+  EXPECT_FALSE(source_.armed());
+  ASSERT_TRUE(source_.stepped());
+  EXPECT_EQ(runner_.session().state(), training::SessionState::kRunning);
+  EXPECT_EQ(starts, std::vector<std::int64_t>{4321});
+  EXPECT_EQ(runner_.session().steps(), 1u);
+  EXPECT_NEAR(runner_.state().time_s, params_.dt_s, 1e-12);
+  // The log maps the device's armed reading onto the anus.
+  EXPECT_NEAR(runner_.session().inputs().back().insertion_m,
+              model_start_m + SessionModelSource::kStartInsertion_m + 0.0001,
+              kLogLengthTolerance_m);
+  for (int i = 0; i < 10; ++i) source_.Update(armed_at_m + 0.01, 0.1, params_.dt_s);
+  EXPECT_EQ(runner_.session().steps(), 11u);
+  EXPECT_EQ(starts.size(), 1u);
+  // A session that is not ready cannot be armed.
+  EXPECT_THROW(source_.Arm(armed_at_m, 0.0), std::logic_error);
 }
 
 TEST(MakeStationHealth, CarriesTheCountersTheFaultsAndTheLoopsTail) {

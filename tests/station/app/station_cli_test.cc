@@ -109,5 +109,75 @@ TEST_F(StationCli, HapticCheckOnAMissingCanInterfaceIsBadInputLikeRun) {
   EXPECT_NE(r.err.find("--device can:vcan0: CAN interface 'vcan0'"), std::string::npos) << r.err;
 }
 
+// Issue #48: a fresh station could not start the shipped cases by id, and
+// `snapshot` refused an id that `run` took. Now the shipped cases are in the
+// offline cache from the first command, and run, sim and snapshot take an id
+// the same way, with no import step and no server.
+TEST_F(StationCli, AFreshStationRunsTheShippedCasesByIdWithoutAnImport) {
+  const ProcessResult run = Station({"run", "--trainee", kTrainee, "--case", "standard-adult",
+                                     "--headless", "--operator", "novice", "--out",
+                                     (dir_ / "out").string(), "--seconds", "1"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("shipped cases put into the offline cache"), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("case standard-adult v1 "), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("(offline cache)"), std::string::npos) << run.out;
+  // Said once: the second command finds them there.
+  const ProcessResult sim = Station({"sim", "--case", "redundant-sigmoid", "--operator", "novice",
+                                     "--seconds", "0.5"});
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  EXPECT_EQ(sim.out.rfind("outcome=", 0), 0u) << sim.out;
+  EXPECT_EQ(sim.err.find("shipped cases"), std::string::npos) << sim.err;
+  const ProcessResult snapshot =
+      Station({"snapshot", "--case", "paper-sigmoid", "--insert-mm", "100", "--width", "64",
+               "--height", "48", "--segments", "40", "--out", (dir_ / "snapshot").string()});
+  ASSERT_EQ(snapshot.exit_code, 0) << snapshot.out << snapshot.err;
+  EXPECT_TRUE(fs::exists(dir_ / "snapshot" / "fluoroscopy_ap.png"));
+  const ProcessResult status = Station({"status"});
+  for (const char* id : {"standard-adult", "paper-sigmoid", "redundant-sigmoid",
+                         "mobile-descending", "fixed-tube"}) {
+    EXPECT_NE(status.out.find(std::string("\n  ") + id + " v"), std::string::npos)
+        << id << "\n" << status.out;
+  }
+}
+
+// An id that is neither a case file nor cached: one line naming what was
+// looked for, where, and the ids there are; exit status 2, for every command.
+TEST_F(StationCli, AnUnknownCaseNamesWhatWasLookedForAndTheCachedIds) {
+  const std::vector<std::vector<std::string>> commands = {
+      {"run", "--trainee", kTrainee, "--case", "standard-adlt", "--headless", "--operator",
+       "novice", "--out", (dir_ / "out").string(), "--seconds", "1"},
+      {"sim", "--case", "standard-adlt", "--operator", "novice", "--seconds", "1"},
+      {"snapshot", "--case", "standard-adlt", "--insert-mm", "100", "--out",
+       (dir_ / "snapshot").string()}};
+  for (const auto& command : commands) {
+    const ProcessResult r = Station(command);
+    EXPECT_EQ(r.exit_code, 2) << command[0] << ": " << r.out << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << command[0] << ": " << r.err;
+    EXPECT_NE(r.err.find("case 'standard-adlt' is neither a case file"), std::string::npos)
+        << command[0] << ": " << r.err;
+    EXPECT_NE(r.err.find((dir_ / "station" / "cases").string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("cached: fixed-tube, mobile-descending, paper-sigmoid, "
+                         "redundant-sigmoid, standard-adult"),
+              std::string::npos)
+        << command[0] << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "station" / "outbox.db")) << "a session ran";
+}
+
+// Interactive without a display: one line saying what to do, nothing stored.
+TEST_F(StationCli, WithoutADisplayTheInteractiveRunSaysWhatToDoInOneLine) {
+  std::vector<std::string> args = {kStationBin, "run", "--trainee", kTrainee, "--case",
+                                   "standard-adult", "--data-dir", (dir_ / "station").string()};
+  const ProcessResult r = RunProgram(args, dir_ / "no-display", {"DISPLAY="},
+                                     std::chrono::seconds(60));
+  EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+  EXPECT_EQ(Lines(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("DISPLAY is not set"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--headless"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("case standard-adult v1 "), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "station" / "outbox.db")) << "a session was stored";
+}
+
 }  // namespace
 }  // namespace ves::station::testing

@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -89,6 +90,38 @@ TEST(SimAndReplay, ReplayPrintsTheSimsSummaryByteForByte) {
   const ProcessResult replay = RunProgram({kStationBin, "replay", session.string()}, dir / "replay");
   ASSERT_EQ(replay.exit_code, 0) << replay.err;
   EXPECT_EQ(replay.out, sim.out);
+  fs::remove_all(dir);
+}
+
+// The debrief of a real session (docs/scoring.md, "Debrief"): `replay
+// --debrief` prints the summary line, then one line per weighed part whose
+// points sum to the score.
+TEST(SimAndReplay, TheDebriefsPartsSumToTheReplayedScore) {
+  const fs::path dir = MakeTempDir("debrief");
+  const fs::path session = dir / "novice.session";
+  const ProcessResult sim = RunProgram(
+      {kStationBin, "sim", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+       "--operator", "novice", "--seconds", "20", "--session-out", session.string()},
+      dir / "sim");
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  const ProcessResult replay =
+      RunProgram({kStationBin, "replay", session.string(), "--debrief"}, dir / "replay");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  ASSERT_EQ(replay.out.rfind(sim.out, 0), 0u) << "the summary line first:\n" << replay.out;
+  const double score = NumberAfter(sim.out, "score");
+  double sum = 0.0;
+  int parts = 0;
+  std::istringstream lines(replay.out.substr(sim.out.size()));
+  for (std::string line; std::getline(lines, line);) {
+    ASSERT_EQ(line.rfind("  ", 0), 0u) << line;
+    const std::string name = line.substr(2, line.find(' ', 2) - 2);
+    sum += std::atof(line.c_str() + 2 + name.size() + 1);
+    ++parts;
+  }
+  // cecum, pain, loops, force, x-ray, red-out on a medium case (time is out
+  // of play short of the cecum); each printed to 0.1.
+  EXPECT_GE(parts, 6) << replay.out;
+  EXPECT_NEAR(sum, score, 0.05 * parts + 0.05) << replay.out;
   fs::remove_all(dir);
 }
 

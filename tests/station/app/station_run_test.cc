@@ -77,10 +77,12 @@ TEST_F(StationRun, TheCaseComesFromTheCacheWhenTheServerIsDown) {
 }
 
 TEST_F(StationRun, AnUnknownCaseWithNoServerIsBadInput) {
-  const ProcessResult r =
-      Station(RunArgs("novice", dir_ / "empty-station", dir_ / "out", /*with_server=*/false));
+  auto args = RunArgs("novice", dir_ / "empty-station", dir_ / "out", /*with_server=*/false);
+  std::replace(args.begin(), args.end(), std::string("standard-adult"), std::string("no-case"));
+  const ProcessResult r = Station(args);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("not in the offline cache"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("case 'no-case' is neither a case file"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(no --server given)"), std::string::npos) << r.err;
 }
 
 // The arguments without the default `--device sim`, so another --device can be given.
@@ -210,8 +212,11 @@ TEST_F(StationRun, CasesAndSessionsMoveTheObviousWay) {
                          "imported patient-3 v1"}) {
     EXPECT_NE(imported.out.find(id), std::string::npos) << imported.out;
   }
-  EXPECT_NE(Station({"status", "--data-dir", data_dir}).out.find("cached cases: 3"),
-            std::string::npos);
+  // The three imported cases, beside the shipped ones (standard-adult is one of them).
+  const std::string status = Station({"status", "--data-dir", data_dir}).out;
+  for (const char* id : {"  standard-adult v1  ", "  straight v1  ", "  patient-3 v1  "}) {
+    EXPECT_NE(status.find(id), std::string::npos) << id << "\n" << status;
+  }
   const ProcessResult bad = Station({"import-case", (dir_ / "nothing.csv").string(),
                                      "--data-dir", data_dir});
   EXPECT_EQ(bad.exit_code, 2);

@@ -229,9 +229,11 @@ class StationUi : public StationFixture {
     }
     return bytes;
   }
-  // Once the running session's journal holds three seconds more than its
-  // header, kills the station (SIGKILL: a crash, the power) mid-session.
+  // Pushes the scope in (the session starts), then, once the running
+  // session's journal holds three seconds more than its header, kills the
+  // station (SIGKILL: a crash, the power) mid-session.
   void KillWithThreeSecondsJournaled(const fs::path& data) {
+    Keys({"w"});
     for (int i = 0; i < 300 && JournalBytes(data) == 0 && station_->Running(); ++i) {
       std::this_thread::sleep_for(milliseconds(100));
     }
@@ -352,12 +354,13 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   EXPECT_GT(endoscope_mean[0] + endoscope_mean[1] + endoscope_mean[2], 60.0);
   EXPECT_FALSE(BannerShown(start, layout_.banner));
 
-  // Without input the screen holds still but for the clock.
+  // Without input the screen holds still, the session clock too: it starts
+  // at the first insertion past the anus, not when the window opens.
   std::this_thread::sleep_for(kSettle);
   const cv::Mat idle = Shot("idle");
   EXPECT_LT(ChangedShare(start, idle, layout_.panel), kUnchanged);
   EXPECT_LT(ChangedShare(start, idle, layout_.fluoroscopy), kUnchanged);
-  EXPECT_GT(ChangedShare(start, idle, layout_.status), 0.0);  // the session clock runs
+  EXPECT_LT(ChangedShare(start, idle, layout_.status), kUnchanged) << "the clock ran before an insertion";
 
   // f: the X-ray comes on: the fluoroscopy area and its button change, the
   // endoscope does not.
@@ -394,6 +397,7 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
     pushed = Shot("pushed");
   }
   EXPECT_GT(ChangedShare(wire, pushed, layout_.figures), kTextChanged);
+  EXPECT_GT(ChangedShare(wire, pushed, layout_.status), 0.0) << "the clock did not start";
   EXPECT_GT(ChangedShare(wire, pushed, layout_.endoscope), kChanged);
   EXPECT_GT(ChangedShare(wire, pushed, layout_.fluoroscopy), 0.001);
   for (const auto& button : layout_.buttons) {
@@ -496,17 +500,31 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   EXPECT_LE(health.can_lost_frames(), count("lost_frames")) << quit.out;
 }
 
+// A sitting (issue #48): a session with the X-ray on, a repeat that starts
+// clean (X-ray off: no X-ray time before the trainee asks for it), another
+// case chosen on the panel, a session there that never goes in, quit. The
+// two sessions that went in are in the outbox, the third is no record; the
+// terminal shows each recorded session's summary line, and `status` lists
+// them.
 TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   const fs::path data = dir_ / "station";
-  CacheCase(data, kCaseFile);
-  // A second case in the offline cache (the paper's CD-ROM path).
-  CacheCase(data, (fs::path(VES_SOURCE_DIR) / "patient_db/cases/paper-sigmoid.textproto").string());
   StartStation({"run", "--trainee", kTrainee, "--case", "standard-adult", "--data-dir",
                 data.string(), "--seconds", "120"});
   ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
+  WaitForScreen();
+  // f, w, w: the X-ray on, the scope in 10 mm: the first session runs.
+  Keys({"f", "w", "w"});
+  const cv::Mat xray_on = Shot("first-session");
+  // r: the second session, clean: the X-ray off, armed until the next push.
+  Keys({"r"});
+  const cv::Mat repeated = Shot("repeated");
+  EXPECT_GT(ChangedShare(xray_on, repeated, layout_.fluoroscopy), 0.3) << "the X-ray stayed on";
+  Keys({"w", "w"});
 
   // The panel's ">" next to the case: the case name changes, nothing else.
-  const cv::Mat before = WaitForScreen();
+  const cv::Mat before = Shot("second-session");
+  EXPECT_LT(ChangedShare(repeated, before, layout_.fluoroscopy), kUnchanged)
+      << "the X-ray came back on";
   Click(ButtonRect(layout_, ui::PanelAction::kNextCase));
   const cv::Mat after = Shot("next-case");
   const cv::Rect& previous = ButtonRect(layout_, ui::PanelAction::kPreviousCase);
@@ -516,18 +534,48 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   EXPECT_LT(ChangedShare(before, after, layout_.fluoroscopy), kUnchanged);
   Keys({"r"});
   // The new run brings up its window again: wait for it (not a fixed time;
-  // this test once failed under a full `ctest -j2`), then quit it.
-  ASSERT_TRUE(WaitForOutput(dir_ / "interactive.out", "switched to case paper-sigmoid"))
-      << ReadFile(dir_ / "interactive.out") << ReadFile(dir_ / "interactive.err");
+  // this test once failed under a full `ctest -j2`), then quit it without
+  // pushing the scope in.
+  const fs::path out = dir_ / "interactive.out";
+  ASSERT_TRUE(WaitForOutput(out, "switched to case ")) << ReadFile(out)
+                                                        << ReadFile(dir_ / "interactive.err");
   std::this_thread::sleep_for(kSettle);
   ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   Keys({"q"});
   const ProcessResult quit = station_->Wait(seconds(60));
-  EXPECT_NE(quit.out.find("switched to case paper-sigmoid"), std::string::npos)
-      << quit.out << quit.err;
-  // Both runs' sessions were committed: the first (standard-adult, aborted by
-  // the switch) and the second (paper-sigmoid).
+  EXPECT_EQ(quit.exit_code, 0) << quit.out << quit.err;
+  // The shipped cases, from the first start on, without an import; the
+  // panel's next one after standard-adult.
+  EXPECT_NE(quit.out.find("switched to case "), std::string::npos) << quit.out << quit.err;
+  EXPECT_EQ(quit.out.find("switched to case standard-adult"), std::string::npos) << quit.out;
+  // Both sessions that went in were committed (the first ended by the
+  // repeat, the second by the switch); the last run's, which never went
+  // in, is no record.
   EXPECT_EQ(Occurrences(quit.out, "committed to the outbox"), 2u) << quit.out;
+  sync::Outbox outbox(sync::ResolveStationPaths(data.string()).outbox_db());
+  const auto stored = outbox.Stored(10);
+  ASSERT_EQ(stored.size(), 2u);
+  for (const auto& session : stored) {
+    EXPECT_EQ(session.record.case_id(), "standard-adult");
+    EXPECT_EQ(session.record.outcome(), ves::v1::OUTCOME_ABORTED);
+    EXPECT_GT(session.record.metrics().duration_s(), 0.0) << session.uuid;
+    EXPECT_GT(session.record.metrics().max_insertion_m(), 0.0) << session.uuid;
+  }
+  EXPECT_GT(stored[0].record.metrics().xray_s(), 0.0);
+  EXPECT_EQ(stored[1].record.metrics().xray_s(), 0.0) << "X-ray time counted after the repeat";
+  // The terminal: every recorded session's summary, then the best and the last.
+  EXPECT_NE(quit.out.find("sitting: 2 sessions\n"), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find("  1. standard-adult  outcome=aborted "), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find("  2. standard-adult  outcome=aborted "), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find(" xray_s=0.0 score="), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find("\nbest: "), std::string::npos) << quit.out;
+  // `status` lists them: when, who, which case, how it went, the score.
+  const std::string status = Station({"status", "--data-dir", data.string()}).out;
+  EXPECT_NE(status.find("sessions stored: 2\n"), std::string::npos) << status;
+  EXPECT_EQ(Occurrences(status, "  trainee=" + std::string(kTrainee) +
+                                    "  case=standard-adult  outcome=aborted  score="),
+            2u)
+      << status;
 }
 
 // Each session is committed to the outbox as soon as it ends, not when the
@@ -542,13 +590,14 @@ TEST_F(StationUi, EachSessionIsInTheOutboxAsSoonAsItEndsSoACrashLosesNone) {
   WaitForScreen();
   const fs::path out = dir_ / "interactive.out";
   const auto committed = [&] { return Occurrences(ReadFile(out), "committed to the outbox"); };
-  // The 3 s session times out by itself; its record goes to the outbox while
-  // the screen still shows it over.
+  // In: the 3 s session runs, times out by itself; its record goes to the
+  // outbox while the screen still shows it over.
+  Keys({"w"});
   ASSERT_TRUE(WaitForOutput(out, "committed to the outbox")) << ReadFile(out)
                                                                << ReadFile(dir_ / "interactive.err");
   ASSERT_TRUE(station_->Running()) << "the station quit by itself: " << ReadFile(out);
-  // Repeat: a second session, which also ends on its own and is committed.
-  Keys({"r"});
+  // Repeat and in: a second session, which also ends on its own and is committed.
+  Keys({"r", "w"});
   for (int i = 0; i < 300 && committed() < 2 && station_->Running(); ++i) {
     std::this_thread::sleep_for(milliseconds(100));
   }
@@ -648,6 +697,7 @@ TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) 
   EXPECT_LT(ChangedShare(before, after, ButtonRect(layout_, ui::PanelAction::kToggleFluoroscopy)),
             kUnchanged);
 
+  Keys({"w", "w"});  // in: the attempt starts
   Keys({"q"});
   const ProcessResult quit = station_->Wait(seconds(90));
   EXPECT_EQ(quit.exit_code, 0) << quit.out << quit.err;
@@ -674,6 +724,7 @@ TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
                 "--token", station_token_, "--data-dir", data.string(), "--seconds", "45"});
   ASSERT_FALSE(WindowId().empty()) << WhyNoWindow();
   ASSERT_FALSE(WaitForScreen().empty());
+  Keys({"w"});  // in: the session starts, and streams
   // The uuids of the sessions the server lists as live now.
   std::string last_list;  // the last answer, for failure messages
   const auto live_list = [&] {
@@ -704,8 +755,8 @@ TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
   ASSERT_EQ(first.size(), 1u) << "the first session is not live: " << last_list << "\n"
                                << ReadFile(dir_ / "interactive.out")
                                << ReadFile(dir_ / "interactive.err");
-  // r: a new session (45 s from now); its stream replaces the first one's.
-  Keys({"r"});
+  // r, w: a new session (45 s from its first push); its stream replaces the first one's.
+  Keys({"r", "w"});
   const std::vector<std::string> second = wait_list(
       [&](const auto& u) { return u.size() == 1 && u[0] != first[0]; });
   ASSERT_EQ(second.size(), 1u) << "the repeated session is not live alone: " << last_list;

@@ -4,10 +4,12 @@
 #include <unistd.h>
 
 #include <fstream>
+#include <set>
 
 #include "patient_db/case_bundle.h"
 #include "patient_db/case_format.h"
 #include "patient_db/case_problem.h"
+#include "station/sync/shipped_cases.h"
 
 namespace ves::sync {
 namespace {
@@ -118,6 +120,48 @@ TEST(CaseCache, ExportOfUnknownCaseNamesIt) {
   } catch (const std::runtime_error& error) {
     EXPECT_NE(std::string(error.what()).find("no-such-case"), std::string::npos);
   }
+}
+
+// A fresh station has the shipped cases without an import step: seeding puts
+// every file of patient_db/cases into an empty cache, each as it parses from
+// the source tree, and a second seeding puts none.
+TEST(ShippedCases, AFreshCacheGetsEveryShippedCaseOnceAsInTheSourceTree) {
+  CaseCache cache(FreshDir("seed") / "cache");
+  std::set<std::string> shipped_ids;
+  for (const auto& file : std::filesystem::directory_iterator(std::filesystem::path(VES_SOURCE_DIR) /
+                                                              "patient_db" / "cases")) {
+    if (file.path().extension() == ".textproto") {
+      shipped_ids.insert(patient_db::LoadCaseFile(file.path()).id());
+    }
+  }
+  ASSERT_GE(shipped_ids.size(), 5u);
+  ASSERT_EQ(ShippedCaseTexts().size(), shipped_ids.size());
+  const std::vector<CachedCase> seeded = SeedShippedCases(cache);
+  std::set<std::string> seeded_ids;
+  for (const CachedCase& entry : seeded) seeded_ids.insert(entry.id);
+  EXPECT_EQ(seeded_ids, shipped_ids);
+  const auto standard = cache.FindLatest("standard-adult");
+  ASSERT_TRUE(standard.has_value());
+  EXPECT_EQ(cache.Load(standard->sha256_hex).SerializeAsString(),
+            ShippedCase("standard-adult").SerializeAsString());
+  EXPECT_TRUE(SeedShippedCases(cache).empty());
+  EXPECT_EQ(cache.List().size(), shipped_ids.size());
+}
+
+// The station's own library wins: a case id already cached (here a newer
+// version, as the server would send) is not joined by the shipped one.
+TEST(ShippedCases, ACaseIdAlreadyCachedIsLeftAsItIs) {
+  CaseCache cache(FreshDir("seed_kept") / "cache");
+  ves::v1::ColonCase newer = ShippedCase("standard-adult");
+  newer.set_version(7);
+  newer.set_title("Standard adult colon, the hospital's revision");
+  const CachedCase put = cache.Put(newer);
+  const std::vector<CachedCase> seeded = SeedShippedCases(cache);
+  for (const CachedCase& entry : seeded) EXPECT_NE(entry.id, "standard-adult");
+  int standard_versions = 0;
+  for (const CachedCase& entry : cache.List()) standard_versions += entry.id == "standard-adult";
+  EXPECT_EQ(standard_versions, 1);
+  EXPECT_EQ(cache.FindLatest("standard-adult")->sha256_hex, put.sha256_hex);
 }
 
 }  // namespace

@@ -10,6 +10,9 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace ves::sync {
 namespace {
@@ -81,6 +84,31 @@ TEST(Outbox, RejectedRecordLeavesPendingButIsKept) {
 
 // Issue #20: a record with a station id that is not UTF-8 was committed, could
 // not be read back, and every later run, status and sync failed on it.
+// `ves-station status` lists the station's sessions (issue #48): pending,
+// delivered and set aside alike, oldest first, the newest `limit` of them.
+TEST(Outbox, StoredListsEverySessionWhateverItsStateOldestFirstNewestLimit) {
+  Outbox outbox(FreshDir("stored") / "outbox.db");
+  for (const char* uuid : {"a", "b", "c", "d"}) outbox.Commit(MakeRecord(uuid, 10));
+  outbox.MarkAcknowledged("a", 1000);
+  outbox.MarkRejected("c", "refused");
+  EXPECT_EQ(outbox.StoredCount(), 4u);
+  const auto all = outbox.Stored(10);
+  ASSERT_EQ(all.size(), 4u);
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"a", "delivered"}, {"b", "pending"}, {"c", "set aside"}, {"d", "pending"}};
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(all[i].uuid, expected[i].first);
+    EXPECT_EQ(all[i].state, expected[i].second) << all[i].uuid;
+    EXPECT_TRUE(all[i].readable);
+    EXPECT_EQ(all[i].record.uuid(), expected[i].first);
+    EXPECT_EQ(all[i].record.case_id(), "standard-adult");
+  }
+  const auto newest = outbox.Stored(2);
+  ASSERT_EQ(newest.size(), 2u);
+  EXPECT_EQ(newest[0].uuid, "c");
+  EXPECT_EQ(newest[1].uuid, "d");
+}
+
 TEST(Outbox, ARecordThatWouldNotReadBackIsRefusedAtCommit) {
   Outbox outbox(FreshDir("notutf8") / "outbox.db");
   auto record = MakeRecord("a", 50);

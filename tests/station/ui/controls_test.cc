@@ -105,5 +105,28 @@ TEST(KeyHelpText, NamesEveryBoundKey) {
   }
 }
 
+// Issue #48: the X-ray and the C-arm carried over to a repeated session,
+// which counted X-ray time before a key was touched.
+TEST(StartClean, TheXrayGoesOffAndTheCarmHomeTheRestStays) {
+  ControlState state;
+  state.view_mode = ViewMode::kWireframe;
+  state.fluoroscopy_visible = true;
+  state.damage_display = true;
+  state.fluoro_yaw_rad = 0.7;
+  state.fluoro_pitch_rad = -0.2;
+  state.fluoro_zoom = 3.0;
+  state.hand_insertion_m = 0.9;
+  state.hand_roll_rad = 0.4;
+  state.knob_up_rad = 0.5;
+  state.case_choice = 2;
+  ControlState expected = state;
+  expected.fluoroscopy_visible = false;
+  expected.fluoro_yaw_rad = 0.0;
+  expected.fluoro_pitch_rad = 0.0;
+  expected.fluoro_zoom = 1.0;
+  StartClean(&state);
+  EXPECT_EQ(state, expected);
+}
+
 }  // namespace
 }  // namespace ves::ui
