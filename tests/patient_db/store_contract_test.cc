@@ -142,6 +142,55 @@ TEST_P(StoreContract, SameCaseVersionTwiceIsIdempotentOtherContentRefused) {
   EXPECT_EQ(store_->GetBlob("h9").status.code, StoreCode::kNotFound);  // rolled back
 }
 
+// `ves-admin case upload --share-with` on a case stored before shares it:
+// the owner's re-upload adds its shares (kept, never removed); another
+// institution cannot share the owner's case.
+TEST_P(StoreContract, ReuploadByTheOwnerAddsShares) {
+  ASSERT_TRUE(store_->PutCase(Case("c", 1, "h1"), "bytes-1").ok());
+  CaseRow again = Case("c", 1, "h1");
+  again.shared_with = {"south", "north", "south"};  // the owner and a repeat are no share
+  auto shared = store_->PutCase(again, "bytes-1");
+  ASSERT_TRUE(shared.ok()) << shared.status.message;
+  EXPECT_TRUE(shared.value.already_stored);
+  EXPECT_EQ(shared.value.row.shared_with, std::vector<std::string>{"south"});
+  CaseFilter south;
+  south.visible_to = "south";
+  auto seen = store_->ListCases(south);
+  ASSERT_TRUE(seen.ok()) << seen.status.message;
+  ASSERT_EQ(seen.value.size(), 1u);
+  EXPECT_EQ(seen.value[0].case_id, "c");
+  // A later upload without shares keeps them; one with another adds it.
+  auto plain = store_->PutCase(Case("c", 1, "h1"), "bytes-1");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain.value.row.shared_with, std::vector<std::string>{"south"});
+  ASSERT_TRUE(store_->AddInstitution("east", 1).ok());
+  CaseRow east = Case("c", 1, "h1");
+  east.shared_with = {"east"};
+  auto both = store_->PutCase(east, "bytes-1");
+  ASSERT_TRUE(both.ok()) << both.status.message;
+  EXPECT_EQ(both.value.row.shared_with, (std::vector<std::string>{"east", "south"}));
+  Reopen();
+  auto listed = store_->ListCases(CaseFilter{});
+  ASSERT_TRUE(listed.ok());
+  ASSERT_EQ(listed.value.size(), 1u);
+  EXPECT_EQ(listed.value[0].shared_with, (std::vector<std::string>{"east", "south"}));
+  // Not the owner: refused, nothing shared.
+  CaseRow foreign = Case("c", 1, "h1");
+  foreign.institution = "south";
+  foreign.shared_with = {"west"};
+  auto refused = store_->PutCase(foreign, "bytes-1");
+  EXPECT_EQ(refused.status.code, StoreCode::kAlreadyExists);
+  EXPECT_NE(refused.status.message.find("owned by institution 'north'"), std::string::npos)
+      << refused.status.message;
+  CaseFilter west;
+  west.visible_to = "west";
+  EXPECT_TRUE(store_->ListCases(west).value.empty());
+  // Another institution's upload of the same content without shares stays
+  // the idempotent repeat it was.
+  foreign.shared_with.clear();
+  EXPECT_TRUE(store_->PutCase(foreign, "bytes-1").ok());
+}
+
 TEST_P(StoreContract, CaseListFiltersAndVisibility) {
   CaseRow shared = Case("shared", 1, "hs");
   shared.shared_with = {"south"};
@@ -225,6 +274,38 @@ TEST_P(StoreContract, SessionsSurviveReopenWithBodyAndOrder) {
   EXPECT_EQ(list.value[1].max_tip_arc_m, 0.8125);
   EXPECT_EQ(store_->ListSessions("t1", "other-case").value.size(), 0u);
   EXPECT_EQ(store_->GetSession("nope").status.code, StoreCode::kNotFound);
+}
+
+// Learning curves per lesson are built from the listing: the lesson a
+// record names comes back with it (after a reopen, too), '' for a free run.
+TEST_P(StoreContract, SessionsReadBackTheLessonTheyName) {
+  WriteBatch b;
+  SessionRow lesson = Session("u1", "body-a", 100);
+  lesson.lesson_id = "navigate-sigmoid";
+  SessionRow free_run = Session("u2", "body-b", 200);
+  b.sessions = {lesson, free_run};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto list = store_->ListSessions("t1", "");
+  ASSERT_TRUE(list.ok()) << list.status.message;
+  ASSERT_EQ(list.value.size(), 2u);
+  EXPECT_EQ(list.value[0].lesson_id, "navigate-sigmoid");
+  EXPECT_EQ(list.value[1].lesson_id, "");
+  // A page after the first row still names its lesson column right.
+  ListPage page;
+  page.has_after = true;
+  page.after_text = "u1";
+  page.after_number = 100;
+  auto rest = store_->ListSessions("t1", "standard-adult", page);
+  ASSERT_TRUE(rest.ok()) << rest.status.message;
+  ASSERT_EQ(rest.value.size(), 1u);
+  EXPECT_EQ(rest.value[0].uuid, "u2");
+  EXPECT_EQ(rest.value[0].lesson_id, "");
+  auto one = store_->GetSession("u1");
+  ASSERT_TRUE(one.ok()) << one.status.message;
+  EXPECT_EQ(one.value.lesson_id, "navigate-sigmoid");
+  EXPECT_EQ(one.value.body, "body-a");
+  EXPECT_EQ(store_->GetSession("u2").value.lesson_id, "");
 }
 
 TEST_P(StoreContract, TraineeActivityCountsSessionsAndTheLatestEnd) {

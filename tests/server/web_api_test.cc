@@ -6,10 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <thread>
 
 #include <boost/asio/ip/tcp.hpp>
 
@@ -510,8 +512,15 @@ TEST_F(WebApiTest, ReplayIsComputedFromTheInputLogAndEndsAtTheFinalDepth) {
   EXPECT_TRUE(frames.back().contains("scope_mm"));
   EXPECT_TRUE(frames.back().contains("colon_mm"));
   EXPECT_GE(frames.back()["scope_mm"].size(), 2u);
-  // Time runs forward at the series rate (10 Hz).
-  EXPECT_NEAR(frames[1]["t_s"].get<double>() - frames[0]["t_s"].get<double>(), 0.1, 1e-6);
+  // The replay opens on the first step with its shapes (not an empty view
+  // until the first shape sample), then runs at the series rate (10 Hz).
+  EXPECT_NEAR(frames[0]["t_s"].get<double>(), record.input_log().dt_s(), 1e-9);
+  ASSERT_TRUE(frames[0].contains("scope_mm")) << frames[0].dump();
+  ASSERT_TRUE(frames[0].contains("colon_mm")) << frames[0].dump();
+  EXPECT_GE(frames[0]["scope_mm"].size(), 1u);  // not in yet: the tip at the anus
+  EXPECT_GE(frames[0]["colon_mm"].size(), 2u);
+  EXPECT_NEAR(frames[1]["t_s"].get<double>(), 0.1, 1e-6);
+  EXPECT_NEAR(frames[2]["t_s"].get<double>() - frames[1]["t_s"].get<double>(), 0.1, 1e-6);
   // The summary leaves out the bulky input log.
   const json summary = json::parse(Get("/api/v1/sessions/" + record.uuid(), supervisor_).body);
   EXPECT_FALSE(summary["record"].contains("input_log"));
@@ -573,6 +582,73 @@ TEST_F(WebApiTest, ACurvePointWithoutTheCecumHasNoTimeToCecum) {
   EXPECT_TRUE(points[0]["time_to_cecum_s"].is_null()) << points.dump();
   EXPECT_FALSE(points[0]["completed"].get<bool>());
   EXPECT_NEAR(points[1]["time_to_cecum_s"].get<double>(), 221.0, 1e-9);
+}
+
+// A lesson the scripted expert passes in 3 s on the sample case: after the
+// server's judge passes it, the curve has that lesson with its point and
+// pass line (the lesson id must come back from the store's listing).
+TEST_F(WebApiTest, LearningCurveShowsALessonAfterItIsPassed) {
+  ves::v1::Curriculum c;
+  c.set_curriculum_id("web-lessons");
+  c.set_title("Web lessons");
+  ves::v1::Lesson* lesson = c.add_lessons();
+  lesson->set_lesson_id("web-first-seconds");
+  lesson->set_title("The first seconds");
+  lesson->mutable_case_ref()->set_case_id(SampleCase().id());
+  lesson->mutable_aids()->set_fluoroscopy_allowed(true);
+  lesson->mutable_aids()->set_wireframe_allowed(true);
+  lesson->set_time_limit_s(3);
+  lesson->mutable_pass()->set_max_damage_events(0);
+  lesson->mutable_pass()->set_max_pain_s(30);
+  lesson->set_required_passes(1);
+  auto lessons = ves::v1::Lessons::NewStub(MakeClientChannel(server_.Client(supervisor_)));
+  ves::v1::CreateCurriculumRequest create;
+  *create.mutable_curriculum() = c;
+  ves::v1::CreateCurriculumResponse created;
+  {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, server_.Client(supervisor_));
+    const grpc::Status s = lessons->CreateCurriculum(&ctx, create, &created);
+    ASSERT_TRUE(s.ok()) << s.error_message();
+  }
+  const ves::v1::Lesson& stored_lesson = created.curriculum().lessons(0);
+  ves::v1::SessionRecord record;
+  training::RunScriptedCase(SampleCase(), stored_lesson.scope(), {}, "expert", 3.0,
+                            1'700'000'000'000, &record);
+  record.set_trainee_id("t2");
+  record.set_station_id("station-1");
+  record.set_case_id(SampleCase().id());
+  record.set_case_version(SampleCase().version());
+  record.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(SampleCase()));
+  record.set_lesson_id(stored_lesson.lesson_id());
+  ves::v1::UploadSessionResponse up;
+  const grpc::Status s = UploadSession(server_.Client(station_), record, &up);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  // The judge replays it in the background.
+  patient_db::StoreResult<patient_db::LessonVerdictRow> verdict;
+  for (int i = 0; i < 600; ++i) {
+    verdict = server_.store().GetLessonVerdict(record.uuid());
+    if (verdict.ok()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(verdict.ok()) << "no verdict: " << verdict.status.message;
+  ASSERT_TRUE(verdict.value.passed) << verdict.value.detail;
+
+  const HttpResult r = Get("/api/v1/trainees/t2/curve", supervisor_);
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json curve = json::parse(r.body);
+  ASSERT_EQ(curve["lessons"].size(), 1u) << curve.dump();
+  const json& l = curve["lessons"][0];
+  EXPECT_EQ(l["lesson_id"], "web-first-seconds");
+  ASSERT_EQ(l["points"].size(), 1u);
+  EXPECT_EQ(l["points"][0]["uuid"], record.uuid());
+  EXPECT_EQ(l["points"][0]["attempt"], 1);
+  EXPECT_NEAR(l["points"][0]["score"].get<double>(), record.score(), 1e-9);
+  EXPECT_EQ(l["pass_line"]["pain_s"], 30.0);
+  EXPECT_EQ(l["pass_line"]["title"], "The first seconds");
+  // The same session is a point of its case's curve too.
+  ASSERT_EQ(curve["cases"].size(), 1u);
+  EXPECT_EQ(curve["cases"][0]["points"].size(), 1u);
 }
 
 }  // namespace

@@ -166,6 +166,19 @@ def main():
             '.map(c => c.data.datasets[0].data.length)')
         frames = driver.execute_script('return ves.replay.frames.length')
         assert all(n == frames and n > 10 for n in lengths), (lengths, frames)
+        # The replay opens on its first step with the colon and the scope's
+        # tip drawn, not on an empty view (all background, #8a8a8a).
+        assert driver.find_element(By.ID, 'scrub').get_attribute('value') == '0'
+        assert driver.find_element(By.ID, 'fig-t').text == '0.0 s'
+        drawn, tip = driver.execute_script(
+            "const c = document.getElementById('fluoro');"
+            "const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;"
+            "let drawn = 0, tip = 0; for (let i = 0; i < d.length; i += 4) {"
+            "  if (d[i] !== 0x8a || d[i + 1] !== 0x8a || d[i + 2] !== 0x8a) drawn++;"
+            "  if (d[i] > 200 && d[i + 1] > 160 && d[i + 2] < 140) tip++; }"
+            "return [drawn, tip]")
+        assert drawn > 1000 and tip > 5, 'the replay at t = 0: %d pixels drawn, %d of the tip' % (
+            drawn, tip)
         shot('04-session')
         driver.execute_script(
             "const s = document.getElementById('scrub'); s.value = s.max;"
