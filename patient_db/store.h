@@ -201,6 +201,17 @@ struct AuditRow {
   bool operator==(const AuditRow&) const = default;
 };
 
+// What the audit page asks for (docs/web.md): newest first, every filter
+// optional.
+struct AuditQuery {
+  std::string actor;         // the token id or its label, exactly; empty: anyone
+  std::string action;        // exactly; empty: any
+  int64_t from_unix_ms = 0;  // at_unix_ms >= from_unix_ms
+  int64_t to_unix_ms = 0;    // at_unix_ms < to_unix_ms; 0: no bound
+  int64_t before_id = 0;     // ids below it (the last of the previous page); 0: from the newest
+  int limit = 0;             // 0: all
+};
+
 // A curriculum (docs/lessons.md): searchable columns plus the serialized
 // ves.v1.Curriculum. Curricula are immutable once stored.
 struct CurriculumRow {
@@ -309,6 +320,8 @@ class Store {
   // Oldest first, at most `limit`, ids above `after_id`.
   virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
                                                        int64_t after_id = 0) = 0;
+  // Newest first (by id), as filtered by `query`.
+  virtual StoreResult<std::vector<AuditRow>> ListAuditNewest(const AuditQuery& query) = 0;
 
   // ---- Lessons (docs/lessons.md) ----
   // Stores the curriculum and its lesson ids. The same id and body hash again:
