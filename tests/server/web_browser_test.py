@@ -3,9 +3,10 @@
 driven by Selenium against a real ves-server on loopback. Sign in, the
 trainee list (a trainee named like markup shows as text), a learning curve
 with one point per uploaded session, a session page with its plots, the
-replay scrubbed to the end showing the tip at the session's final depth,
-the live page, the stations page with the health a headless station reported,
-group progress, the audit log (admin), sign-out. Screenshots of each page go
+replay opening on the colon and the scope's tip and scrubbed to the end
+showing the tip at the session's final depth, a lesson's curve after the
+server passed it, the sessions' CSV export read with the csv module, the live page, the stations page with the health a headless station reported,
+group progress, the audit log (admin: newest first, paged, filtered), sign-out. Screenshots of each page go
 to --out. Exits 77 (CTest SKIP) with a reason when Chromium cannot run here.
 """
 import argparse
@@ -208,6 +209,29 @@ def main():
             yesterday, time.strftime('%Y-%m-%d', time.gmtime()))
         status, _, text = fetch_text(driver.find_element(By.ID, 'export-csv').get_attribute('href'))
         assert status == 200 and len(list(csv.reader(io.StringIO(text, newline='')))) == 4, text
+
+        # A lesson t2 passes (judged by the server): its curve appears on
+        # t2's page with one point per chart and the lesson's pass line.
+        lesson = json.loads(subprocess.check_output(
+            [args.seed, 'lesson', '127.0.0.1:' + grpc_port, tokens['supervisor'],
+             tokens['station'], 't2'], text=True))
+        assert lesson['passed'], lesson
+        driver.get(base + '/trainee.html?id=t2')
+        ready('trainee')
+        key = 'lesson:' + lesson['lesson_id']
+        points = driver.execute_script(
+            'return (ves.charts[arguments[0]] || []).map(c => c.data.datasets[0].data.length)', key)
+        assert points == [1, 1, 1, 1], (key, points)
+        score = driver.execute_script('return ves.charts[arguments[0]][0].data.datasets[0].data[0].y',
+                                      key)
+        assert round(score, 6) == round(lesson['score'], 6), (score, lesson)
+        pain_sets = driver.execute_script(
+            'return ves.charts[arguments[0]][2].data.datasets.map(d => d.label)', key)
+        assert pain_sets == ['Pain', 'pass line'], pain_sets
+        block = driver.find_element(By.ID, 'curve-' + key.replace(':', '-'))
+        assert block.find_element(By.TAG_NAME, 'h3').text == 'Lesson ' + lesson['lesson_id']
+        assert len(block.find_elements(By.CSS_SELECTOR, 'table.points tbody tr')) == 1
+        shot('03b-lesson-curve')
 
         # The XSS trainee's page shows the name as text too.
         driver.get(base + '/trainee.html?id=' + '%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E')
