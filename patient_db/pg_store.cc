@@ -306,9 +306,8 @@ StoreResult<std::vector<AuditRow>> PgStore::ListAuditNewest(const AuditQuery& q)
         q.limit > 0 ? int64_t{q.limit} : int64_t{1} << 62);
     for (const auto& row : r) {
       out.push_back({row[0].as<int64_t>(), row[1].as<int64_t>(), row[2].as<std::string>(),
-                     row[3].as<std::string>(), row[4].as<std::string>(),
-                     row[5].as<std::string>(), row[6].as<std::string>(),
-                     row[7].as<std::string>(), row[8].as<std::string>()});
+                     row[3].as<std::string>(), row[4].as<std::string>(), row[5].as<std::string>(),
+                     row[6].as<std::string>(), row[7].as<std::string>(), row[8].as<std::string>()});
     }
     return StoreStatus::Ok();
   });

@@ -471,10 +471,10 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
 StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
   SessionRow out;
   StoreStatus st = Transact("get session", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
-            ", body FROM sessions WHERE uuid = $1",
-        uuid);
+    pqxx::result r =
+        tx.exec_params(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                           ", body FROM sessions WHERE uuid = $1",
+                       uuid);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
     out = ReadSessionRow(r[0]);
     out.lesson_id = r[0][17].as<std::string>();

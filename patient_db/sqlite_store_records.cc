@@ -465,10 +465,10 @@ StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteB
 
 StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
-      std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
-          ", body FROM sessions WHERE uuid = ?",
-      nullptr);
+  SqliteStatement* s =
+      r.db().Prepare(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                         ", body FROM sessions WHERE uuid = ?",
+                     nullptr);
   if (!s) return Internal(r.db(), "get session");
   s->Bind(1, uuid);
   int rc = SQLITE_OK;
@@ -488,9 +488,8 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
                                                                const std::string& case_id,
                                                                const ListPage& page) {
   Reader r = Read();
-  std::string sql =
-      std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
-      " FROM sessions WHERE trainee_id = ?";
+  std::string sql = std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                    " FROM sessions WHERE trainee_id = ?";
   if (!case_id.empty()) sql += " AND case_id = ?";
   if (page.has_after) sql += " AND (start_unix_ms > ? OR (start_unix_ms = ? AND uuid > ?))";
   sql += " ORDER BY start_unix_ms, uuid LIMIT ?";

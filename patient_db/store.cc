@@ -61,9 +61,8 @@ std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string&
   refusal->clear();
   std::vector<std::string> added;
   for (const std::string& i : requested) {
-    if (i == stored.institution ||
-        std::find(stored.shared_with.begin(), stored.shared_with.end(), i) !=
-            stored.shared_with.end()) {
+    if (i == stored.institution || std::find(stored.shared_with.begin(), stored.shared_with.end(),
+                                             i) != stored.shared_with.end()) {
       continue;
     }
     added.push_back(i);

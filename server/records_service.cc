@@ -508,9 +508,9 @@ Status ExportSessionsCall(const ServiceDeps& deps, const Principal& who,
     for (auto& row : rows.value) {
       if (to_unix_ms > 0 && row.start_unix_ms >= to_unix_ms) break;
       if (static_cast<int>(sessions->size()) == kMaxExportSessions) {
-        return Status(StatusCode::OUT_OF_RANGE,
-                      "more than " + std::to_string(kMaxExportSessions) + " sessions of " +
-                          trainee_id + " in this range: export fewer days at a time");
+        return Status(StatusCode::OUT_OF_RANGE, "more than " + std::to_string(kMaxExportSessions) +
+                                                    " sessions of " + trainee_id +
+                                                    " in this range: export fewer days at a time");
       }
       sessions->push_back(std::move(row));
     }

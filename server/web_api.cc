@@ -222,7 +222,8 @@ std::string OutcomeText(int outcome) {
 std::string FileNamePart(const std::string& id) {
   std::string out;
   for (char c : id) {
-    const bool kept = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_';
+    const bool kept =
+        std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_';
     out += kept ? c : '_';
   }
   return out.substr(0, 64);
@@ -513,8 +514,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     if (!QueryNumber(query, "to_unix_ms", INT64_MAX, &to, &bad)) return bad;
     if (to != 0 && to <= from) {
       return Error(400, "INVALID_ARGUMENT",
-                   "query to_unix_ms = " + std::to_string(to) + ": must be after from_unix_ms = " +
-                       std::to_string(from));
+                   "query to_unix_ms = " + std::to_string(to) +
+                       ": must be after from_unix_ms = " + std::to_string(from));
     }
     Status s = admit(req);
     if (!s.ok()) return ErrorOf(s);
@@ -842,8 +843,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     }
     if (to != 0 && to <= from) {
       return Error(400, "INVALID_ARGUMENT",
-                   "query to_unix_ms = " + std::to_string(to) + ": must be after from_unix_ms = " +
-                       std::to_string(from));
+                   "query to_unix_ms = " + std::to_string(to) +
+                       ": must be after from_unix_ms = " + std::to_string(from));
     }
     q.from_unix_ms = static_cast<int64_t>(from);
     q.to_unix_ms = static_cast<int64_t>(to);
@@ -883,7 +884,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
            {"actor", r.actor},
            {"actor_label", r.actor_label},
            {"role", patient_db::ParseRoleName(r.role, &role) ? v1::Role_Name(ToProtoRole(role))
-                                                              : "ROLE_UNSPECIFIED"},
+                                                             : "ROLE_UNSPECIFIED"},
            {"institution", r.institution},
            {"action", r.action},
            {"target", r.target},
@@ -920,10 +921,10 @@ std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {
 
 const std::vector<std::string>& SessionsCsvColumns() {
   static const std::vector<std::string> columns = {
-      "session_uuid", "trainee_id",     "case_id",       "case_version",    "lesson_id",
-      "lesson_verdict", "lesson_checks", "station_id",   "operator",        "start_utc",
-      "end_utc",      "duration_s",     "outcome",       "completed",       "time_to_cecum_s",
-      "pain_s",       "max_tip_arc_m",  "score"};
+      "session_uuid",   "trainee_id",    "case_id",    "case_version", "lesson_id",
+      "lesson_verdict", "lesson_checks", "station_id", "operator",     "start_utc",
+      "end_utc",        "duration_s",    "outcome",    "completed",    "time_to_cecum_s",
+      "pain_s",         "max_tip_arc_m", "score"};
   return columns;
 }
 

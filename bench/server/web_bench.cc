@@ -141,8 +141,8 @@ int main(int argc, char** argv) {
     ves::patient_db::WriteBatch audit;
     for (int i = 0; i < 100'000; ++i) {
       const std::string actor = "tok-" + std::to_string(i % 50);
-      audit.audit.push_back({0, 1'700'000'000'000 + i, actor, "Dr " + actor, "supervisor",
-                             "north", i % 1000 == 0 ? "session.export" : "session.read",
+      audit.audit.push_back({0, 1'700'000'000'000 + i, actor, "Dr " + actor, "supervisor", "north",
+                             i % 1000 == 0 ? "session.export" : "session.read",
                              "trainee-" + std::to_string(i % trainees), "OK"});
     }
     if (!store.CommitBatch(audit).ok()) {
@@ -162,8 +162,9 @@ int main(int argc, char** argv) {
 
   std::vector<std::string> page, curve, sessions, list = {"/api/v1/trainees?page_size=500"}, csv;
   const std::vector<std::string> audit_newest = {"/api/v1/audit?page_size=50"},
-                                 audit_rare = {"/api/v1/audit?page_size=50&action=session.export"
-                                               "&actor=Dr%20tok-7"};
+                                 audit_rare = {
+                                     "/api/v1/audit?page_size=50&action=session.export"
+                                     "&actor=Dr%20tok-7"};
   for (int t = 0; t < trainees; ++t) {
     const std::string id = "trainee-" + std::to_string(t);
     csv.push_back("/api/v1/trainees/" + id + "/sessions.csv");

@@ -174,10 +174,10 @@ TEST(AdminCli, UploadingAStoredCaseAgainWithShareWithSharesIt) {
   const auto& dir = server.dir();
   const std::string remote =
       " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kAdmin, "north");
-  const std::string south_station =
-      " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kStation, "south");
-  const std::string case_file = std::string(VES_SOURCE_DIR) +
-                                "/patient_db/cases/standard-adult.textproto";
+  const std::string south_station = " --server " + server.address() + " --token " +
+                                    server.MakeToken(StoreRole::kStation, "south");
+  const std::string case_file =
+      std::string(VES_SOURCE_DIR) + "/patient_db/cases/standard-adult.textproto";
   AdminRun first = Admin(dir, "case upload " + case_file + remote);
   ASSERT_EQ(first.exit_status, 0) << first.err;
   EXPECT_EQ(first.out.rfind("stored standard-adult v1", 0), 0u) << first.out;
@@ -194,8 +194,7 @@ TEST(AdminCli, UploadingAStoredCaseAgainWithShareWithSharesIt) {
   ASSERT_EQ(seen.exit_status, 0) << seen.err;
   EXPECT_NE(seen.out.find("standard-adult"), std::string::npos) << seen.out;
   const auto copy = dir / "south.vescase";
-  AdminRun down =
-      Admin(dir, "case download standard-adult -o " + copy.string() + south_station);
+  AdminRun down = Admin(dir, "case download standard-adult -o " + copy.string() + south_station);
   ASSERT_EQ(down.exit_status, 0) << down.err;
   EXPECT_EQ(patient_db::ReadFileBytes(copy),
             patient_db::EncodeCaseBundle(patient_db::LoadCaseFile(case_file)));

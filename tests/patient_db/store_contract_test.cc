@@ -498,8 +498,8 @@ TEST_P(StoreContract, AuditIsListedNewestFirstAndFiltered) {
     if (rows.value.size() < 3) break;
     page.before_id = rows.value.back().id;
   }
-  EXPECT_EQ(walked, (std::vector<std::string>{"t9", "t8", "t7", "t6", "t5", "t4", "t3", "t2",
-                                              "t1", "t0"}));
+  EXPECT_EQ(walked,
+            (std::vector<std::string>{"t9", "t8", "t7", "t6", "t5", "t4", "t3", "t2", "t1", "t0"}));
   AuditQuery nobody;
   nobody.actor = "tok-c";
   EXPECT_TRUE(store_->ListAuditNewest(nobody).value.empty());

@@ -7,14 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/asio/ip/tcp.hpp>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <thread>
-
-#include <boost/asio/ip/tcp.hpp>
 
 #include "patient_db/case_bundle.h"
 #include "server/http_server.h"
@@ -705,8 +704,7 @@ TEST_F(WebApiTest, SessionsExportAsCsvOneRowPerSession) {
     EXPECT_EQ(cells[column("outcome")], "cecum_reached");
     EXPECT_EQ(cells[column("completed")], "true");
     EXPECT_EQ(cells[column("duration_s")], "300.000");
-    EXPECT_NEAR(std::stod(cells[column("time_to_cecum_s")]), rec.metrics().time_to_cecum_s(),
-                1e-3);
+    EXPECT_NEAR(std::stod(cells[column("time_to_cecum_s")]), rec.metrics().time_to_cecum_s(), 1e-3);
     EXPECT_NEAR(std::stod(cells[column("pain_s")]), rec.metrics().pain_s(), 1e-3);
     EXPECT_NEAR(std::stod(cells[column("score")]), rec.score(), 1e-2);
   }
@@ -782,7 +780,8 @@ TEST(SessionsCsv, QuotesCellsAndDefusesFormulas) {
             "pain_s 31 <= 30: FAILED; damage_events 0 <= 0: ok,\"ward 3, bed \"\"A\"\"\",,"
             "1970-01-01T00:00:01.000Z,1970-01-01T00:01:01.500Z,60.500,timed_out,false,,0.000,"
             "0.0000,0.00");
-  EXPECT_NE(csv.find("\r\nu2,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,pending,,"), std::string::npos)
+  EXPECT_NE(csv.find("\r\nu2,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,pending,,"),
+            std::string::npos)
       << csv;
   EXPECT_NE(csv.find("\r\nu3,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,,,,"), std::string::npos) << csv;
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);

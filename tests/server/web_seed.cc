@@ -16,8 +16,8 @@
 //     server's verdict; prints {"uuid", "lesson_id", "passed", "score"}.
 #include <chrono>
 #include <iostream>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "patient_db/case_bundle.h"
 #include "server/client.h"
