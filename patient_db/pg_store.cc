@@ -291,4 +291,28 @@ StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int
   return out;
 }
 
+StoreResult<std::vector<AuditRow>> PgStore::ListAuditNewest(const AuditQuery& q) {
+  std::vector<AuditRow> out;
+  StoreStatus st = Transact("list audit", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    // An empty or zero filter matches every row: one statement serves all.
+    pqxx::result r = tx.exec_params(
+        "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
+        "FROM audit_log WHERE ($1::TEXT = '' OR actor = $1 OR actor_label = $1) "
+        "AND ($2::TEXT = '' OR action = $2) AND at_unix_ms >= $3::BIGINT "
+        "AND ($4::BIGINT = 0 OR at_unix_ms < $4::BIGINT) AND ($5::BIGINT = 0 OR id < $5::BIGINT) "
+        "ORDER BY id DESC LIMIT $6::BIGINT",
+        q.actor, q.action, q.from_unix_ms, q.to_unix_ms, q.before_id,
+        q.limit > 0 ? int64_t{q.limit} : int64_t{1} << 62);
+    for (const auto& row : r) {
+      out.push_back({row[0].as<int64_t>(), row[1].as<int64_t>(), row[2].as<std::string>(),
+                     row[3].as<std::string>(), row[4].as<std::string>(), row[5].as<std::string>(),
+                     row[6].as<std::string>(), row[7].as<std::string>(), row[8].as<std::string>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
 }  // namespace ves::patient_db

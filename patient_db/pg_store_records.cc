@@ -44,6 +44,12 @@ constexpr const char* kSessionColumns =
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
     "stored_unix_ms, operator_kind, max_tip_arc_m";
 
+// Column 17 of a session read back: the lesson the record names ('' when
+// none), kept in lesson_sessions rather than in sessions.
+constexpr const char* kSessionLessonColumn =
+    ", COALESCE((SELECT l.lesson_id FROM lesson_sessions l WHERE l.session_uuid = sessions.uuid), "
+    "'')";
+
 SessionRow ReadSessionRow(const pqxx::row& r) {
   SessionRow s;
   s.uuid = r[0].as<std::string>();
@@ -235,7 +241,21 @@ StoreResult<PutCaseResult> PgStore::PutCase(const CaseRow& row, const std::strin
                 "); give the new content a higher version");
       }
       ReadShares(tx, &existing);
-      result = {existing, true};  // the blob was there too: the commit writes nothing
+      std::string refusal;
+      const std::vector<std::string> added =
+          NewCaseShares(existing, row.institution, row.shared_with, &refusal);
+      if (!refusal.empty()) return StoreStatus::Error(StoreCode::kAlreadyExists, refusal);
+      // The blob was there too: the commit writes only the new shares, if any
+      // (another replica adding the same one at once is no conflict).
+      for (const std::string& institution : added) {
+        tx.exec_params(
+            "INSERT INTO case_shares (case_id, version, institution) VALUES ($1, $2, $3) "
+            "ON CONFLICT DO NOTHING",
+            row.case_id, int64_t{row.version}, institution);
+        existing.shared_with.push_back(institution);
+      }
+      std::sort(existing.shared_with.begin(), existing.shared_with.end());
+      result = {existing, true};
       return StoreStatus::Ok();
     }
     CaseRow stored = row;
@@ -451,11 +471,14 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
 StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
   SessionRow out;
   StoreStatus st = Transact("get session", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("SELECT ") + kSessionColumns + ", body FROM sessions WHERE uuid = $1", uuid);
+    pqxx::result r =
+        tx.exec_params(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                           ", body FROM sessions WHERE uuid = $1",
+                       uuid);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
     out = ReadSessionRow(r[0]);
-    out.body = pqxx::binarystring(r[0][17]).str();
+    out.lesson_id = r[0][17].as<std::string>();
+    out.body = pqxx::binarystring(r[0][18]).str();
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;
@@ -465,7 +488,7 @@ StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
 StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& trainee_id,
                                                            const std::string& case_id,
                                                            const ListPage& page) {
-  const std::string sql = std::string("SELECT ") + kSessionColumns +
+  const std::string sql = std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
                           " FROM sessions WHERE trainee_id = $1 AND ($2 = '' OR case_id = $2)"
                           " AND ($3 = 0 OR start_unix_ms > $4 OR (start_unix_ms = $4 AND "
                           "uuid COLLATE \"C\" > $5))"
@@ -477,6 +500,7 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
              sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
              page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
       out.push_back(ReadSessionRow(row));
+      out.back().lesson_id = row[17].as<std::string>();
     }
     return StoreStatus::Ok();
   });

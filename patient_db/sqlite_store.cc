@@ -242,6 +242,29 @@ StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms,
   return out;
 }
 
+StoreResult<std::vector<AuditRow>> SqliteStore::ListAuditNewest(const AuditQuery& q) {
+  Reader r = Read();
+  // An empty or zero filter matches every row: one statement serves all.
+  SqliteStatement* s = r.db().Prepare(
+      "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
+      "FROM audit_log WHERE (?1 = '' OR actor = ?1 OR actor_label = ?1) "
+      "AND (?2 = '' OR action = ?2) AND at_unix_ms >= ?3 AND (?4 = 0 OR at_unix_ms < ?4) "
+      "AND (?5 = 0 OR id < ?5) ORDER BY id DESC LIMIT ?6",
+      nullptr);
+  if (!s) return Internal(r.db(), "list audit");
+  s->Bind(1, q.actor).Bind(2, q.action).Bind(3, q.from_unix_ms).Bind(4, q.to_unix_ms);
+  s->Bind(5, q.before_id).Bind(6, int64_t{q.limit > 0 ? q.limit : -1});
+  int rc = SQLITE_OK;
+  std::vector<AuditRow> out;
+  while (s->Step(&rc)) {
+    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
+                   s->Text(6), s->Text(7), s->Text(8)});
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list audit");
+  return out;
+}
+
 StoreStatus SqliteStore::WriteAudit(const AuditRow& a) {
   SqliteStatement* s = writer_->Prepare(
       "INSERT INTO audit_log (id, at_unix_ms, actor, actor_label, role, institution, action, "

@@ -44,6 +44,7 @@ class SqliteStore final : public Store {
                                                     const ListPage& page = {}) override;
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
                                                int64_t after_id = 0) override;
+  StoreResult<std::vector<AuditRow>> ListAuditNewest(const AuditQuery& query) override;
   StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
   StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) override;
   StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution,

@@ -1,5 +1,6 @@
 // SqliteStore: cases (content-addressed blobs, versions, shares) and sessions
 // (group-committed batches).
+#include <algorithm>
 #include <map>
 #include <optional>
 
@@ -38,6 +39,12 @@ constexpr const char* kSessionColumns =
     "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
     "stored_unix_ms, operator_kind, max_tip_arc_m";
+
+// Column 17 of a session read back: the lesson the record names ('' when
+// none), kept in lesson_sessions rather than in sessions.
+constexpr const char* kSessionLessonColumn =
+    ", COALESCE((SELECT l.lesson_id FROM lesson_sessions l WHERE l.session_uuid = sessions.uuid), "
+    "'')";
 
 SessionRow ReadSessionRow(const SqliteStatement& s) {
   SessionRow r;
@@ -165,7 +172,26 @@ StoreResult<PutCaseResult> SqliteStore::PutCase(const CaseRow& row, const std::s
     auto shares = ReadShares(db, row.case_id, row.version);
     if (!shares.ok()) return fail(shares.status);
     existing->shared_with = shares.value;
-    db.Exec("ROLLBACK", nullptr);
+    std::string refusal;
+    const std::vector<std::string> added =
+        NewCaseShares(*existing, row.institution, row.shared_with, &refusal);
+    if (!refusal.empty()) return fail(StoreStatus::Error(StoreCode::kAlreadyExists, refusal));
+    if (added.empty()) {
+      db.Exec("ROLLBACK", nullptr);
+      return PutCaseResult{*existing, true};
+    }
+    for (const std::string& institution : added) {
+      s = db.Prepare("INSERT INTO case_shares (case_id, version, institution) VALUES (?, ?, ?)",
+                     nullptr);
+      if (!s) return fail(Internal(db, "put case share"));
+      s->Bind(1, row.case_id).Bind(2, int64_t{row.version}).Bind(3, institution);
+      if (!Run(s, &rc)) return fail(Internal(db, "put case share"));
+      existing->shared_with.push_back(institution);
+    }
+    std::sort(existing->shared_with.begin(), existing->shared_with.end());
+    if (!db.Exec("COMMIT", &error)) {
+      return fail(StoreStatus::Error(StoreCode::kInternal, "commit " + name + ": " + error));
+    }
     return PutCaseResult{*existing, true};
   }
   s = db.Prepare(
@@ -439,15 +465,18 @@ StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteB
 
 StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
-      std::string("SELECT ") + kSessionColumns + ", body FROM sessions WHERE uuid = ?", nullptr);
+  SqliteStatement* s =
+      r.db().Prepare(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                         ", body FROM sessions WHERE uuid = ?",
+                     nullptr);
   if (!s) return Internal(r.db(), "get session");
   s->Bind(1, uuid);
   int rc = SQLITE_OK;
   std::optional<SessionRow> row;
   if (s->Step(&rc)) {
     row = ReadSessionRow(*s);
-    row->body = s->Blob(17);
+    row->lesson_id = s->Text(17);
+    row->body = s->Blob(18);
   }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get session");
@@ -459,8 +488,8 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
                                                                const std::string& case_id,
                                                                const ListPage& page) {
   Reader r = Read();
-  std::string sql =
-      std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE trainee_id = ?";
+  std::string sql = std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                    " FROM sessions WHERE trainee_id = ?";
   if (!case_id.empty()) sql += " AND case_id = ?";
   if (page.has_after) sql += " AND (start_unix_ms > ? OR (start_unix_ms = ? AND uuid > ?))";
   sql += " ORDER BY start_unix_ms, uuid LIMIT ?";
@@ -476,7 +505,10 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
   s->Bind(i, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<SessionRow> out;
-  while (s->Step(&rc)) out.push_back(ReadSessionRow(*s));
+  while (s->Step(&rc)) {
+    out.push_back(ReadSessionRow(*s));
+    out.back().lesson_id = s->Text(17);
+  }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list sessions");
   return out;

@@ -55,6 +55,29 @@ StationRow MergeStationReport(const StationRow* stored, const StationRow& report
   return out;
 }
 
+std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string& requested_owner,
+                                       const std::vector<std::string>& requested,
+                                       std::string* refusal) {
+  refusal->clear();
+  std::vector<std::string> added;
+  for (const std::string& i : requested) {
+    if (i == stored.institution || std::find(stored.shared_with.begin(), stored.shared_with.end(),
+                                             i) != stored.shared_with.end()) {
+      continue;
+    }
+    added.push_back(i);
+  }
+  std::sort(added.begin(), added.end());
+  added.erase(std::unique(added.begin(), added.end()), added.end());
+  if (!added.empty() && requested_owner != stored.institution) {
+    *refusal = "case '" + stored.case_id + "' version " + std::to_string(stored.version) +
+               " is owned by institution '" + stored.institution +
+               "': only its owner can share it (upload it again for that institution)";
+    return {};
+  }
+  return added;
+}
+
 std::unique_ptr<Store> OpenStore(const std::string& url) {
   const std::string kSqlite = "sqlite:";
   if (url.rfind(kSqlite, 0) == 0 && url.size() > kSqlite.size()) {

@@ -142,6 +142,14 @@ struct StationRow {
 // upload's row (has_health when it carried health). Pure.
 StationRow MergeStationReport(const StationRow* stored, const StationRow& report);
 
+// The institutions of `requested` that a re-upload of `stored` adds to its
+// shares (sorted, unique; neither the owner nor one already shared), and in
+// *refusal why they cannot be added when `requested_owner` is not the owner
+// (empty when they can, or when there are none). Pure; both stores use it.
+std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string& requested_owner,
+                                       const std::vector<std::string>& requested,
+                                       std::string* refusal);
+
 // A session record as stored: the searchable columns plus the serialized body.
 struct SessionRow {
   std::string uuid;
@@ -163,7 +171,8 @@ struct SessionRow {
   int64_t stored_unix_ms = 0;
   std::string body;  // serialized ves.v1.SessionRecord; empty in listings
   // Non-empty: the record names a lesson; CommitBatch queues it for judging
-  // (table lesson_sessions) in the same transaction. Not read back.
+  // (table lesson_sessions) in the same transaction. GetSession and
+  // ListSessions read it back (learning curves per lesson are built from it).
   std::string lesson_id;
   // Set: the station's report that came with this upload; CommitBatch merges
   // it into table stations in the same transaction unless the session is a
@@ -190,6 +199,17 @@ struct AuditRow {
   std::string target;
   std::string result;
   bool operator==(const AuditRow&) const = default;
+};
+
+// What the audit page asks for (docs/web.md): newest first, every filter
+// optional.
+struct AuditQuery {
+  std::string actor;         // the token id or its label, exactly; empty: anyone
+  std::string action;        // exactly; empty: any
+  int64_t from_unix_ms = 0;  // at_unix_ms >= from_unix_ms
+  int64_t to_unix_ms = 0;    // at_unix_ms < to_unix_ms; 0: no bound
+  int64_t before_id = 0;     // ids below it (the last of the previous page); 0: from the newest
+  int limit = 0;             // 0: all
 };
 
 // A curriculum (docs/lessons.md): searchable columns plus the serialized
@@ -266,7 +286,10 @@ class Store {
                                                             const ListPage& page = {}) = 0;
 
   // Stores the payload under its SHA-256 (once) and the (id, version) row. The
-  // same id, version and hash again: already_stored. Same id and version with
+  // same id, version and hash again: already_stored, and the row's shared_with
+  // institutions are added to the stored shares (never removed) when the row
+  // names the stored owner; new shares asked by another institution:
+  // kAlreadyExists (only the owner shares its case). Same id and version with
   // other content: kAlreadyExists.
   virtual StoreResult<PutCaseResult> PutCase(const CaseRow& row, const std::string& payload) = 0;
   virtual StoreResult<std::vector<CaseRow>> ListCases(const CaseFilter& filter) = 0;
@@ -297,6 +320,8 @@ class Store {
   // Oldest first, at most `limit`, ids above `after_id`.
   virtual StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
                                                        int64_t after_id = 0) = 0;
+  // Newest first (by id), as filtered by `query`.
+  virtual StoreResult<std::vector<AuditRow>> ListAuditNewest(const AuditQuery& query) = 0;
 
   // ---- Lessons (docs/lessons.md) ----
   // Stores the curriculum and its lesson ids. The same id and body hash again:

@@ -64,6 +64,17 @@ grpc::Status ListStationsCall(const ServiceDeps&, const Principal&, const v1::Li
 grpc::Status GetProgressCall(const ServiceDeps&, const Principal&, const v1::GetProgressRequest&,
                              v1::GetProgressResponse*);
 
+// What a CSV export of a trainee's sessions holds (docs/web.md): the sessions
+// started in [from_unix_ms, to_unix_ms) (to 0: no bound), oldest first, and
+// the trainee's lesson verdicts. The read rules of ListSessions; audited as
+// session.export. More than kMaxExportSessions sessions in the range:
+// OUT_OF_RANGE (narrow the dates).
+inline constexpr int kMaxExportSessions = 20000;
+grpc::Status ExportSessionsCall(const ServiceDeps& deps, const Principal& who,
+                                const std::string& trainee_id, int64_t from_unix_ms,
+                                int64_t to_unix_ms, std::vector<patient_db::SessionRow>* sessions,
+                                std::vector<patient_db::LessonVerdictRow>* verdicts);
+
 // A gRPC unary handler over one of the calls above: admit from the call's
 // metadata, run, finish.
 template <class Request, class Response>

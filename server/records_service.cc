@@ -485,6 +485,42 @@ Status ListSessionsCall(const ServiceDeps& deps, const Principal& who,
   });
 }
 
+Status ExportSessionsCall(const ServiceDeps& deps, const Principal& who,
+                          const std::string& trainee_id, int64_t from_unix_ms, int64_t to_unix_ms,
+                          std::vector<patient_db::SessionRow>* sessions,
+                          std::vector<patient_db::LessonVerdictRow>* verdicts) {
+  static const CallSpec spec{"session.export",
+                             {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
+                             "export the sessions"};
+  return RunCall(deps, who, spec, trainee_id, [&]() -> Status {
+    patient_db::TraineeRow trainee;
+    Status s = ReadableTrainee(deps, who, trainee_id, "export the sessions", &trainee);
+    if (!s.ok()) return s;
+    // From the first session starting at from_unix_ms (the listing's key is
+    // (start, uuid) and every uuid sorts after ""), one more than the bound.
+    patient_db::ListPage page;
+    page.has_after = from_unix_ms > 0;
+    page.after_number = from_unix_ms;
+    page.limit = kMaxExportSessions + 1;
+    auto rows = deps.store->ListSessions(trainee.trainee_id, "", page);
+    if (!rows.ok()) return ToGrpcStatus(rows.status);
+    sessions->clear();
+    for (auto& row : rows.value) {
+      if (to_unix_ms > 0 && row.start_unix_ms >= to_unix_ms) break;
+      if (static_cast<int>(sessions->size()) == kMaxExportSessions) {
+        return Status(StatusCode::OUT_OF_RANGE, "more than " + std::to_string(kMaxExportSessions) +
+                                                    " sessions of " + trainee_id +
+                                                    " in this range: export fewer days at a time");
+      }
+      sessions->push_back(std::move(row));
+    }
+    auto judged = deps.store->ListLessonVerdicts(trainee.trainee_id);
+    if (!judged.ok()) return ToGrpcStatus(judged.status);
+    *verdicts = std::move(judged.value);
+    return Status::OK;
+  });
+}
+
 grpc::ServerUnaryReactor* TraineesService::ListSessions(grpc::CallbackServerContext* ctx,
                                                         const ves::v1::ListSessionsRequest* request,
                                                         ves::v1::ListSessionsResponse* response) {

@@ -43,7 +43,10 @@ SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, d
     out.pain_stretch_m = th.pain_stretch_m;
     out.cecum_arc_m = th.cecum_arc_m;
     out.final_tip_arc_m = obs.tip_arc_m;
-    if (step % series_every != 0 && step != n_steps) return;
+    // The first step is a frame with shapes too, so the replay opens on the
+    // scope at the start rather than on an empty view until the first sample.
+    const bool first_or_last = step == 1 || step == n_steps;
+    if (step % series_every != 0 && !first_or_last) return;
     ReplayFrame f;
     f.t_s = obs.t_s;
     f.hand_force_N = obs.base_force_N;
@@ -52,7 +55,7 @@ SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, d
     f.inserted_m = obs.inserted_m;
     f.pain = obs.peak_stretch_m > th.pain_stretch_m;
     f.loop = runner.session().accumulator().in_loop();
-    if (step % shape_every == 0 || step == n_steps) {
+    if (step % shape_every == 0 || first_or_last) {
       const auto& state = runner.state();
       // The scope from just outside the anus to the tip.
       const size_t first = static_cast<size_t>(std::max(0, state.first_inside_sample - 1));

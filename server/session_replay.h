@@ -20,13 +20,13 @@ struct ReplayFrame {
   bool pain = false;  // stretch over the pain threshold
   bool loop = false;  // loop index over its enter threshold (until under its exit one)
   // AP fluoroscopy projection (image right = -x, up = +z of W), millimetres;
-  // empty on frames between shape samples.
+  // empty on frames between shape samples (the first and last frames have them).
   std::vector<std::pair<int, int>> scope_mm;
   std::vector<std::pair<int, int>> colon_mm;
 };
 
 struct SessionReplay {
-  std::vector<ReplayFrame> frames;  // every 1/series_hz seconds, and the last step
+  std::vector<ReplayFrame> frames;  // every 1/series_hz seconds, the first and the last step
   double pain_stretch_m = 0;
   double cecum_arc_m = 0;
   double final_tip_arc_m = 0;  // after the last logged step

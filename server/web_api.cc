@@ -4,7 +4,10 @@
 #include <openssl/crypto.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
+#include <cstdio>
+#include <ctime>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -166,6 +169,64 @@ double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// RFC 4180: quoted when it holds a comma, quote or line end. A text cell a
+// spreadsheet would run as a formula gets a leading ' (ids are printable
+// text from uploads; a trainee id may well start with '=').
+std::string CsvText(const std::string& text) {
+  std::string cell = text;
+  if (!cell.empty() && std::string_view("=+-@").find(cell[0]) != std::string_view::npos) {
+    cell.insert(cell.begin(), '\'');
+  }
+  if (cell.find_first_of(",\"\r\n") == std::string::npos) return cell;
+  std::string quoted = "\"";
+  for (char c : cell) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string CsvNumber(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// ISO 8601 in UTC to the millisecond: 2026-12-07T14:53:22.123Z.
+std::string IsoUtc(int64_t unix_ms) {
+  const std::time_t secs = static_cast<std::time_t>(unix_ms / 1000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char buf[96];  // room for any int the compiler cannot rule out
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+                static_cast<int>(unix_ms % 1000));
+  return buf;
+}
+
+// "cecum_reached", "timed_out", ...: the station's names for an outcome.
+std::string OutcomeText(int outcome) {
+  std::string name = v1::Outcome_IsValid(outcome)
+                         ? v1::Outcome_Name(static_cast<v1::Outcome>(outcome))
+                         : "OUTCOME_UNSPECIFIED";
+  name = name.substr(name.rfind("OUTCOME_", 0) == 0 ? 8 : 0);
+  std::transform(name.begin(), name.end(), name.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return name;
+}
+
+// A file name for Content-Disposition: the id's letters, digits, '.', '-'
+// and '_' kept, anything else '_'.
+std::string FileNamePart(const std::string& id) {
+  std::string out;
+  for (char c : id) {
+    const bool kept =
+        std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_';
+    out += kept ? c : '_';
+  }
+  return out.substr(0, 64);
 }
 
 }  // namespace
@@ -443,6 +504,33 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                            {"next_page_token", resp.next_page_token()}});
   }
   if (!get) return Error(405, "METHOD_NOT_ALLOWED", "this route answers GET only");
+
+  // trainees/{id}/sessions.csv: the export (docs/web.md, "Export")
+  if (path.size() == 3 && path[0] == "trainees" && path[2] == "sessions.csv") {
+    v1::ListSessionsRequest req;  // the trainee id's bounds
+    req.set_trainee_id(path[1]);
+    uint64_t from = 0, to = 0;
+    if (!QueryNumber(query, "from_unix_ms", INT64_MAX, &from, &bad)) return bad;
+    if (!QueryNumber(query, "to_unix_ms", INT64_MAX, &to, &bad)) return bad;
+    if (to != 0 && to <= from) {
+      return Error(400, "INVALID_ARGUMENT",
+                   "query to_unix_ms = " + std::to_string(to) +
+                       ": must be after from_unix_ms = " + std::to_string(from));
+    }
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    std::vector<patient_db::SessionRow> sessions;
+    std::vector<patient_db::LessonVerdictRow> verdicts;
+    s = ExportSessionsCall(deps_, who, path[1], static_cast<int64_t>(from),
+                           static_cast<int64_t>(to), &sessions, &verdicts);
+    if (!s.ok()) return ErrorOf(s);
+    HttpReply r;
+    r.content_type = "text/csv; charset=utf-8";
+    r.body = SessionsCsv(sessions, verdicts);
+    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"ves-sessions-" +
+                                                      FileNamePart(path[1]) + ".csv\"");
+    return r;
+  }
 
   // trainees/{id}/sessions
   if (path.size() == 3 && path[0] == "trainees" && path[2] == "sessions") {
@@ -733,21 +821,76 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                            {"now_unix_ms", NowUnixMs()}});
   }
 
-  // audit
+  // audit: newest first, filtered by actor, action and time, paged
   if (path.size() == 1 && path[0] == "audit") {
-    v1::ListAuditRequest req;
-    uint64_t since = 0, limit = 0;
-    if (!QueryNumber(query, "since_unix_ms", INT64_MAX, &since, &bad)) return bad;
-    if (!QueryNumber(query, "limit", patient_db::kMaxPageSize, &limit, &bad)) return bad;
-    req.set_since_unix_ms(static_cast<int64_t>(since));
-    req.set_limit(static_cast<uint32_t>(limit));
+    v1::ListAuditRequest req;  // the page token's bounds
     req.set_page_token(page_token);
+    patient_db::AuditQuery q;
+    uint64_t from = 0, to = 0, limit = 0;
+    if (!QueryNumber(query, "from_unix_ms", INT64_MAX, &from, &bad)) return bad;
+    if (!QueryNumber(query, "since_unix_ms", INT64_MAX, &from, &bad)) return bad;  // older name
+    if (!QueryNumber(query, "to_unix_ms", INT64_MAX, &to, &bad)) return bad;
+    if (!QueryNumber(query, "limit", patient_db::kMaxPageSize, &limit, &bad)) return bad;
+    if (page_size > 0) limit = page_size;
+    for (const auto& [name, field] : {std::pair{"actor", &q.actor}, {"action", &q.action}}) {
+      *field = QueryText(query, name);
+      if (!field->empty() && !patient_db::IsPrintableId(*field)) {
+        return Error(400, "INVALID_ARGUMENT",
+                     std::string("query ") + name + " = '" +
+                         patient_db::PrintableExcerpt(*field, 40) + "': must be 1.." +
+                         std::to_string(patient_db::kMaxIdBytes) + " printable characters");
+      }
+    }
+    if (to != 0 && to <= from) {
+      return Error(400, "INVALID_ARGUMENT",
+                   "query to_unix_ms = " + std::to_string(to) +
+                       ": must be after from_unix_ms = " + std::to_string(from));
+    }
+    q.from_unix_ms = static_cast<int64_t>(from);
+    q.to_unix_ms = static_cast<int64_t>(to);
     Status s = admit(req);
     if (!s.ok()) return ErrorOf(s);
-    v1::ListAuditResponse resp;
-    s = ListAuditCall(deps_, who, req, &resp);
+    // The rules of Admin.ListAudit: admins only, reading it is not audited
+    // (every page would write to it), refusals are.
+    static const CallSpec spec{"audit.list",
+                               {StoreRole::kAdmin},
+                               "read the audit log",
+                               /*audit_every_call=*/false};
+    std::vector<patient_db::AuditRow> rows;
+    std::string next;
+    s = RunCall(deps_, who, spec, "", [&]() -> Status {
+      const int size = PageSizeOf(static_cast<uint32_t>(limit), patient_db::kDefaultPageSize);
+      patient_db::ListPage after;
+      Status token = ReadPageToken(page_token, "audit-newest", &after);
+      if (!token.ok()) return token;
+      q.before_id = after.has_after ? after.after_number : 0;
+      q.limit = size + 1;
+      auto listed = deps_.store->ListAuditNewest(q);
+      if (!listed.ok()) return ToGrpcStatus(listed.status);
+      rows = std::move(listed.value);
+      if (static_cast<int>(rows.size()) > size) {
+        rows.resize(size);
+        next = MakePageToken("audit-newest", rows.back().id, "");
+      }
+      return Status::OK;
+    });
     if (!s.ok()) return ErrorOf(s);
-    return JsonReply(200, ProtoJson(resp));
+    json entries = json::array();
+    for (const auto& r : rows) {
+      StoreRole role = StoreRole::kTrainee;
+      entries.push_back(
+          {{"id", r.id},
+           {"at_unix_ms", r.at_unix_ms},
+           {"actor", r.actor},
+           {"actor_label", r.actor_label},
+           {"role", patient_db::ParseRoleName(r.role, &role) ? v1::Role_Name(ToProtoRole(role))
+                                                             : "ROLE_UNSPECIFIED"},
+           {"institution", r.institution},
+           {"action", r.action},
+           {"target", r.target},
+           {"result", r.result}});
+    }
+    return JsonReply(200, {{"entries", entries}, {"next_page_token", next}});
   }
   return Error(404, "NOT_FOUND",
                "no API route '" + patient_db::PrintableExcerpt(raw_path, 80) + "' (docs/web.md)");
@@ -774,6 +917,53 @@ std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {
     flags.push_back("can_errors");
   }
   return flags;
+}
+
+const std::vector<std::string>& SessionsCsvColumns() {
+  static const std::vector<std::string> columns = {
+      "session_uuid",   "trainee_id",    "case_id",    "case_version", "lesson_id",
+      "lesson_verdict", "lesson_checks", "station_id", "operator",     "start_utc",
+      "end_utc",        "duration_s",    "outcome",    "completed",    "time_to_cecum_s",
+      "pain_s",         "max_tip_arc_m", "score"};
+  return columns;
+}
+
+std::string SessionsCsv(const std::vector<patient_db::SessionRow>& sessions,
+                        const std::vector<patient_db::LessonVerdictRow>& verdicts) {
+  std::map<std::string, const patient_db::LessonVerdictRow*> verdict_of;
+  for (const auto& v : verdicts) verdict_of[v.session_uuid] = &v;
+  std::string out;
+  const auto line = [&out](const std::vector<std::string>& cells) {
+    for (size_t i = 0; i < cells.size(); ++i) {
+      if (i > 0) out += ',';
+      out += cells[i];
+    }
+    out += "\r\n";
+  };
+  line(SessionsCsvColumns());
+  for (const auto& s : sessions) {
+    std::string verdict, checks;
+    if (!s.lesson_id.empty()) {
+      auto it = verdict_of.find(s.uuid);
+      if (it == verdict_of.end()) {
+        verdict = "pending";  // the judge has not replayed it yet
+      } else {
+        verdict = it->second->rejected ? "rejected" : it->second->passed ? "passed" : "failed";
+        for (const std::string& check : Split(it->second->detail, '\n')) {
+          if (check.empty()) continue;
+          checks += (checks.empty() ? "" : "; ") + check;
+        }
+      }
+    }
+    line({CsvText(s.uuid), CsvText(s.trainee_id), CsvText(s.case_id),
+          std::to_string(s.case_version), CsvText(s.lesson_id), verdict, CsvText(checks),
+          CsvText(s.station_id), CsvText(s.operator_kind), IsoUtc(s.start_unix_ms),
+          IsoUtc(s.end_unix_ms), CsvNumber((s.end_unix_ms - s.start_unix_ms) / 1000.0, 3),
+          OutcomeText(s.outcome), s.completed ? "true" : "false",
+          s.completed ? CsvNumber(s.time_to_cecum_s, 3) : "", CsvNumber(s.pain_s, 3),
+          CsvNumber(s.max_tip_arc_m, 4), CsvNumber(s.score, 2)});
+  }
+  return out;
 }
 
 HttpReply WebApi::LiveWatch(const HttpRequest& request, std::string* session_uuid,

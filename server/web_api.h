@@ -65,6 +65,15 @@ std::vector<std::string> StationHealthFlags(const v1::StationHealth& health);
 // counter of kStationHealthCounts as a number. Pure.
 nlohmann::json StationHealthJson(const v1::StationHealth& health);
 
+// The header of a sessions CSV export (docs/web.md, "Export"), its columns
+// in order, and the export itself: one row per session of `sessions` (in
+// their order) with its lesson verdict from `verdicts` (any order), RFC 4180
+// quoting, CRLF line ends, text cells that a spreadsheet would take for a
+// formula (=, +, -, @ first) prefixed with '. Pure.
+const std::vector<std::string>& SessionsCsvColumns();
+std::string SessionsCsv(const std::vector<patient_db::SessionRow>& sessions,
+                        const std::vector<patient_db::LessonVerdictRow>& verdicts);
+
 class WebApi {
  public:
   WebApi(ServiceDeps deps, WebOptions options);

@@ -4,7 +4,9 @@
 // of 10, 100 sessions each. A trainee page is what trainee.html asks for:
 // GET /api/v1/trainees/{id}/curve (per case and lesson, with the group's
 // median) and GET /api/v1/trainees/{id}/sessions; the trainee list page
-// (GET /api/v1/trainees: every trainee's last activity) is timed apart.
+// (GET /api/v1/trainees: every trainee's last activity) is timed apart, as
+// are a trainee's CSV export (100 sessions) and the audit page (an admin's
+// newest 50 of 100,000 rows, and a filter that matches none of them).
 // Each request on a new connection, one at a time; p50/p99 over --requests.
 // Usage: web_bench [--sessions N] [--requests R]
 #include <sys/resource.h>
@@ -132,16 +134,40 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  // An audit log of a busy server: 100,000 rows of 50 actors, one row in a
+  // thousand another action (all tok-0's), so a filter for that action and
+  // another actor matches nothing: the page scans every row.
+  {
+    ves::patient_db::WriteBatch audit;
+    for (int i = 0; i < 100'000; ++i) {
+      const std::string actor = "tok-" + std::to_string(i % 50);
+      audit.audit.push_back({0, 1'700'000'000'000 + i, actor, "Dr " + actor, "supervisor", "north",
+                             i % 1000 == 0 ? "session.export" : "session.read",
+                             "trainee-" + std::to_string(i % trainees), "OK"});
+    }
+    if (!store.CommitBatch(audit).ok()) {
+      std::fprintf(stderr, "web_bench: cannot store the audit rows\n");
+      return 1;
+    }
+  }
   const std::string token = ves::server::NewToken();
   store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kSupervisor, "north",
                   "", "bench supervisor", 1});
+  const std::string admin = ves::server::NewToken();
+  store.AddToken({ves::server::Sha256HexOf(admin), ves::patient_db::StoreRole::kAdmin, "north", "",
+                  "bench admin", 1});
   const double seed_s = std::chrono::duration<double>(Clock::now() - t_seed).count();
   server->Start();
   const int port = server->http_port();
 
-  std::vector<std::string> page, curve, sessions, list = {"/api/v1/trainees?page_size=500"};
+  std::vector<std::string> page, curve, sessions, list = {"/api/v1/trainees?page_size=500"}, csv;
+  const std::vector<std::string> audit_newest = {"/api/v1/audit?page_size=50"},
+                                 audit_rare = {
+                                     "/api/v1/audit?page_size=50&action=session.export"
+                                     "&actor=Dr%20tok-7"};
   for (int t = 0; t < trainees; ++t) {
     const std::string id = "trainee-" + std::to_string(t);
+    csv.push_back("/api/v1/trainees/" + id + "/sessions.csv");
     curve.push_back("/api/v1/trainees/" + id + "/curve");
     sessions.push_back("/api/v1/trainees/" + id + "/sessions?page_size=500");
     page.push_back(curve.back());
@@ -155,6 +181,9 @@ int main(int argc, char** argv) {
   const Stats c = Measure(curve, port, token, requests);
   const Stats s = Measure(sessions, port, token, requests);
   const Stats l = Measure(list, port, token, std::max(10, requests / 10));
+  const Stats x = Measure(csv, port, token, requests);
+  const Stats an = Measure(audit_newest, port, admin, std::max(10, requests / 10));
+  const Stats ar = Measure(audit_rare, port, admin, std::max(10, requests / 10));
   const double cpu = CpuSeconds() - cpu0;
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
   std::printf(
@@ -166,6 +195,16 @@ int main(int argc, char** argv) {
   std::printf(
       "  GET trainees (list, 100)    p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
       l.p50_ms, l.p99_ms, l.max_ms, std::max(10, requests / 10));
+  std::printf(
+      "  GET trainees/{id}/sessions.csv  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
+      x.p50_ms, x.p99_ms, x.max_ms, requests);
+  std::printf(
+      "  GET audit (newest 50 of 100k)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
+      an.p50_ms, an.p99_ms, an.max_ms, std::max(10, requests / 10));
+  std::printf(
+      "  GET audit (actor+action, none of 100k match)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
+      "  (%d requests)\n",
+      ar.p50_ms, ar.p99_ms, ar.max_ms, std::max(10, requests / 10));
   std::printf("  process CPU (server and client) %.1f s over %.1f s wall\n", cpu, wall);
   server->Shutdown(std::chrono::milliseconds(0));
   server.reset();

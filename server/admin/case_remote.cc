@@ -67,6 +67,12 @@ int RunCaseUpload(const CommandArgs& args) {
             << " v" << r.summary().version() << " sha256=" << r.summary().payload_sha256_hex()
             << " (bundle " << r.summary().size_bytes() << " bytes, sha256 "
             << r.summary().sha256_hex().substr(0, 16) << "…)\n";
+  // Shares are added on every upload, a repeat's too: say which hold now.
+  if (r.summary().shared_with_size() > 0) {
+    std::cout << "shared with";
+    for (const auto& i : r.summary().shared_with()) std::cout << " " << Shown(i);
+    std::cout << "\n";
+  }
   return kExitOk;
 }
 

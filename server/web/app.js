@@ -186,6 +186,17 @@ async function traineePage() {
   $('trainee-group').textContent = curve.group || '—';
   for (const c of curve.cases) curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null);
   for (const l of curve.lessons) curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line);
+  // The CSV export of the sessions between the chosen days (docs/web.md, "Export").
+  const exportLink = () => {
+    let range = '';
+    const from = utcDayMs($('export-from').value), to = utcDayMs($('export-to').value);
+    if (!Number.isNaN(from)) range += '&from_unix_ms=' + from;
+    if (!Number.isNaN(to)) range += '&to_unix_ms=' + (to + 24 * 3600 * 1000);
+    $('export-csv').href = '/api/v1/trainees/' + encodeURIComponent(id) + '/sessions.csv' +
+                           range.replace('&', '?');
+  };
+  for (const input of ['export-from', 'export-to']) $(input).addEventListener('change', exportLink);
+  exportLink();
   const sessions = await api('trainees/' + encodeURIComponent(id) + '/sessions?page_size=500');
   const body = $('sessions').querySelector('tbody');
   for (const s of sessions.sessions.slice().reverse()) {
@@ -357,21 +368,62 @@ async function progressPage() {
   }
 }
 
+// A UTC day (YYYY-MM-DD, as a date input gives it) as Unix ms at its start;
+// NaN when it is not one.
+function utcDayMs(day) {
+  const m = /^(\d{4})-(\d{2})-(\d{2})$/.exec(day);
+  return m ? Date.UTC(Number(m[1]), Number(m[2]) - 1, Number(m[3])) : NaN;
+}
+
+// The audit log, newest first, a page at a time, filtered as the form (and
+// the address: audit.html?actor=&action=&from=&to=) says.
 async function auditPage() {
   await signedIn();
+  const dayMs = 24 * 3600 * 1000;
+  let filter = '';
+  for (const [name, input] of [['actor', 'filter-actor'], ['action', 'filter-action']]) {
+    const v = param(name);
+    $(input).value = v;
+    if (v) filter += '&' + name + '=' + encodeURIComponent(v);
+  }
+  for (const [name, input, key, extra] of [['from', 'filter-from', 'from_unix_ms', 0],
+                                           ['to', 'filter-to', 'to_unix_ms', dayMs]]) {
+    const v = param(name);
+    if (!v) continue;
+    const ms = utcDayMs(v);
+    if (Number.isNaN(ms)) throw new Error(name + ' = \'' + v + '\': not a date (YYYY-MM-DD)');
+    $(input).value = v;
+    filter += '&' + key + '=' + (ms + extra);
+  }
   const body = $('audit').querySelector('tbody');
-  let token = '';
-  const more = async () => {
-    const page = await api('audit?limit=200' + (token ? '&page_token=' + encodeURIComponent(token) : ''));
+  const tokens = [''];  // the token of each page seen; the last is the one shown
+  let next = '';
+  const show = async (token) => {
+    const page = await api('audit?page_size=50' + filter +
+                           (token ? '&page_token=' + encodeURIComponent(token) : ''));
+    body.replaceChildren();
     for (const e of page.entries) {
       body.appendChild(row([e.id, when(e.at_unix_ms), e.actor_label || e.actor, e.role,
                             e.institution, e.action, e.target, e.result]));
     }
-    token = page.next_page_token;
-    $('audit-more').hidden = !token;
+    next = page.next_page_token;
+    $('audit-page').textContent = page.entries.length === 0 ? 'No entries.'
+        : 'Page ' + tokens.length + ': entries ' + page.entries[0].id + ' to ' +
+          page.entries[page.entries.length - 1].id + (next ? '' : ' (the oldest)');
+    $('audit-older').disabled = !next;
+    $('audit-newer').disabled = tokens.length < 2;
+    $('audit').dataset.page = String(tokens.length);  // which page is shown (tests wait on it)
   };
-  $('audit-more').addEventListener('click', () => more().catch((e) => showError(e.message)));
-  await more();
+  const go = (f) => f().catch((e) => showError(e.message));
+  $('audit-older').addEventListener('click', () => go(async () => {
+    tokens.push(next);
+    await show(next);
+  }));
+  $('audit-newer').addEventListener('click', () => go(async () => {
+    tokens.pop();
+    await show(tokens[tokens.length - 1]);
+  }));
+  await show('');
 }
 
 // A station's health (the API's shape, docs/web.md) as the texts of its

@@ -166,6 +166,52 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   EXPECT_NE(audit.out.find("session.read"), std::string::npos);
 }
 
+// `case upload --share-with` of a case already stored shares it (it once
+// printed "already stored" and shared nothing): south's station can then
+// list and download it. Another institution cannot share north's case.
+TEST(AdminCli, UploadingAStoredCaseAgainWithShareWithSharesIt) {
+  TestServer server;
+  const auto& dir = server.dir();
+  const std::string remote =
+      " --server " + server.address() + " --token " + server.MakeToken(StoreRole::kAdmin, "north");
+  const std::string south_station = " --server " + server.address() + " --token " +
+                                    server.MakeToken(StoreRole::kStation, "south");
+  const std::string case_file =
+      std::string(VES_SOURCE_DIR) + "/patient_db/cases/standard-adult.textproto";
+  AdminRun first = Admin(dir, "case upload " + case_file + remote);
+  ASSERT_EQ(first.exit_status, 0) << first.err;
+  EXPECT_EQ(first.out.rfind("stored standard-adult v1", 0), 0u) << first.out;
+  EXPECT_EQ(first.out.find("shared with"), std::string::npos) << first.out;
+  AdminRun unseen = Admin(dir, "case list" + south_station);
+  ASSERT_EQ(unseen.exit_status, 0) << unseen.err;
+  EXPECT_EQ(unseen.out.find("standard-adult"), std::string::npos) << unseen.out;
+
+  AdminRun again = Admin(dir, "case upload " + case_file + " --share-with south" + remote);
+  ASSERT_EQ(again.exit_status, 0) << again.err;
+  EXPECT_EQ(again.out.rfind("already stored standard-adult v1", 0), 0u) << again.out;
+  EXPECT_NE(again.out.find("\nshared with south\n"), std::string::npos) << again.out;
+  AdminRun seen = Admin(dir, "case list" + south_station);
+  ASSERT_EQ(seen.exit_status, 0) << seen.err;
+  EXPECT_NE(seen.out.find("standard-adult"), std::string::npos) << seen.out;
+  const auto copy = dir / "south.vescase";
+  AdminRun down = Admin(dir, "case download standard-adult -o " + copy.string() + south_station);
+  ASSERT_EQ(down.exit_status, 0) << down.err;
+  EXPECT_EQ(patient_db::ReadFileBytes(copy),
+            patient_db::EncodeCaseBundle(patient_db::LoadCaseFile(case_file)));
+
+  // An admin uploading it as south's cannot share north's case onward.
+  ASSERT_TRUE(server.store().AddInstitution("west", 1).ok());
+  AdminRun foreign =
+      Admin(dir, "case upload " + case_file + " --institution south --share-with west" + remote);
+  EXPECT_EQ(foreign.exit_status, 1) << foreign.out;
+  EXPECT_EQ(Lines(foreign.err), 1) << foreign.err;
+  EXPECT_NE(foreign.err.find("owned by institution 'north'"), std::string::npos) << foreign.err;
+  AdminRun west = Admin(dir, "case list --server " + server.address() + " --token " +
+                                 server.MakeToken(StoreRole::kStation, "west"));
+  ASSERT_EQ(west.exit_status, 0) << west.err;
+  EXPECT_EQ(west.out.find("standard-adult"), std::string::npos) << west.out;
+}
+
 TEST(AdminCli, ErrorsAreOneLineWithNonZeroStatus) {
   TestServer server;
   const auto& dir = server.dir();

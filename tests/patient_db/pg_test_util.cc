@@ -90,6 +90,7 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<std::vector<AuditRow>> ListAudit(int64_t, int, int64_t) override { return {}; }
+  StoreResult<std::vector<AuditRow>> ListAuditNewest(const AuditQuery&) override { return {}; }
   StoreResult<bool> PutCurriculum(const CurriculumRow&) override { return Skipped(); }
   StoreResult<CurriculumRow> GetCurriculum(const std::string&) override { return Skipped(); }
   StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string&,

@@ -142,6 +142,55 @@ TEST_P(StoreContract, SameCaseVersionTwiceIsIdempotentOtherContentRefused) {
   EXPECT_EQ(store_->GetBlob("h9").status.code, StoreCode::kNotFound);  // rolled back
 }
 
+// `ves-admin case upload --share-with` on a case stored before shares it:
+// the owner's re-upload adds its shares (kept, never removed); another
+// institution cannot share the owner's case.
+TEST_P(StoreContract, ReuploadByTheOwnerAddsShares) {
+  ASSERT_TRUE(store_->PutCase(Case("c", 1, "h1"), "bytes-1").ok());
+  CaseRow again = Case("c", 1, "h1");
+  again.shared_with = {"south", "north", "south"};  // the owner and a repeat are no share
+  auto shared = store_->PutCase(again, "bytes-1");
+  ASSERT_TRUE(shared.ok()) << shared.status.message;
+  EXPECT_TRUE(shared.value.already_stored);
+  EXPECT_EQ(shared.value.row.shared_with, std::vector<std::string>{"south"});
+  CaseFilter south;
+  south.visible_to = "south";
+  auto seen = store_->ListCases(south);
+  ASSERT_TRUE(seen.ok()) << seen.status.message;
+  ASSERT_EQ(seen.value.size(), 1u);
+  EXPECT_EQ(seen.value[0].case_id, "c");
+  // A later upload without shares keeps them; one with another adds it.
+  auto plain = store_->PutCase(Case("c", 1, "h1"), "bytes-1");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain.value.row.shared_with, std::vector<std::string>{"south"});
+  ASSERT_TRUE(store_->AddInstitution("east", 1).ok());
+  CaseRow east = Case("c", 1, "h1");
+  east.shared_with = {"east"};
+  auto both = store_->PutCase(east, "bytes-1");
+  ASSERT_TRUE(both.ok()) << both.status.message;
+  EXPECT_EQ(both.value.row.shared_with, (std::vector<std::string>{"east", "south"}));
+  Reopen();
+  auto listed = store_->ListCases(CaseFilter{});
+  ASSERT_TRUE(listed.ok());
+  ASSERT_EQ(listed.value.size(), 1u);
+  EXPECT_EQ(listed.value[0].shared_with, (std::vector<std::string>{"east", "south"}));
+  // Not the owner: refused, nothing shared.
+  CaseRow foreign = Case("c", 1, "h1");
+  foreign.institution = "south";
+  foreign.shared_with = {"west"};
+  auto refused = store_->PutCase(foreign, "bytes-1");
+  EXPECT_EQ(refused.status.code, StoreCode::kAlreadyExists);
+  EXPECT_NE(refused.status.message.find("owned by institution 'north'"), std::string::npos)
+      << refused.status.message;
+  CaseFilter west;
+  west.visible_to = "west";
+  EXPECT_TRUE(store_->ListCases(west).value.empty());
+  // Another institution's upload of the same content without shares stays
+  // the idempotent repeat it was.
+  foreign.shared_with.clear();
+  EXPECT_TRUE(store_->PutCase(foreign, "bytes-1").ok());
+}
+
 TEST_P(StoreContract, CaseListFiltersAndVisibility) {
   CaseRow shared = Case("shared", 1, "hs");
   shared.shared_with = {"south"};
@@ -225,6 +274,38 @@ TEST_P(StoreContract, SessionsSurviveReopenWithBodyAndOrder) {
   EXPECT_EQ(list.value[1].max_tip_arc_m, 0.8125);
   EXPECT_EQ(store_->ListSessions("t1", "other-case").value.size(), 0u);
   EXPECT_EQ(store_->GetSession("nope").status.code, StoreCode::kNotFound);
+}
+
+// Learning curves per lesson are built from the listing: the lesson a
+// record names comes back with it (after a reopen, too), '' for a free run.
+TEST_P(StoreContract, SessionsReadBackTheLessonTheyName) {
+  WriteBatch b;
+  SessionRow lesson = Session("u1", "body-a", 100);
+  lesson.lesson_id = "navigate-sigmoid";
+  SessionRow free_run = Session("u2", "body-b", 200);
+  b.sessions = {lesson, free_run};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto list = store_->ListSessions("t1", "");
+  ASSERT_TRUE(list.ok()) << list.status.message;
+  ASSERT_EQ(list.value.size(), 2u);
+  EXPECT_EQ(list.value[0].lesson_id, "navigate-sigmoid");
+  EXPECT_EQ(list.value[1].lesson_id, "");
+  // A page after the first row still names its lesson column right.
+  ListPage page;
+  page.has_after = true;
+  page.after_text = "u1";
+  page.after_number = 100;
+  auto rest = store_->ListSessions("t1", "standard-adult", page);
+  ASSERT_TRUE(rest.ok()) << rest.status.message;
+  ASSERT_EQ(rest.value.size(), 1u);
+  EXPECT_EQ(rest.value[0].uuid, "u2");
+  EXPECT_EQ(rest.value[0].lesson_id, "");
+  auto one = store_->GetSession("u1");
+  ASSERT_TRUE(one.ok()) << one.status.message;
+  EXPECT_EQ(one.value.lesson_id, "navigate-sigmoid");
+  EXPECT_EQ(one.value.body, "body-a");
+  EXPECT_EQ(store_->GetSession("u2").value.lesson_id, "");
 }
 
 TEST_P(StoreContract, TraineeActivityCountsSessionsAndTheLatestEnd) {
@@ -366,6 +447,62 @@ TEST_P(StoreContract, AuditRowsGetIdsAndSessionResults) {
   more.audit = {read};
   ASSERT_TRUE(store_->CommitBatch(more).ok());
   EXPECT_EQ(store_->ListAudit(0, 100).value.back().id, 4);
+}
+
+// The audit page's listing: newest first, filtered by actor (token id or
+// label), action and a time range, paged below the last id seen.
+TEST_P(StoreContract, AuditIsListedNewestFirstAndFiltered) {
+  WriteBatch b;
+  for (int i = 0; i < 10; ++i) {
+    const bool even = i % 2 == 0;
+    b.audit.push_back({0, 100 + i * 10, even ? "tok-a" : "tok-b", even ? "Dr A" : "Dr B",
+                       "supervisor", "north", i < 5 ? "trainee.curve" : "session.read",
+                       "t" + std::to_string(i), "OK"});
+  }
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  auto all = store_->ListAuditNewest({});
+  ASSERT_TRUE(all.ok()) << all.status.message;
+  ASSERT_EQ(all.value.size(), 10u);
+  EXPECT_EQ(all.value[0].target, "t9");  // newest first
+  EXPECT_EQ(all.value[9].target, "t0");
+  for (size_t i = 1; i < all.value.size(); ++i) EXPECT_LT(all.value[i].id, all.value[i - 1].id);
+
+  AuditQuery by_label;
+  by_label.actor = "Dr A";
+  auto a = store_->ListAuditNewest(by_label).value;
+  ASSERT_EQ(a.size(), 5u);
+  for (const auto& row : a) EXPECT_EQ(row.actor, "tok-a");
+  AuditQuery by_token;
+  by_token.actor = "tok-b";
+  by_token.action = "session.read";
+  auto bs = store_->ListAuditNewest(by_token).value;
+  ASSERT_EQ(bs.size(), 3u);  // t9, t7, t5
+  EXPECT_EQ(bs[0].target, "t9");
+  EXPECT_EQ(bs[2].target, "t5");
+  AuditQuery range;
+  range.from_unix_ms = 120;  // t2 ..
+  range.to_unix_ms = 150;    // .. t4, not t5
+  auto in_range = store_->ListAuditNewest(range).value;
+  ASSERT_EQ(in_range.size(), 3u);
+  EXPECT_EQ(in_range[0].target, "t4");
+  EXPECT_EQ(in_range[2].target, "t2");
+
+  // Pages of 3 below the last id seen give every row once, newest first.
+  std::vector<std::string> walked;
+  AuditQuery page;
+  page.limit = 3;
+  for (int n = 0; n < 10; ++n) {
+    auto rows = store_->ListAuditNewest(page);
+    ASSERT_TRUE(rows.ok());
+    for (const auto& row : rows.value) walked.push_back(row.target);
+    if (rows.value.size() < 3) break;
+    page.before_id = rows.value.back().id;
+  }
+  EXPECT_EQ(walked,
+            (std::vector<std::string>{"t9", "t8", "t7", "t6", "t5", "t4", "t3", "t2", "t1", "t0"}));
+  AuditQuery nobody;
+  nobody.actor = "tok-c";
+  EXPECT_TRUE(store_->ListAuditNewest(nobody).value.empty());
 }
 
 // Every listing pages by its sort key (docs/server.md, "Limits"): walking the

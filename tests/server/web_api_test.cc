@@ -6,12 +6,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <boost/asio/ip/tcp.hpp>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
-
-#include <boost/asio/ip/tcp.hpp>
+#include <sstream>
+#include <thread>
 
 #include "patient_db/case_bundle.h"
 #include "server/http_server.h"
@@ -510,8 +512,15 @@ TEST_F(WebApiTest, ReplayIsComputedFromTheInputLogAndEndsAtTheFinalDepth) {
   EXPECT_TRUE(frames.back().contains("scope_mm"));
   EXPECT_TRUE(frames.back().contains("colon_mm"));
   EXPECT_GE(frames.back()["scope_mm"].size(), 2u);
-  // Time runs forward at the series rate (10 Hz).
-  EXPECT_NEAR(frames[1]["t_s"].get<double>() - frames[0]["t_s"].get<double>(), 0.1, 1e-6);
+  // The replay opens on the first step with its shapes (not an empty view
+  // until the first shape sample), then runs at the series rate (10 Hz).
+  EXPECT_NEAR(frames[0]["t_s"].get<double>(), record.input_log().dt_s(), 1e-9);
+  ASSERT_TRUE(frames[0].contains("scope_mm")) << frames[0].dump();
+  ASSERT_TRUE(frames[0].contains("colon_mm")) << frames[0].dump();
+  EXPECT_GE(frames[0]["scope_mm"].size(), 1u);  // not in yet: the tip at the anus
+  EXPECT_GE(frames[0]["colon_mm"].size(), 2u);
+  EXPECT_NEAR(frames[1]["t_s"].get<double>(), 0.1, 1e-6);
+  EXPECT_NEAR(frames[2]["t_s"].get<double>() - frames[1]["t_s"].get<double>(), 0.1, 1e-6);
   // The summary leaves out the bulky input log.
   const json summary = json::parse(Get("/api/v1/sessions/" + record.uuid(), supervisor_).body);
   EXPECT_FALSE(summary["record"].contains("input_log"));
@@ -573,6 +582,209 @@ TEST_F(WebApiTest, ACurvePointWithoutTheCecumHasNoTimeToCecum) {
   EXPECT_TRUE(points[0]["time_to_cecum_s"].is_null()) << points.dump();
   EXPECT_FALSE(points[0]["completed"].get<bool>());
   EXPECT_NEAR(points[1]["time_to_cecum_s"].get<double>(), 221.0, 1e-9);
+}
+
+// A lesson the scripted expert passes in 3 s on the sample case: after the
+// server's judge passes it, the curve has that lesson with its point and
+// pass line (the lesson id must come back from the store's listing).
+TEST_F(WebApiTest, LearningCurveShowsALessonAfterItIsPassed) {
+  ves::v1::Curriculum c;
+  c.set_curriculum_id("web-lessons");
+  c.set_title("Web lessons");
+  ves::v1::Lesson* lesson = c.add_lessons();
+  lesson->set_lesson_id("web-first-seconds");
+  lesson->set_title("The first seconds");
+  lesson->mutable_case_ref()->set_case_id(SampleCase().id());
+  lesson->mutable_aids()->set_fluoroscopy_allowed(true);
+  lesson->mutable_aids()->set_wireframe_allowed(true);
+  lesson->set_time_limit_s(3);
+  lesson->mutable_pass()->set_max_damage_events(0);
+  lesson->mutable_pass()->set_max_pain_s(30);
+  lesson->set_required_passes(1);
+  auto lessons = ves::v1::Lessons::NewStub(MakeClientChannel(server_.Client(supervisor_)));
+  ves::v1::CreateCurriculumRequest create;
+  *create.mutable_curriculum() = c;
+  ves::v1::CreateCurriculumResponse created;
+  {
+    grpc::ClientContext ctx;
+    PrepareContext(&ctx, server_.Client(supervisor_));
+    const grpc::Status s = lessons->CreateCurriculum(&ctx, create, &created);
+    ASSERT_TRUE(s.ok()) << s.error_message();
+  }
+  const ves::v1::Lesson& stored_lesson = created.curriculum().lessons(0);
+  ves::v1::SessionRecord record;
+  training::RunScriptedCase(SampleCase(), stored_lesson.scope(), {}, "expert", 3.0,
+                            1'700'000'000'000, &record);
+  record.set_trainee_id("t2");
+  record.set_station_id("station-1");
+  record.set_case_id(SampleCase().id());
+  record.set_case_version(SampleCase().version());
+  record.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(SampleCase()));
+  record.set_lesson_id(stored_lesson.lesson_id());
+  ves::v1::UploadSessionResponse up;
+  const grpc::Status s = UploadSession(server_.Client(station_), record, &up);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  // The judge replays it in the background.
+  patient_db::StoreResult<patient_db::LessonVerdictRow> verdict;
+  for (int i = 0; i < 600; ++i) {
+    verdict = server_.store().GetLessonVerdict(record.uuid());
+    if (verdict.ok()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(verdict.ok()) << "no verdict: " << verdict.status.message;
+  ASSERT_TRUE(verdict.value.passed) << verdict.value.detail;
+
+  const HttpResult r = Get("/api/v1/trainees/t2/curve", supervisor_);
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json curve = json::parse(r.body);
+  ASSERT_EQ(curve["lessons"].size(), 1u) << curve.dump();
+  const json& l = curve["lessons"][0];
+  EXPECT_EQ(l["lesson_id"], "web-first-seconds");
+  ASSERT_EQ(l["points"].size(), 1u);
+  EXPECT_EQ(l["points"][0]["uuid"], record.uuid());
+  EXPECT_EQ(l["points"][0]["attempt"], 1);
+  EXPECT_NEAR(l["points"][0]["score"].get<double>(), record.score(), 1e-9);
+  EXPECT_EQ(l["pass_line"]["pain_s"], 30.0);
+  EXPECT_EQ(l["pass_line"]["title"], "The first seconds");
+  // The same session is a point of its case's curve too.
+  ASSERT_EQ(curve["cases"].size(), 1u);
+  EXPECT_EQ(curve["cases"][0]["points"].size(), 1u);
+}
+
+// Splits one CSV line of cells without quotes (what these sessions make).
+std::vector<std::string> CsvCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream in(line);
+  std::string cell;
+  while (std::getline(in, cell, ',')) cells.push_back(cell);
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+// The sessions export: one row per session in the date range, the columns
+// documented, the same figures as the API's listing; the read rules and
+// refusals of the listing; audited as session.export.
+TEST_F(WebApiTest, SessionsExportAsCsvOneRowPerSession) {
+  std::mt19937_64 rng(13);
+  ves::v1::UploadSessionResponse up;
+  std::vector<ves::v1::SessionRecord> records;
+  for (int seed : {10, 11, 12}) {
+    records.push_back(MakeRecord(NewUuid(rng), "t2", seed));
+    ASSERT_TRUE(UploadSession(server_.Client(station_), records.back(), &up).ok());
+  }
+  const HttpResult r = Get("/api/v1/trainees/t2/sessions.csv", supervisor_);
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.Header("content-type"), "text/csv; charset=utf-8");
+  EXPECT_EQ(r.Header("content-disposition"), "attachment; filename=\"ves-sessions-t2.csv\"");
+  EXPECT_EQ(r.Header("cache-control"), "no-store");
+  std::vector<std::string> lines;
+  for (size_t at = 0; at < r.body.size();) {
+    const size_t end = r.body.find("\r\n", at);
+    ASSERT_NE(end, std::string::npos) << "a line without CRLF: " << r.body.substr(at);
+    lines.push_back(r.body.substr(at, end - at));
+    at = end + 2;
+  }
+  ASSERT_EQ(lines.size(), 4u) << r.body;  // the header and one row per session
+  EXPECT_EQ(CsvCells(lines[0]), SessionsCsvColumns());
+  const auto column = [&](const std::string& name) {
+    const auto& c = SessionsCsvColumns();
+    return static_cast<size_t>(std::find(c.begin(), c.end(), name) - c.begin());
+  };
+  for (size_t i = 0; i < records.size(); ++i) {
+    const std::vector<std::string> cells = CsvCells(lines[i + 1]);
+    ASSERT_EQ(cells.size(), SessionsCsvColumns().size()) << lines[i + 1];
+    const ves::v1::SessionRecord& rec = records[i];
+    EXPECT_EQ(cells[column("session_uuid")], rec.uuid());
+    EXPECT_EQ(cells[column("trainee_id")], "t2");
+    EXPECT_EQ(cells[column("case_id")], "standard-adult");
+    EXPECT_EQ(cells[column("case_version")], "1");
+    EXPECT_EQ(cells[column("lesson_id")], "");
+    EXPECT_EQ(cells[column("lesson_verdict")], "");
+    EXPECT_EQ(cells[column("station_id")], "station-1");
+    EXPECT_EQ(cells[column("outcome")], "cecum_reached");
+    EXPECT_EQ(cells[column("completed")], "true");
+    EXPECT_EQ(cells[column("duration_s")], "300.000");
+    EXPECT_NEAR(std::stod(cells[column("time_to_cecum_s")]), rec.metrics().time_to_cecum_s(), 1e-3);
+    EXPECT_NEAR(std::stod(cells[column("pain_s")]), rec.metrics().pain_s(), 1e-3);
+    EXPECT_NEAR(std::stod(cells[column("score")]), rec.score(), 1e-2);
+  }
+  // MakeRecord's seed 10 starts at 1,700,000,600,000 ms.
+  EXPECT_EQ(CsvCells(lines[1])[column("start_utc")], "2023-11-14T22:23:20.000Z");
+  EXPECT_EQ(CsvCells(lines[1])[column("end_utc")], "2023-11-14T22:28:20.000Z");
+
+  // A date range: from the second session's start (included) to the third's
+  // (excluded).
+  const std::string range = "?from_unix_ms=" + std::to_string(records[1].start_unix_ms()) +
+                            "&to_unix_ms=" + std::to_string(records[2].start_unix_ms());
+  const HttpResult one = Get("/api/v1/trainees/t2/sessions.csv" + range, supervisor_);
+  ASSERT_EQ(one.status, 200) << one.body;
+  EXPECT_EQ(std::count(one.body.begin(), one.body.end(), '\n'), 2) << one.body;
+  EXPECT_NE(one.body.find(records[1].uuid()), std::string::npos) << one.body;
+  const HttpResult none =
+      Get("/api/v1/trainees/t2/sessions.csv?from_unix_ms=1800000000000", supervisor_);
+  ASSERT_EQ(none.status, 200);
+  EXPECT_EQ(std::count(none.body.begin(), none.body.end(), '\n'), 1) << none.body;
+
+  // The listing's rules: another institution's trainee is a missing one, the
+  // trainee itself may export its own, a station may not.
+  EXPECT_EQ(Get("/api/v1/trainees/s1/sessions.csv", supervisor_).status, 404);
+  EXPECT_EQ(Get("/api/v1/trainees/nobody/sessions.csv", supervisor_).status, 404);
+  EXPECT_EQ(Get("/api/v1/trainees/t2/sessions.csv", trainee_t2_).status, 200);
+  EXPECT_EQ(Get("/api/v1/trainees/t1/sessions.csv", trainee_t2_).status, 404);
+  EXPECT_EQ(Get("/api/v1/trainees/t2/sessions.csv", station_).status, 403);
+  EXPECT_EQ(Get("/api/v1/trainees/t2/sessions.csv").status, 401);
+  const HttpResult backwards =
+      Get("/api/v1/trainees/t2/sessions.csv?from_unix_ms=20&to_unix_ms=10", supervisor_);
+  EXPECT_EQ(backwards.status, 400) << backwards.body;
+  EXPECT_NE(backwards.body.find("to_unix_ms"), std::string::npos) << backwards.body;
+  EXPECT_EQ(Get("/api/v1/trainees/t2/sessions.csv?from_unix_ms=x", supervisor_).status, 400);
+
+  bool audited = false;
+  for (int i = 0; i < 100 && !audited; ++i) {
+    const json audit =
+        json::parse(Get("/api/v1/audit?action=session.export&actor=supervisor@north", admin_).body);
+    for (const auto& e : audit["entries"]) audited |= e["target"] == "t2" && e["result"] == "OK";
+    if (!audited) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(audited);
+}
+
+// Cells a spreadsheet would misread: quoted per RFC 4180, formulas defused,
+// a lesson's verdict and its checks on one line.
+TEST(SessionsCsv, QuotesCellsAndDefusesFormulas) {
+  patient_db::SessionRow s;
+  s.uuid = "u1";
+  s.trainee_id = "=HYPERLINK(\"x\",1)";
+  s.case_id = "-case";
+  s.station_id = "ward 3, bed \"A\"";
+  s.lesson_id = "l1";
+  s.start_unix_ms = 1'000;
+  s.end_unix_ms = 61'500;
+  s.outcome = ves::v1::OUTCOME_TIMED_OUT;
+  s.completed = false;
+  s.time_to_cecum_s = 12;
+  patient_db::LessonVerdictRow v;
+  v.session_uuid = "u1";
+  v.passed = false;
+  v.detail = "pain_s 31 <= 30: FAILED\ndamage_events 0 <= 0: ok\n";
+  patient_db::SessionRow pending = s;
+  pending.uuid = "u2";
+  patient_db::SessionRow free_run = s;
+  free_run.uuid = "u3";
+  free_run.lesson_id.clear();
+  const std::string csv = SessionsCsv({s, pending, free_run}, {v});
+  const size_t first = csv.find("\r\n") + 2;
+  const std::string row = csv.substr(first, csv.find("\r\n", first) - first);
+  EXPECT_EQ(row,
+            "u1,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,failed,"
+            "pain_s 31 <= 30: FAILED; damage_events 0 <= 0: ok,\"ward 3, bed \"\"A\"\"\",,"
+            "1970-01-01T00:00:01.000Z,1970-01-01T00:01:01.500Z,60.500,timed_out,false,,0.000,"
+            "0.0000,0.00");
+  EXPECT_NE(csv.find("\r\nu2,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,pending,,"),
+            std::string::npos)
+      << csv;
+  EXPECT_NE(csv.find("\r\nu3,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,,,,"), std::string::npos) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
 }
 
 }  // namespace

@@ -3,12 +3,15 @@
 driven by Selenium against a real ves-server on loopback. Sign in, the
 trainee list (a trainee named like markup shows as text), a learning curve
 with one point per uploaded session, a session page with its plots, the
-replay scrubbed to the end showing the tip at the session's final depth,
-the live page, the stations page with the health a headless station reported,
-group progress, the audit log (admin), sign-out. Screenshots of each page go
+replay opening on the colon and the scope's tip and scrubbed to the end
+showing the tip at the session's final depth, a lesson's curve after the
+server passed it, the sessions' CSV export read with the csv module, the live page, the stations page with the health a headless station reported,
+group progress, the audit log (admin: newest first, paged, filtered), sign-out. Screenshots of each page go
 to --out. Exits 77 (CTest SKIP) with a reason when Chromium cannot run here.
 """
 import argparse
+import csv
+import io
 import json
 import os
 import shutil
@@ -35,6 +38,21 @@ def wait_file(path, proc, seconds=30):
             raise RuntimeError('ves-server exited with %d' % proc.returncode)
         time.sleep(0.05)
     raise RuntimeError('ves-server did not write ' + path)
+
+
+def documented_csv_columns():
+    """The column names of docs/web.md's "Export" table, in order."""
+    docs = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'docs', 'web.md')
+    with open(docs) as f:
+        text = f.read()
+    section = text.split('\n## Export\n', 1)[1].split('\n## ', 1)[0]
+    columns = []
+    for line in section.splitlines():
+        if not line.startswith('| `'):
+            continue
+        first_cell = line.split('|')[1]
+        columns += [c for c in first_cell.split('`')[1::2]]
+    return columns
 
 
 def main():
@@ -151,6 +169,70 @@ def main():
         assert len(driver.find_elements(By.CSS_SELECTOR, '#sessions tbody tr')) == 3
         shot('03-learning-curve')
 
+        # The CSV export behind the page's link, fetched as the browser would
+        # (cookie), read with Python's csv module: the documented columns and
+        # one row per session, the same uuids and scores.
+        def fetch_text(href):
+            return driver.execute_async_script(
+                'const done = arguments[arguments.length - 1];'
+                'fetch(arguments[0], {credentials: "same-origin"})'
+                '.then(r => r.text().then(t => done([r.status, r.headers.get("content-type"), t])))'
+                '.catch(e => done([0, "", String(e)]));', href)
+
+        href = driver.find_element(By.ID, 'export-csv').get_attribute('href')
+        assert href == base + '/api/v1/trainees/t1/sessions.csv', href
+        status, content_type, text = fetch_text(href)
+        assert status == 200 and content_type == 'text/csv; charset=utf-8', (status, content_type)
+        table = list(csv.reader(io.StringIO(text, newline='')))
+        assert table[0] == documented_csv_columns(), (table[0], documented_csv_columns())
+        rows = [dict(zip(table[0], r)) for r in table[1:]]
+        assert [r['session_uuid'] for r in rows] == [s['uuid'] for s in sessions], rows
+        assert all(len(r) == len(table[0]) for r in table), table
+        assert [round(float(r['score']), 2) for r in rows] == \
+            [round(s['score'], 2) for s in sessions], rows
+        assert all(r['trainee_id'] == 't1' and r['case_id'] == 'standard-adult' for r in rows)
+        # Days chosen on the page narrow the link: none of these sessions is
+        # from 2100, all of them from today or yesterday (UTC).
+        driver.execute_script(
+            "const f = document.getElementById('export-from'); f.value = '2100-01-01';"
+            "f.dispatchEvent(new Event('change'));")
+        href = driver.find_element(By.ID, 'export-csv').get_attribute('href')
+        assert 'from_unix_ms=4102444800000' in href, href
+        status, _, text = fetch_text(href)
+        assert status == 200 and len(list(csv.reader(io.StringIO(text, newline='')))) == 1, text
+        yesterday = time.strftime('%Y-%m-%d', time.gmtime(time.time() - 86400))
+        driver.execute_script(
+            "const f = document.getElementById('export-from'); f.value = arguments[0];"
+            "f.dispatchEvent(new Event('change'));"
+            "const t = document.getElementById('export-to'); t.value = arguments[1];"
+            "t.dispatchEvent(new Event('change'));",
+            yesterday, time.strftime('%Y-%m-%d', time.gmtime()))
+        status, _, text = fetch_text(driver.find_element(By.ID, 'export-csv').get_attribute('href'))
+        assert status == 200 and len(list(csv.reader(io.StringIO(text, newline='')))) == 4, text
+
+        # A lesson t2 passes (judged by the server): its curve appears on
+        # t2's page with one point per chart and the lesson's pass line.
+        lesson = json.loads(subprocess.check_output(
+            [args.seed, 'lesson', '127.0.0.1:' + grpc_port, tokens['supervisor'],
+             tokens['station'], 't2'], text=True))
+        assert lesson['passed'], lesson
+        driver.get(base + '/trainee.html?id=t2')
+        ready('trainee')
+        key = 'lesson:' + lesson['lesson_id']
+        points = driver.execute_script(
+            'return (ves.charts[arguments[0]] || []).map(c => c.data.datasets[0].data.length)', key)
+        assert points == [1, 1, 1, 1], (key, points)
+        score = driver.execute_script('return ves.charts[arguments[0]][0].data.datasets[0].data[0].y',
+                                      key)
+        assert round(score, 6) == round(lesson['score'], 6), (score, lesson)
+        pain_sets = driver.execute_script(
+            'return ves.charts[arguments[0]][2].data.datasets.map(d => d.label)', key)
+        assert pain_sets == ['Pain', 'pass line'], pain_sets
+        block = driver.find_element(By.ID, 'curve-' + key.replace(':', '-'))
+        assert block.find_element(By.TAG_NAME, 'h3').text == 'Lesson ' + lesson['lesson_id']
+        assert len(block.find_elements(By.CSS_SELECTOR, 'table.points tbody tr')) == 1
+        shot('03b-lesson-curve')
+
         # The XSS trainee's page shows the name as text too.
         driver.get(base + '/trainee.html?id=' + '%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E')
         ready('trainee')
@@ -166,6 +248,19 @@ def main():
             '.map(c => c.data.datasets[0].data.length)')
         frames = driver.execute_script('return ves.replay.frames.length')
         assert all(n == frames and n > 10 for n in lengths), (lengths, frames)
+        # The replay opens on its first step with the colon and the scope's
+        # tip drawn, not on an empty view (all background, #8a8a8a).
+        assert driver.find_element(By.ID, 'scrub').get_attribute('value') == '0'
+        assert driver.find_element(By.ID, 'fig-t').text == '0.0 s'
+        drawn, tip = driver.execute_script(
+            "const c = document.getElementById('fluoro');"
+            "const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;"
+            "let drawn = 0, tip = 0; for (let i = 0; i < d.length; i += 4) {"
+            "  if (d[i] !== 0x8a || d[i + 1] !== 0x8a || d[i + 2] !== 0x8a) drawn++;"
+            "  if (d[i] > 200 && d[i + 1] > 160 && d[i + 2] < 140) tip++; }"
+            "return [drawn, tip]")
+        assert drawn > 1000 and tip > 5, 'the replay at t = 0: %d pixels drawn, %d of the tip' % (
+            drawn, tip)
         shot('04-session')
         driver.execute_script(
             "const s = document.getElementById('scrub'); s.value = s.max;"
@@ -291,12 +386,65 @@ def main():
         driver.find_element(By.ID, 'sign-in').click()
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/trainees.html'))
         ready('trainees')
+        # The audit log: newest first, 50 a page, filtered by actor, action
+        # and days, what the page shows read back.
+        def audit_rows():
+            return [[td.text for td in r.find_elements(By.TAG_NAME, 'td')]
+                    for r in driver.find_elements(By.CSS_SELECTOR, '#audit tbody tr')]
+
+        # Enough rows for more than one page: 60 trainee listings (audited).
+        driver.execute_async_script(
+            'const done = arguments[arguments.length - 1];'
+            'Promise.all([...Array(60)].map(() => fetch("/api/v1/trainees")))'
+            '.then(() => done(true));')
+        # Their rows go through the group commit: wait until no more arrive.
+        newest = None
+        for _ in range(50):
+            latest = json.loads(fetch_text('/api/v1/audit?page_size=1')[2])['entries'][0]['id']
+            if latest == newest:
+                break
+            newest = latest
+            time.sleep(0.3)
         driver.get(base + '/audit.html')
         ready('audit')
-        actions = [r.find_elements(By.TAG_NAME, 'td')[5].text
-                   for r in driver.find_elements(By.CSS_SELECTOR, '#audit tbody tr')]
-        assert 'session.upload' in actions and 'trainee.curve' in actions, actions
+        first = audit_rows()
+        ids = [int(r[0]) for r in first]
+        assert len(ids) == 50 and ids == sorted(ids, reverse=True), ids
+        assert ids[0] == newest, (ids[0], newest)
         shot('10-audit')
+        assert driver.find_element(By.ID, 'audit-newer').get_attribute('disabled')
+        driver.find_element(By.ID, 'audit-older').click()
+        WebDriverWait(driver, 30).until(
+            lambda d: d.find_element(By.ID, 'audit').get_attribute('data-page') == '2')
+        older = [int(r[0]) for r in audit_rows()]
+        assert older and older == sorted(older, reverse=True) and older[0] < ids[-1], (ids, older)
+        driver.find_element(By.ID, 'audit-newer').click()
+        WebDriverWait(driver, 30).until(
+            lambda d: d.find_element(By.ID, 'audit').get_attribute('data-page') == '1')
+        assert [int(r[0]) for r in audit_rows()] == ids
+        # Filtered through the form: one action of one actor.
+        driver.find_element(By.ID, 'filter-actor').send_keys('supervisor (web test)')
+        driver.find_element(By.ID, 'filter-action').send_keys('trainee.curve')
+        driver.find_element(By.ID, 'filter-apply').click()
+        WebDriverWait(driver, 30).until(lambda d: 'action=trainee.curve' in d.current_url)
+        ready('audit')
+        rows = audit_rows()
+        assert rows and all(r[5] == 'trainee.curve' and r[2] == 'supervisor (web test)'
+                            for r in rows), rows
+        assert driver.find_element(By.ID, 'filter-action').get_attribute('value') == 'trainee.curve'
+        shot('10b-audit-filtered')
+        driver.get(base + '/audit.html?action=session.upload')
+        ready('audit')
+        uploads = audit_rows()
+        # The three seeded uploads, the faulty station's and the live run's.
+        assert len(uploads) >= 5 and all(r[5] == 'session.upload' for r in uploads), uploads
+        today = time.strftime('%Y-%m-%d', time.gmtime())
+        driver.get(base + '/audit.html?action=session.upload&from=' + today + '&to=' + today)
+        ready('audit')
+        assert audit_rows() == uploads, audit_rows()
+        driver.get(base + '/audit.html?action=session.upload&from=2100-01-01')
+        ready('audit')
+        assert audit_rows() == [] and driver.find_element(By.ID, 'audit-page').text == 'No entries.'
         driver.find_element(By.ID, 'sign-out').click()
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
         print('web_browser_test: all pages checked; screenshots in ' + args.out)

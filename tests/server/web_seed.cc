@@ -9,8 +9,15 @@
 //   web_seed upload ... SECONDS STATION_ID faulty
 //     the same from STATION_ID with a fixture StationHealth whose every
 //     figure is out of range (the stations page's flags).
+//   web_seed lesson GRPC_ADDRESS SUPERVISOR_TOKEN STATION_TOKEN TRAINEE
+//     creates curriculum "web-lessons" with one 3 s lesson on the sample case
+//     ("web-first-seconds": no damage, under 30 s of pain), uploads the
+//     scripted expert's session of it and waits (up to 60 s) for the
+//     server's verdict; prints {"uuid", "lesson_id", "passed", "score"}.
+#include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "patient_db/case_bundle.h"
 #include "server/client.h"
@@ -33,6 +40,94 @@ std::string Token(ves::patient_db::Store& store, StoreRole role, const std::stri
                                 1};
   if (!store.AddToken(row).ok()) throw std::runtime_error("cannot add a token");
   return token;
+}
+
+// The station's upload of `record` with `client`; "" or why it was refused.
+std::string Upload(const ves::server::ClientOptions& client, const ves::v1::SessionRecord& record) {
+  ves::v1::UploadSessionRequest req;
+  *req.mutable_record() = record;
+  ves::v1::UploadSessionResponse resp;
+  grpc::ClientContext ctx;
+  ves::server::PrepareContext(&ctx, client);
+  const grpc::Status s = ves::v1::Sessions::NewStub(ves::server::MakeClientChannel(client))
+                             ->UploadSession(&ctx, req, &resp);
+  return s.ok() ? "" : s.error_message();
+}
+
+int SeedPassedLesson(const std::string& address, const std::string& supervisor_token,
+                     const std::string& station_token, const std::string& trainee) {
+  ves::server::ClientOptions supervisor{};
+  supervisor.address = address;
+  supervisor.token = supervisor_token;
+  ves::server::ClientOptions station = supervisor;
+  station.token = station_token;
+  const auto colon_case = ts::SampleCase();
+  ves::v1::CreateCurriculumRequest create;
+  ves::v1::Curriculum* c = create.mutable_curriculum();
+  c->set_curriculum_id("web-lessons");
+  c->set_title("Web lessons");
+  ves::v1::Lesson* lesson = c->add_lessons();
+  lesson->set_lesson_id("web-first-seconds");
+  lesson->set_title("The first seconds");
+  lesson->mutable_case_ref()->set_case_id(colon_case.id());
+  lesson->mutable_aids()->set_fluoroscopy_allowed(true);
+  lesson->mutable_aids()->set_wireframe_allowed(true);
+  lesson->set_time_limit_s(3);
+  lesson->mutable_pass()->set_max_damage_events(0);
+  lesson->mutable_pass()->set_max_pain_s(30);
+  lesson->set_required_passes(1);
+  auto lessons = ves::v1::Lessons::NewStub(ves::server::MakeClientChannel(supervisor));
+  ves::v1::CreateCurriculumResponse created;
+  {
+    grpc::ClientContext ctx;
+    ves::server::PrepareContext(&ctx, supervisor);
+    const grpc::Status s = lessons->CreateCurriculum(&ctx, create, &created);
+    if (!s.ok()) {
+      std::cerr << "web_seed: curriculum refused: " << s.error_message() << "\n";
+      return 1;
+    }
+  }
+  const ves::v1::Lesson& stored = created.curriculum().lessons(0);
+  ves::v1::SessionRecord record;
+  ves::training::RunScriptedCase(colon_case, stored.scope(), {}, "expert", stored.time_limit_s(),
+                                 ves::server::NowUnixMs() - 60'000, &record);
+  record.set_trainee_id(trainee);
+  record.set_station_id("web-test-station");
+  record.set_case_id(colon_case.id());
+  record.set_case_version(colon_case.version());
+  record.set_case_sha256_hex(ves::patient_db::CasePayloadSha256Hex(colon_case));
+  record.set_lesson_id(stored.lesson_id());
+  const std::string refused = Upload(station, record);
+  if (!refused.empty()) {
+    std::cerr << "web_seed: upload refused: " << refused << "\n";
+    return 1;
+  }
+  // The judge replays it in the background.
+  auto verdicts = ves::v1::Lessons::NewStub(ves::server::MakeClientChannel(station));
+  for (int i = 0; i < 600; ++i) {
+    grpc::ClientContext ctx;
+    ves::server::PrepareContext(&ctx, station);
+    ves::v1::GetLessonVerdictRequest q;
+    q.set_session_uuid(record.uuid());
+    ves::v1::GetLessonVerdictResponse r;
+    const grpc::Status s = verdicts->GetLessonVerdict(&ctx, q, &r);
+    if (!s.ok()) {
+      std::cerr << "web_seed: verdict refused: " << s.error_message() << "\n";
+      return 1;
+    }
+    if (r.judged()) {
+      std::cout << nlohmann::json{{"uuid", record.uuid()},
+                                  {"lesson_id", stored.lesson_id()},
+                                  {"passed", r.verdict().passed()},
+                                  {"score", record.score()}}
+                       .dump()
+                << "\n";
+      return 0;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::cerr << "web_seed: no verdict for " << record.uuid() << " within 60 s\n";
+  return 1;
 }
 
 }  // namespace
@@ -88,15 +183,9 @@ int main(int argc, char** argv) {
       ves::server::ClientOptions client;
       client.address = argv[2];
       client.token = argv[3];
-      ves::v1::UploadSessionRequest req;
-      *req.mutable_record() = record;
-      ves::v1::UploadSessionResponse resp;
-      grpc::ClientContext ctx;
-      ves::server::PrepareContext(&ctx, client);
-      const grpc::Status s = ves::v1::Sessions::NewStub(ves::server::MakeClientChannel(client))
-                                 ->UploadSession(&ctx, req, &resp);
-      if (!s.ok()) {
-        std::cerr << "web_seed: upload refused: " << s.error_message() << "\n";
+      const std::string refused = Upload(client, record);
+      if (!refused.empty()) {
+        std::cerr << "web_seed: upload refused: " << refused << "\n";
         return 1;
       }
       std::cout << nlohmann::json{{"uuid", record.uuid()},
@@ -106,8 +195,10 @@ int main(int argc, char** argv) {
                 << "\n";
       return 0;
     }
+    if (mode == "lesson" && argc == 6) return SeedPassedLesson(argv[2], argv[3], argv[4], argv[5]);
     std::cerr << "usage: web_seed setup DB_URL | web_seed upload ADDRESS TOKEN TRAINEE "
-                 "OPERATOR SECONDS [STATION_ID faulty]\n";
+                 "OPERATOR SECONDS [STATION_ID faulty] | web_seed lesson ADDRESS SUPERVISOR_TOKEN "
+                 "STATION_TOKEN TRAINEE\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "web_seed: " << e.what() << "\n";
