@@ -27,6 +27,16 @@ enum class ThrustMode : std::uint8_t {
   kForce,     // push_force_N applied at the base (the paper's constant-force run)
 };
 
+// The patient's position on the couch (docs/model.md, "Position and
+// pressure"): gravity turns with it in the patient frame W, and the mobile
+// colon's weight moves it. Supine: back down (-y); left lateral: left side
+// down; right lateral: right side down.
+enum class PatientPosition : std::uint8_t {
+  kSupine = 0,
+  kLeftLateral = 1,
+  kRightLateral = 2,
+};
+
 struct ModelParams {
   ColonSpec colon;
   EndoscopeParams scope;
@@ -119,6 +129,7 @@ struct StepInput {
   // flattens that region's mobile colon onto its mesentery root, so a
   // straightened loop cannot bow out again (docs/model.md).
   std::array<double, 9> abdominal_pressure{};
+  PatientPosition patient_position{PatientPosition::kSupine};
 };
 
 // A point along the scope where contact and gravity act (fixed at creation).
