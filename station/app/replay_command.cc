@@ -40,8 +40,8 @@ void WriteCsvRow(std::ostream& out, const training::InputSample& in,
                 o.peak_stretch_m, runner.session().accumulator().loop_index_m(),
                 static_cast<int>(in.thrust_mode), in.insertion_m, in.push_force_N, in.roll_rad,
                 in.knob_up_rad, in.knob_right_rad, static_cast<int>(in.view_mode),
-                in.fluoroscopy_on ? 1 : 0,
-                static_cast<int>(in.abdominal_press), static_cast<int>(in.patient_position));
+                in.fluoroscopy_on ? 1 : 0, static_cast<int>(in.abdominal_press),
+                static_cast<int>(in.patient_position));
   out << row;
 }
 

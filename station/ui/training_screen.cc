@@ -293,8 +293,9 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       std::string("Patient   ") + PositionName(controls.patient_position),
   };
   // The toolkit's line in amber while a press or a turned patient is in use.
-  const cv::Scalar left_color[] = {kText, kText, kText, kText,
-                                   controls.abdominal_press == AbdominalPress::kNone ? kText : kAmber};
+  const cv::Scalar left_color[] = {
+      kText, kText, kText, kText,
+      controls.abdominal_press == AbdominalPress::kNone ? kText : kAmber};
   const cv::Scalar right_color[] = {
       kText, kText, kText, kText,
       controls.patient_position == PatientPosition::kSupine ? kText : kAmber};
@@ -337,10 +338,11 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
                                                                                      : kRed;
   const cv::Rect device_box(top.x + top.width * 46 / 100, top.y, top.width * 54 / 100, top.height);
   DrawTextFitted(canvas, "Device: " + model.device_text, device_box, 0.7 * s, device_color);
-  DrawTextFitted(canvas,
-                 "w/s insert  a/d roll  i/k j/l knobs  c centre  1 2 3 v view  f X-ray  g damage  "
-                 "+/- zoom  drag X-ray: rotate  p press  t patient  n/m case/scope  r repeat  q quit",
-                 bottom, 0.55 * s, kDim);
+  DrawTextFitted(
+      canvas,
+      "w/s insert  a/d roll  i/k j/l knobs  c centre  1 2 3 v view  f X-ray  g damage  "
+      "+/- zoom  drag X-ray: rotate  p press  t patient  n/m case/scope  r repeat  q quit",
+      bottom, 0.55 * s, kDim);
 
   // Session over: a banner across the endoscope image.
   if (model.phase == SessionPhase::kOver) {
