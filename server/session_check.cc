@@ -106,8 +106,15 @@ std::string CheckMetrics(const ves::v1::SessionRecord& r) {
            ": must be 0 when not completed";
   }
   const std::pair<const char*, double> within_session[] = {
-      {"excessive_force_s", m.excessive_force_s()}, {"pain_s", m.pain_s()},
-      {"loop_s", m.loop_s()},   {"redout_s", m.redout_s()}, {"xray_s", m.xray_s()}};
+      {"excessive_force_s", m.excessive_force_s()},
+      {"pain_s", m.pain_s()},
+      {"loop_s", m.loop_s()},
+      {"redout_s", m.redout_s()},
+      {"xray_s", m.xray_s()},
+      {"press_llq_s", m.press_llq_s()},
+      {"press_mid_s", m.press_mid_s()},
+      {"left_lateral_s", m.left_lateral_s()},
+      {"right_lateral_s", m.right_lateral_s()}};
   for (const auto& [name, value] : within_session) {
     p = InRange(std::string("record.metrics.") + name, value, 0.0, d + kTolerance_s,
                 "s (0 to duration_s)");
@@ -135,7 +142,8 @@ std::string CheckMetrics(const ves::v1::SessionRecord& r) {
   const std::pair<const char*, uint32_t> counts[] = {
       {"excessive_force_episodes", m.excessive_force_episodes()},
       {"loop_count", m.loop_count()},
-      {"damage_events", m.damage_events()}};
+      {"damage_events", m.damage_events()},
+      {"position_changes", m.position_changes()}};
   for (const auto& [name, n] : counts) {
     if (n > max_episodes) {
       return std::string("record.metrics.") + name + " = " + std::to_string(n) +
@@ -172,12 +180,13 @@ std::string CheckEvents(const ves::v1::SessionRecord& r) {
 std::string CheckInputLog(const ves::v1::SessionRecord& r) {
   if (!r.has_input_log()) return "record.input_log: missing (every session keeps its input log)";
   const auto& log = r.input_log();
-  if (log.format_version() != training::kInputLogFormatVersion ||
-      log.encoding() != training::kInputLogEncoding) {
+  // Older stations' logs (version 1) are still judged: the decoder reads them.
+  const std::string_view encoding = training::InputLogEncodingOf(log.format_version());
+  if (encoding.empty() || log.encoding() != encoding) {
     return "record.input_log.encoding = '" + patient_db::PrintableExcerpt(log.encoding(), 32) +
            "' version " + std::to_string(log.format_version()) + ": must be " +
            training::kInputLogEncoding + " version " +
-           std::to_string(training::kInputLogFormatVersion);
+           std::to_string(training::kInputLogFormatVersion) + " (or delta-zlib-v1 version 1)";
   }
   std::string p = InRange("record.input_log.dt_s", log.dt_s(), training::kMinJudgedDt_s,
                           training::kMaxJudgedDt_s, "s");

@@ -179,6 +179,11 @@ void PrintSessionSummary(const ves::v1::SessionRecord& r, std::ostream& out) {
   line("tip_path_m", Fixed(m.tip_path_m(), 2));
   line("damage", std::to_string(m.damage_events()) + " events, " +
                      Fixed(m.damage_impulse_n_s(), 2) + " N·s");
+  line("abdominal_press", "left lower quadrant " + Fixed(m.press_llq_s(), 1) + " s, mid-abdomen " +
+                              Fixed(m.press_mid_s(), 1) + " s");
+  line("patient_position", std::to_string(m.position_changes()) + " changes, left lateral " +
+                               Fixed(m.left_lateral_s(), 1) + " s, right lateral " +
+                               Fixed(m.right_lateral_s(), 1) + " s");
   out << "events: " << r.events_size() << "\n";
   for (const auto& e : r.events()) {
     out << "  t=" << Fixed(e.t_s(), 1) << " s  " << EventKindName(e.kind());

@@ -299,6 +299,11 @@ async function sessionPage() {
                    ['Time to cecum', m.completed ? Number(m.time_to_cecum_s).toFixed(1) + ' s' : '—'],
                    ['Pain', Number(m.pain_s || 0).toFixed(1) + ' s'],
                    ['Loop', Number(m.loop_s || 0).toFixed(1) + ' s'],
+                   ['Abdominal pressure', 'left lower quadrant ' + Number(m.press_llq_s || 0).toFixed(1) +
+                    ' s, mid-abdomen ' + Number(m.press_mid_s || 0).toFixed(1) + ' s'],
+                   ['Patient position', (m.position_changes || 0) + ' changes; left lateral ' +
+                    Number(m.left_lateral_s || 0).toFixed(1) + ' s, right lateral ' +
+                    Number(m.right_lateral_s || 0).toFixed(1) + ' s'],
                    ['Deepest tip', (Number(m.max_tip_arc_m || 0) * 1000).toFixed(0) + ' mm']];
   for (const [k, v] of summary) { $('summary').appendChild(el('dt', k)); $('summary').appendChild(el('dd', v)); }
   // The station's health during this session, flagged as on the stations page.

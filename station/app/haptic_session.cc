@@ -87,6 +87,8 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   sample.knob_right_rad = controls.knob_right_rad;
   sample.view_mode = controls.view_mode;
   sample.fluoroscopy_on = controls.fluoroscopy_on;
+  sample.abdominal_press = controls.abdominal_press;
+  sample.patient_position = controls.patient_position;
   runner_->Step(sample);  // quantizes to the log's resolution first; cannot throw on finite input
   if (runner_->diverged()) {
     response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();

@@ -41,6 +41,8 @@ struct ModelControls {
   double knob_right_rad{0.0};
   training::ViewMode view_mode{training::ViewMode::kTextured};
   bool fluoroscopy_on{false};
+  training::AbdominalPress abdominal_press{training::AbdominalPress::kNone};
+  training::PatientPosition patient_position{training::PatientPosition::kSupine};
 };
 
 class SessionModelSource final : public haptics::BaseResponseSource {

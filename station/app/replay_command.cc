@@ -21,7 +21,8 @@ namespace {
 constexpr char kUsage[] =
     "usage: ves-station replay SESSION_FILE [--csv OUT] [--debrief]\n\n"
     "Re-runs the model from the session's input log alone and prints\n"
-    "outcome=... time_to_cecum_s=... pain_s=... loop_s=... peak_force_N=... xray_s=... score=...\n"
+    "outcome=... time_to_cecum_s=... pain_s=... loop_s=... peak_force_N=... xray_s=...\n"
+    "press_llq_s=... press_mid_s=... position_changes=... score=...\n"
     "With --debrief, then the score's weighed parts, one a line, with where and when each\n"
     "cost points (docs/scoring.md, \"Debrief\"), as the station prints them at the quit.\n"
     "A truncated or corrupted file is refused (exit status 2).";
@@ -29,7 +30,7 @@ constexpr char kUsage[] =
 void WriteCsvHeader(std::ostream& out) {
   out << "t_s,inserted_m,tip_arc_m,base_force_N,max_wall_force_N,peak_stretch_m,loop_index_m,"
          "thrust_mode,insertion_cmd_m,push_force_N,roll_rad,knob_up_rad,knob_right_rad,"
-         "view_mode,fluoroscopy_on\n";
+         "view_mode,fluoroscopy_on,abdominal_press,patient_position\n";
 }
 
 void WriteCsvRow(std::ostream& out, const training::InputSample& in,
@@ -37,11 +38,13 @@ void WriteCsvRow(std::ostream& out, const training::InputSample& in,
   const training::StepObservation& o = runner.observation();
   char row[512];
   std::snprintf(row, sizeof(row),
-                "%.3f,%.6f,%.6f,%.4f,%.4f,%.6f,%.6f,%d,%.6f,%.4f,%.6f,%.6f,%.6f,%d,%d\n", o.t_s,
-                o.inserted_m, o.tip_arc_m, o.base_force_N, o.max_wall_force_N, o.peak_stretch_m,
-                runner.session().accumulator().loop_index_m(), static_cast<int>(in.thrust_mode),
-                in.insertion_m, in.push_force_N, in.roll_rad, in.knob_up_rad,
-                in.knob_right_rad, static_cast<int>(in.view_mode), in.fluoroscopy_on ? 1 : 0);
+                "%.3f,%.6f,%.6f,%.4f,%.4f,%.6f,%.6f,%d,%.6f,%.4f,%.6f,%.6f,%.6f,%d,%d,%d,%d\n",
+                o.t_s, o.inserted_m, o.tip_arc_m, o.base_force_N, o.max_wall_force_N,
+                o.peak_stretch_m, runner.session().accumulator().loop_index_m(),
+                static_cast<int>(in.thrust_mode), in.insertion_m, in.push_force_N, in.roll_rad,
+                in.knob_up_rad, in.knob_right_rad, static_cast<int>(in.view_mode),
+                in.fluoroscopy_on ? 1 : 0, static_cast<int>(in.abdominal_press),
+                static_cast<int>(in.patient_position));
   out << row;
 }
 

@@ -553,7 +553,8 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
                         : scripted->Act(perception);
       rig.device().set_hand(HandForSample(act, source.insertion_offset_m()));
       controls.Store(ModelControls{act.knob_up_rad, act.knob_right_rad, act.view_mode,
-                                   act.fluoroscopy_on});
+                                   act.fluoroscopy_on, act.abdominal_press,
+                                   act.patient_position});
       rig.Step();
       if (runner.diverged()) break;
       if (!source.stepped()) {

@@ -757,7 +757,8 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
     }
     hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
     loop->SetControls(ModelControls{controls.knob_up_rad, controls.knob_right_rad,
-                                    controls.view_mode, controls.fluoroscopy_visible});
+                                    controls.view_mode, controls.fluoroscopy_visible,
+                                    controls.abdominal_press, controls.patient_position});
   }
   return {};
 }

@@ -10,9 +10,13 @@
 namespace ves::training {
 namespace {
 
-constexpr char kMagic[4] = {'V', 'I', 'L', '1'};
+constexpr char kMagicV1[4] = {'V', 'I', 'L', '1'};
+constexpr char kMagicV2[4] = {'V', 'I', 'L', '2'};
 constexpr std::size_t kHeaderBytes = 4 + 8 + 4 + 4 + 4;
-constexpr int kColumns = 9;
+// Version 1 logged the first 9 columns; version 2 added the abdominal press
+// and the patient's position after them.
+constexpr int kColumnsV1 = 9;
+constexpr int kColumns = 11;
 // A varint of a zig-zag int64 takes at most 10 bytes.
 constexpr std::uint64_t kMaxVarintBytes = 10;
 // Refuse absurd headers before allocating: 2^28 samples is 74 h at 1 kHz.
@@ -37,7 +41,13 @@ std::array<std::int64_t, kColumns> ToColumns(const InputSample& s) {
           ToUnits(s.knob_up_rad, kLogAngleResolution_rad, "knob_up_rad"),
           ToUnits(s.knob_right_rad, kLogAngleResolution_rad, "knob_right_rad"),
           static_cast<std::int64_t>(s.view_mode),
-          s.fluoroscopy_on ? 1 : 0};
+          s.fluoroscopy_on ? 1 : 0,
+          static_cast<std::int64_t>(s.abdominal_press),
+          static_cast<std::int64_t>(s.patient_position)};
+}
+
+int ColumnsOf(std::uint32_t format_version) {
+  return format_version == 1 ? kColumnsV1 : kColumns;
 }
 
 // Column c of ToColumns back into the sample; throws InputLogError for a
@@ -61,11 +71,25 @@ void SetColumn(InputSample* s, int c, std::int64_t v) {
       if (v < 0 || v > 2) throw InputLogError("input log: bad view mode " + std::to_string(v));
       s->view_mode = static_cast<ViewMode>(v);
       return;
-    default:
+    case 8:
       if (v < 0 || v > 1) {
         throw InputLogError("input log: bad fluoroscopy flag " + std::to_string(v));
       }
       s->fluoroscopy_on = v == 1;
+      return;
+    case 9:
+      if (v < 0 || v > 2) {
+        throw InputLogError("input log: bad abdominal_press " + std::to_string(v) +
+                            " (0 none, 1 left lower quadrant, 2 mid-abdomen)");
+      }
+      s->abdominal_press = static_cast<AbdominalPress>(v);
+      return;
+    default:
+      if (v < 0 || v > 2) {
+        throw InputLogError("input log: bad patient_position " + std::to_string(v) +
+                            " (0 supine, 1 left lateral, 2 right lateral)");
+      }
+      s->patient_position = static_cast<PatientPosition>(v);
       return;
   }
 }
@@ -121,13 +145,37 @@ std::uint32_t Crc32(std::string_view data) {
 
 InputSample Quantize(const InputSample& sample) { return FromColumns(ToColumns(sample)); }
 
-std::string EncodeInputSamples(std::span<const InputSample> samples) {
+std::string_view InputLogEncodingOf(std::uint32_t format_version) {
+  switch (format_version) {
+    case 1: return "delta-zlib-v1";
+    case 2: return kInputLogEncoding;
+    default: return {};
+  }
+}
+
+std::string EncodeInputSamples(std::span<const InputSample> samples,
+                               std::uint32_t format_version) {
+  if (InputLogEncodingOf(format_version).empty()) {
+    throw std::invalid_argument("input log: cannot encode format version " +
+                                std::to_string(format_version));
+  }
+  const int columns = ColumnsOf(format_version);
   std::vector<std::array<std::int64_t, kColumns>> rows;
   rows.reserve(samples.size());
-  for (const InputSample& s : samples) rows.push_back(ToColumns(s));
+  for (const InputSample& s : samples) {
+    rows.push_back(ToColumns(s));
+    for (int c = columns; c < kColumns; ++c) {
+      if (rows.back()[c] != 0) {
+        throw std::invalid_argument("input log: format version " +
+                                    std::to_string(format_version) +
+                                    " has no abdominal press or patient position (tick " +
+                                    std::to_string(s.tick) + ")");
+      }
+    }
+  }
   std::string raw;
-  raw.reserve(samples.size() * kColumns * 2);
-  for (int c = 0; c < kColumns; ++c) {
+  raw.reserve(samples.size() * columns * 2);
+  for (int c = 0; c < columns; ++c) {
     std::int64_t previous = 0;
     for (const auto& row : rows) {
       PutVarint(&raw, row[c] - previous);
@@ -147,7 +195,7 @@ std::string EncodeInputSamples(std::span<const InputSample> samples) {
   }
   packed.resize(packed_size);
 
-  std::string out(kMagic, sizeof(kMagic));
+  std::string out(format_version == 1 ? kMagicV1 : kMagicV2, 4);
   PutLe(&out, samples.size(), 8);
   PutLe(&out, raw.size(), 4);
   PutLe(&out, Crc32(raw), 4);
@@ -160,13 +208,14 @@ std::string EncodeInputSamples(std::span<const InputSample> samples) {
 
 std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
   const std::uint64_t count = PeekInputSampleCount(encoded);
+  const int columns = ColumnsOf(PeekInputLogFormatVersion(encoded));
   const std::uint64_t raw_size = GetLe(encoded, 12, 4);
   const auto crc = static_cast<std::uint32_t>(GetLe(encoded, 16, 4));
   const auto packed_crc = static_cast<std::uint32_t>(GetLe(encoded, 20, 4));
   if (count > kMaxSamples) {
     throw InputLogError("input log: implausible sample count " + std::to_string(count));
   }
-  if (raw_size < count * kColumns || raw_size > count * kColumns * kMaxVarintBytes) {
+  if (raw_size < count * columns || raw_size > count * columns * kMaxVarintBytes) {
     throw InputLogError("input log: raw length " + std::to_string(raw_size) +
                         " does not fit sample count " + std::to_string(count));
   }
@@ -193,9 +242,10 @@ std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
   if (Crc32(raw) != crc) throw InputLogError("input log: CRC-32 mismatch (corrupted data)");
 
   // Column by column straight into the samples: no second copy of the log.
+  // A version 1 log's samples keep the later columns' defaults.
   std::vector<InputSample> samples(count);
   std::size_t pos = 0;
-  for (int c = 0; c < kColumns; ++c) {
+  for (int c = 0; c < columns; ++c) {
     std::int64_t value = 0;
     for (InputSample& sample : samples) {
       const std::int64_t delta = GetVarint(raw, &pos);
@@ -212,14 +262,18 @@ std::vector<InputSample> DecodeInputSamples(std::string_view encoded) {
   return samples;
 }
 
-std::uint64_t PeekInputSampleCount(std::string_view encoded) {
+std::uint32_t PeekInputLogFormatVersion(std::string_view encoded) {
   if (encoded.size() < kHeaderBytes) {
     throw InputLogError("input log: truncated header (" + std::to_string(encoded.size()) +
                         " bytes, need " + std::to_string(kHeaderBytes) + ")");
   }
-  if (std::memcmp(encoded.data(), kMagic, sizeof(kMagic)) != 0) {
-    throw InputLogError("input log: not a delta-zlib-v1 log (bad magic)");
-  }
+  if (std::memcmp(encoded.data(), kMagicV1, 4) == 0) return 1;
+  if (std::memcmp(encoded.data(), kMagicV2, 4) == 0) return 2;
+  throw InputLogError("input log: not a delta-zlib-v1 or -v2 log (bad magic)");
+}
+
+std::uint64_t PeekInputSampleCount(std::string_view encoded) {
+  PeekInputLogFormatVersion(encoded);  // checks the header's size and magic
   return GetLe(encoded, 4, 8);
 }
 
@@ -232,21 +286,28 @@ std::uint64_t MaxSessionSamples(double time_limit_s, double dt_s) {
                        : static_cast<std::uint64_t>(steps);
 }
 
-v1::InputLog MakeInputLog(std::span<const InputSample> samples, double dt_s) {
+v1::InputLog MakeInputLog(std::span<const InputSample> samples, double dt_s,
+                          std::uint32_t format_version) {
   v1::InputLog log;
-  log.set_format_version(kInputLogFormatVersion);
+  log.set_format_version(format_version);
   log.set_dt_s(dt_s);
   log.set_sample_count(samples.size());
-  log.set_encoded(EncodeInputSamples(samples));
-  log.set_encoding(kInputLogEncoding);
+  log.set_encoded(EncodeInputSamples(samples, format_version));
+  log.set_encoding(std::string(InputLogEncodingOf(format_version)));
   return log;
 }
 
 std::vector<InputSample> DecodeInputLog(const v1::InputLog& log) {
-  if (log.format_version() != kInputLogFormatVersion || log.encoding() != kInputLogEncoding) {
+  const std::string_view encoding = InputLogEncodingOf(log.format_version());
+  if (encoding.empty() || log.encoding() != encoding) {
     throw InputLogError("input log: unsupported format " + std::to_string(log.format_version()) +
-                        " encoding '" + log.encoding() + "' (expected 1, " + kInputLogEncoding +
-                        ")");
+                        " encoding '" + log.encoding() +
+                        "' (expected 1 delta-zlib-v1 or 2 delta-zlib-v2)");
+  }
+  const std::uint32_t in_data = PeekInputLogFormatVersion(log.encoded());
+  if (in_data != log.format_version()) {
+    throw InputLogError("input log: format_version " + std::to_string(log.format_version()) +
+                        " but the encoded data is version " + std::to_string(in_data));
   }
   if (!(log.dt_s() > 0.0 && log.dt_s() < 1.0)) {
     throw InputLogError("input log: dt_s must be in (0, 1) s, got " + std::to_string(log.dt_s()));

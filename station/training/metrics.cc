@@ -92,6 +92,14 @@ void MetricsAccumulator::Add(const StepObservation& o) {
                  0.0);
   mucosa_seen_ = std::max(mucosa_seen_, o.mucosa_seen_fraction);
   if (o.fluoroscopy_on) xray_s_ += dt;
+  if (o.abdominal_press == AbdominalPress::kLeftLowerQuadrant) press_llq_s_ += dt;
+  if (o.abdominal_press == AbdominalPress::kMidAbdomen) press_mid_s_ += dt;
+  if (o.patient_position == PatientPosition::kLeftLateral) left_lateral_s_ += dt;
+  if (o.patient_position == PatientPosition::kRightLateral) right_lateral_s_ += dt;
+  if (o.patient_position != position_) {
+    ++position_changes_;
+    position_ = o.patient_position;
+  }
 
   if (steps_ > 0) tip_path_m_ += (o.p_WTip - last_tip_).norm();
   last_tip_ = o.p_WTip;
@@ -155,6 +163,11 @@ Metrics MetricsAccumulator::Result() const {
   m.max_tip_arc_m = max_tip_arc_m_;
   m.damage_events = static_cast<std::uint32_t>(damage.episodes().size());
   for (const Episode& e : damage.episodes()) m.damage_impulse_N_s += e.excess_integral;
+  m.press_llq_s = press_llq_s_;
+  m.press_mid_s = press_mid_s_;
+  m.left_lateral_s = left_lateral_s_;
+  m.right_lateral_s = right_lateral_s_;
+  m.position_changes = position_changes_;
   return m;
 }
 

@@ -35,6 +35,14 @@ struct Metrics {
   double max_tip_arc_m{0.0};
   std::uint32_t damage_events{0};
   double damage_impulse_N_s{0.0};
+  // The loop-control toolkit: how long the assistant's hand pressed each
+  // site, how long the patient lay on each side, and how often the patient
+  // was turned (from supine at the start).
+  double press_llq_s{0.0};  // left lower quadrant
+  double press_mid_s{0.0};  // mid-abdomen
+  double left_lateral_s{0.0};
+  double right_lateral_s{0.0};
+  std::uint32_t position_changes{0};
 
   bool operator==(const Metrics&) const = default;
 };
@@ -142,6 +150,12 @@ class MetricsAccumulator {
   double peak_stretch_m_{0.0};
   double mucosa_seen_{0.0};
   double xray_s_{0.0};
+  double press_llq_s_{0.0};
+  double press_mid_s_{0.0};
+  double left_lateral_s_{0.0};
+  double right_lateral_s_{0.0};
+  std::uint32_t position_changes_{0};
+  PatientPosition position_{PatientPosition::kSupine};  // every session starts supine
   double tip_path_m_{0.0};
   Eigen::Vector3d last_tip_{Eigen::Vector3d::Zero()};
   double max_inserted_m_{0.0};

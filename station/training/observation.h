@@ -10,6 +10,15 @@ namespace ves::training {
 // polygons for intermediates, texture-mapped mucosa for advanced trainees.
 enum class ViewMode : std::uint8_t { kWireframe = 0, kFlat = 1, kTextured = 2 };
 
+// Where the assistant's hand presses the abdomen to keep a straightened loop
+// from bowing out again (docs/scoring.md, "Input log"): over the sigmoid apex
+// in the left lower quadrant, or under the transverse colon mid-abdomen.
+enum class AbdominalPress : std::uint8_t { kNone = 0, kLeftLowerQuadrant = 1, kMidAbdomen = 2 };
+
+// The patient's position on the couch, as model::PatientPosition: gravity
+// moves the mobile colon when the patient turns.
+enum class PatientPosition : std::uint8_t { kSupine = 0, kLeftLateral = 1, kRightLateral = 2 };
+
 // What the metrics need to know about one model step (DESIGN.md §5). Built
 // from the model's step outputs plus the views' per-frame measures; plain
 // data so the metrics can be tested on constructed sequences without a model.
@@ -30,6 +39,8 @@ struct StepObservation {
   std::span<const double> segment_arc_m{};  // arc of each segment point, same length
   ViewMode view_mode{ViewMode::kTextured};
   bool fluoroscopy_on{false};
+  AbdominalPress abdominal_press{AbdominalPress::kNone};
+  PatientPosition patient_position{PatientPosition::kSupine};
   double redout_fraction{0.0};       // 0..1 of the endoscope image washed red (tip on the wall)
   double mucosa_seen_fraction{0.0};  // 0..1, cumulative coverage reported by the view
 };

@@ -36,6 +36,8 @@ StepObservation Observer::Observe(const InputSample& input, const model::ModelSt
   }
   o.view_mode = input.view_mode;
   o.fluoroscopy_on = input.fluoroscopy_on;
+  o.abdominal_press = input.abdominal_press;
+  o.patient_position = input.patient_position;
 
   const Eigen::Vector3d axis_W = out.X_WTip.linear().col(2);
   const int tip_sample = static_cast<int>(state.samples.size()) - 1;

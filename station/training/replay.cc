@@ -125,10 +125,11 @@ std::string SummaryLine(const RunResult& r) {
   std::snprintf(line, sizeof(line),
                 "outcome=%s time_to_cecum_s=%s inserted_at_cecum_m=%s deepest_tip_arc_m=%.3f "
                 "deepest_region=%s pain_s=%.1f loop_s=%.1f peak_force_N=%.2f xray_s=%.1f "
-                "score=%.1f/100",
+                "press_llq_s=%.1f press_mid_s=%.1f position_changes=%u score=%.1f/100",
                 OutcomeName(r.outcome), time_to_cecum, inserted_at_cecum, m.max_tip_arc_m,
                 r.deepest_region.empty() ? "-" : r.deepest_region.c_str(), m.pain_s, m.loop_s,
-                m.peak_insertion_force_N, m.xray_s, r.score);
+                m.peak_insertion_force_N, m.xray_s, m.press_llq_s, m.press_mid_s,
+                static_cast<unsigned>(m.position_changes), r.score);
   return line;
 }
 

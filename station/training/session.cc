@@ -140,6 +140,11 @@ v1::SessionMetrics ToProto(const Metrics& m) {
   p.set_inserted_at_cecum_m(m.inserted_at_cecum_m);
   p.set_damage_events(m.damage_events);
   p.set_damage_impulse_n_s(m.damage_impulse_N_s);
+  p.set_press_llq_s(m.press_llq_s);
+  p.set_press_mid_s(m.press_mid_s);
+  p.set_left_lateral_s(m.left_lateral_s);
+  p.set_right_lateral_s(m.right_lateral_s);
+  p.set_position_changes(m.position_changes);
   return p;
 }
 
@@ -165,6 +170,11 @@ Metrics FromProto(const v1::SessionMetrics& p) {
   m.inserted_at_cecum_m = p.inserted_at_cecum_m();
   m.damage_events = p.damage_events();
   m.damage_impulse_N_s = p.damage_impulse_n_s();
+  m.press_llq_s = p.press_llq_s();
+  m.press_mid_s = p.press_mid_s();
+  m.left_lateral_s = p.left_lateral_s();
+  m.right_lateral_s = p.right_lateral_s();
+  m.position_changes = p.position_changes();
   return m;
 }
 

@@ -14,6 +14,27 @@ model::StepInput ToStepInput(const InputSample& in) {
   s.roll_rad = in.roll_rad;
   s.knob_up_rad = in.knob_up_rad;
   s.knob_right_rad = in.knob_right_rad;
+  const auto press = [&s](model::Region region) {
+    s.abdominal_pressure[static_cast<std::size_t>(region)] = 1.0;
+  };
+  switch (in.abdominal_press) {
+    case AbdominalPress::kNone: break;
+    case AbdominalPress::kLeftLowerQuadrant:
+      // Over the sigmoid apex; a mobile descending colon lies under the same hand.
+      press(model::Region::kSigmoid);
+      press(model::Region::kDescending);
+      break;
+    case AbdominalPress::kMidAbdomen: press(model::Region::kTransverse); break;
+  }
+  switch (in.patient_position) {
+    case PatientPosition::kSupine: s.patient_position = model::PatientPosition::kSupine; break;
+    case PatientPosition::kLeftLateral:
+      s.patient_position = model::PatientPosition::kLeftLateral;
+      break;
+    case PatientPosition::kRightLateral:
+      s.patient_position = model::PatientPosition::kRightLateral;
+      break;
+  }
   return s;
 }
 

@@ -56,6 +56,14 @@ bool ApplyKey(int key, const KeyboardHand& hand, ControlState* state) {
       state->view_mode = static_cast<ViewMode>((static_cast<int>(state->view_mode) + 1) % 3);
       return true;
     case 'f': state->fluoroscopy_visible = !state->fluoroscopy_visible; return true;
+    case 'p':  // the assistant's hand: off, left lower quadrant, mid-abdomen, off
+      state->abdominal_press =
+          static_cast<AbdominalPress>((static_cast<int>(state->abdominal_press) + 1) % 3);
+      return true;
+    case 't':  // turn the patient: supine, left lateral, right lateral, supine
+      state->patient_position =
+          static_cast<PatientPosition>((static_cast<int>(state->patient_position) + 1) % 3);
+      return true;
     case 'g': state->damage_display = !state->damage_display; return true;
     case 'r': state->repeat_requested = true; return true;
     case '+': case '=': ApplyFluoroWheel(1, state); return true;
@@ -73,8 +81,28 @@ std::string KeyHelpText() {
          "c           knobs to neutral     v, 1 2 3    view mode: wire, polygon, texture\n"
          "f           fluoroscopy on/off   g           damage display on/off\n"
          "+ / -       fluoroscopy zoom     drag        rotate fluoroscopy (wheel: zoom)\n"
+         "p           abdominal press      t           patient position\n"
+         "            (off, left lower quadrant, mid-abdomen; supine, left, right lateral)\n"
          "n / m       next case / scope    r           repeat (with the chosen case, scope)\n"
          "q / Esc     finish (abort) the session\n";
+}
+
+const char* PressName(AbdominalPress press) {
+  switch (press) {
+    case AbdominalPress::kLeftLowerQuadrant: return "left lower quadrant";
+    case AbdominalPress::kMidAbdomen: return "mid-abdomen";
+    case AbdominalPress::kNone: break;
+  }
+  return "none";
+}
+
+const char* PositionName(PatientPosition position) {
+  switch (position) {
+    case PatientPosition::kLeftLateral: return "left lateral";
+    case PatientPosition::kRightLateral: return "right lateral";
+    case PatientPosition::kSupine: break;
+  }
+  return "supine";
 }
 
 void ApplyFluoroDrag(int x, int y, bool button_down, DragTracker* drag, ControlState* state) {

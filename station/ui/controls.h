@@ -10,6 +10,8 @@ namespace ves::ui {
 // The endoscope view mode is the one the session records
 // (training::ViewMode: wire-frame, flat polygons, texture): no other.
 using training::ViewMode;
+using training::AbdominalPress;
+using training::PatientPosition;
 
 // What the trainee asked for through keys, mouse and the control panel
 // (paper §4.4). Without hardware (`--device sim`) the keyboard also moves the
@@ -31,6 +33,10 @@ struct ControlState {
   double hand_roll_rad{0.0};
   double knob_up_rad{0.0};
   double knob_right_rad{0.0};
+  // The loop-control toolkit: where the assistant presses the abdomen and
+  // how the patient lies; the model and the input log take them as asked.
+  AbdominalPress abdominal_press{AbdominalPress::kNone};
+  PatientPosition patient_position{PatientPosition::kSupine};
   bool operator==(const ControlState&) const = default;
 };
 
@@ -55,6 +61,11 @@ bool ApplyKey(int key, const KeyboardHand& hand, ControlState* state);
 
 // One line per key, for the help overlay and the docs.
 std::string KeyHelpText();
+
+// For the panel: "none", "left lower quadrant", "mid-abdomen"; "supine",
+// "left lateral", "right lateral".
+const char* PressName(AbdominalPress press);
+const char* PositionName(PatientPosition position);
 
 // Mouse drag on the fluoroscopy view rotates it; the wheel zooms.
 struct DragTracker {

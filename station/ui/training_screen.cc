@@ -148,7 +148,7 @@ ScreenLayout MakeScreenLayout(cv::Size canvas) {
   layout.status = R(24, 960, 1232, 96);
   layout.fluoroscopy = R(1280, 24, 616, 462);
   layout.panel = R(1280, 498, 616, 558);
-  layout.figures = R(1280, 810, 616, 170);
+  layout.figures = R(1280, 810, 616, 194);
   layout.gauge = R(1280, 1012, 616, 40);
   layout.banner = R(24, 24 + 924 * 0.28, 1232, 924 * 0.44);
 
@@ -272,9 +272,9 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
   DrawTextFitted(canvas, "Scope: " + NameAt(model.scope_names, controls.scope_choice),
                  choice_box(PanelAction::kPreviousScope), 0.62 * s, kText);
 
-  // Live figures: two columns of four lines.
+  // Live figures: two columns of five lines.
   const cv::Rect& f = layout.figures;
-  const int line = f.height / 4;
+  const int line = f.height / 5;
   const int left_width = f.width * 55 / 100;
   const std::string left[] = {
       Format("Inserted    %.2f m", model.inserted_m),
@@ -283,18 +283,27 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       Format("Knobs  U/D %+.0f  L/R %+.0f deg", Shown(controls.knob_up_rad * kDegPerRad, 1.0),
              Shown(controls.knob_right_rad * kDegPerRad, 1.0)),
       Format("Roll   %+.0f deg", Shown(model.roll_rad * kDegPerRad, 1.0)),
+      std::string("Press  ") + PressName(controls.abdominal_press),
   };
   const std::string right[] = {
       Format("Pain      %.1f s", model.pain_s),
       Format("Loop      %.1f s", model.loop_s),
       Format("X-ray     %.1f s", model.xray_s),
       Format("Red-out   %.1f s", model.redout_s),
+      std::string("Patient   ") + PositionName(controls.patient_position),
   };
-  for (int i = 0; i < 4; ++i) {
+  // The toolkit's line in amber while a press or a turned patient is in use.
+  const cv::Scalar left_color[] = {
+      kText, kText, kText, kText,
+      controls.abdominal_press == AbdominalPress::kNone ? kText : kAmber};
+  const cv::Scalar right_color[] = {
+      kText, kText, kText, kText,
+      controls.patient_position == PatientPosition::kSupine ? kText : kAmber};
+  for (int i = 0; i < 5; ++i) {
     DrawTextFitted(canvas, left[i], {f.x, f.y + i * line, left_width - px(8), line}, 0.62 * s,
-                   kText);
+                   left_color[i]);
     DrawTextFitted(canvas, right[i], {f.x + left_width, f.y + i * line, f.width - left_width, line},
-                   0.62 * s, kText);
+                   0.62 * s, right_color[i]);
   }
 
   // Force gauge: the hand's axial force against the device's range.
@@ -329,10 +338,11 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
                                                                                      : kRed;
   const cv::Rect device_box(top.x + top.width * 46 / 100, top.y, top.width * 54 / 100, top.height);
   DrawTextFitted(canvas, "Device: " + model.device_text, device_box, 0.7 * s, device_color);
-  DrawTextFitted(canvas,
-                 "w/s insert  a/d roll  i/k j/l knobs  c centre  1 2 3 v view  f X-ray  g damage  "
-                 "+/- zoom  drag X-ray: rotate  n/m case/scope  r repeat  q quit",
-                 bottom, 0.55 * s, kDim);
+  DrawTextFitted(
+      canvas,
+      "w/s insert  a/d roll  i/k j/l knobs  c centre  1 2 3 v view  f X-ray  g damage  "
+      "+/- zoom  drag X-ray: rotate  p press  t patient  n/m case/scope  r repeat  q quit",
+      bottom, 0.55 * s, kDim);
 
   // Session over: a banner across the endoscope image.
   if (model.phase == SessionPhase::kOver) {

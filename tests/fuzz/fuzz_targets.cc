@@ -124,6 +124,12 @@ std::vector<std::string> SeedsFor(const std::string& target) {
         samples[i].view_mode = static_cast<training::ViewMode>(i % 3);
         samples[i].fluoroscopy_on = i % 5 == 0;
       }
+      // Format 1 (no toolkit columns), as stations before format 2 wrote it.
+      seeds.push_back(training::EncodeInputSamples(samples, 1));
+      for (int i = 0; i < n; ++i) {
+        samples[i].abdominal_press = static_cast<training::AbdominalPress>(i / 40 % 3);
+        samples[i].patient_position = static_cast<training::PatientPosition>(i / 100 % 3);
+      }
       seeds.push_back(training::EncodeInputSamples(samples));
     }
   } else if (target == "journal") {

@@ -94,6 +94,9 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   ves::v1::UploadSessionResponse r;
   ves::v1::SessionRecord record = MakeRecord(uuid, "alice", 7);
   record.mutable_metrics()->set_max_tip_arc_m(1.23456);
+  record.mutable_metrics()->set_press_llq_s(12.34);
+  record.mutable_metrics()->set_position_changes(2);
+  record.mutable_metrics()->set_left_lateral_s(40.0);
   *record.mutable_replay_setup()->mutable_colon_case() = SampleCase();
   record.mutable_replay_setup()->set_time_limit_s(record.metrics().duration_s() + 60.0);
   const grpc::Status uploaded =
@@ -121,6 +124,14 @@ TEST(AdminCli, RemoteCommandsWorkAgainstAServer) {
   EXPECT_NE(show.out.find("time_to_cecum_s          207.0"), std::string::npos) << show.out;
   EXPECT_NE(show.out.find("deepest_tip_arc_m        1.235"), std::string::npos) << show.out;
   EXPECT_NE(show.out.find("57.0 / 100"), std::string::npos) << show.out;
+  // The loop-control toolkit's use, for the supervisor.
+  EXPECT_NE(show.out.find("abdominal_press          left lower quadrant 12.3 s, mid-abdomen 0.0 s"),
+            std::string::npos)
+      << show.out;
+  EXPECT_NE(show.out.find("patient_position         2 changes, left lateral 40.0 s, right lateral "
+                          "0.0 s"),
+            std::string::npos)
+      << show.out;
   EXPECT_EQ(show.out.find("centerline"), std::string::npos) << show.out;
   EXPECT_LT(Lines(show.out), 60) << show.out;
   AdminRun raw = Admin(dir, "session show " + uuid + " --raw" + remote);

@@ -120,6 +120,24 @@ TEST(CheckSessionRecord, ImplausibleRecordsAreRefusedNamingTheField) {
        [](ves::v1::SessionRecord* r) { r->clear_input_log(); }},
       {"record.input_log.dt_s = 1e-06: must be in [0.0001, 0.01] s",
        [](ves::v1::SessionRecord* r) { r->mutable_input_log()->set_dt_s(1e-6); }},
+      {"record.metrics.press_llq_s = 301: must be in [0, 300.001] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_press_llq_s(301); }},
+      {"record.metrics.press_mid_s = -1: must be in [0, 300.001] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_press_mid_s(-1); }},
+      {"record.metrics.left_lateral_s = 400: must be in [0, 300.001] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_left_lateral_s(400); }},
+      {"record.metrics.right_lateral_s = 300.5: must be in [0, 300.001] s",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_right_lateral_s(300.5); }},
+      {"record.metrics.position_changes = 4000000: more episodes than a 300 s session has steps",
+       [](ves::v1::SessionRecord* r) { r->mutable_metrics()->set_position_changes(4'000'000); }},
+      {"record.input_log.encoding = 'delta-zlib-v1' version 2: must be delta-zlib-v2 version 2 "
+       "(or delta-zlib-v1 version 1)",
+       [](ves::v1::SessionRecord* r) { r->mutable_input_log()->set_encoding("delta-zlib-v1"); }},
+      {"record.input_log.encoding = 'delta-zlib-v3' version 3: must be",
+       [](ves::v1::SessionRecord* r) {
+         r->mutable_input_log()->set_format_version(3);
+         r->mutable_input_log()->set_encoding("delta-zlib-v3");
+       }},
   };
   for (const Case& c : cases) {
     auto r = Valid();
@@ -155,6 +173,17 @@ TEST(CheckSessionRecord, CountsAreBoundedByTheDuration) {
   r.mutable_input_log()->set_sample_count(1000);
   EXPECT_EQ(Check(r).rfind("record.events: 121 events, more than 120 for a 1 s session", 0), 0u)
       << Check(r);
+}
+
+// Stations before format 2 upload version 1 logs (no abdominal press, no
+// patient position): still accepted, and judged by their replay.
+TEST(CheckSessionRecord, AVersion1InputLogIsStillAccepted) {
+  auto r = Valid();
+  std::vector<training::InputSample> samples(1000);
+  for (size_t i = 0; i < samples.size(); ++i) samples[i].tick = i;
+  *r.mutable_input_log() = training::MakeInputLog(samples, 0.001, 1);
+  ASSERT_EQ(r.input_log().encoding(), "delta-zlib-v1");
+  EXPECT_EQ(Check(r), "");
 }
 
 TEST(CheckSessionRecord, StringsAreBoundedAndPrintable) {

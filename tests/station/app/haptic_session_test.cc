@@ -61,7 +61,9 @@ TEST_F(SessionModelSourceTest, WithoutARunningSessionItRendersNothingButStaysAli
 TEST_F(SessionModelSourceTest, LogsTheCouplingForceItPushedTheModelWithAndRendersItsNegative) {
   const double model_start_m = runner_.state().inserted_m;
   const double model_roll_rad = runner_.state().roll_rad;
-  controls_.Store(ModelControls{0.3, -0.2, training::ViewMode::kWireframe, true});
+  controls_.Store(ModelControls{0.3, -0.2, training::ViewMode::kWireframe, true,
+                                training::AbdominalPress::kMidAbdomen,
+                                training::PatientPosition::kRightLateral});
   source_.Start(0, /*device_insertion_m=*/0.01, /*device_roll_rad=*/0.0);
   // The device moved 10 mm past where the session started: the coupling,
   // k_c·(x_device + offset − x_model) = 300 N/m × 0.010 m = 3.0 N, pushes the
@@ -78,6 +80,8 @@ TEST_F(SessionModelSourceTest, LogsTheCouplingForceItPushedTheModelWithAndRender
   EXPECT_NEAR(logged.knob_right_rad, -0.2, kLogAngleTolerance_rad);
   EXPECT_EQ(logged.view_mode, training::ViewMode::kWireframe);
   EXPECT_TRUE(logged.fluoroscopy_on);
+  EXPECT_EQ(logged.abdominal_press, training::AbdominalPress::kMidAbdomen);
+  EXPECT_EQ(logged.patient_position, training::PatientPosition::kRightLateral);
   EXPECT_EQ(response.thrust_force_N, -logged.push_force_N);
   EXPECT_EQ(response.roll_torque_Nm, -runner_.output().roll_torque_Nm);
   EXPECT_NEAR(source_.encoder_travel_m(), 0.0, 1e-12);  // one reading: no travel yet

@@ -698,12 +698,23 @@ TEST_F(StationUi, AnInteractiveLessonWithoutAidsIgnoresTheXrayAndWireframeKeys) 
             kUnchanged);
 
   Keys({"w", "w"});  // in: the attempt starts
+  const cv::Mat started = Shot("started");
+  // p, t: the loop-control toolkit is no aid a lesson takes away: the
+  // assistant presses the left lower quadrant and the patient turns onto the
+  // left side; the figures say so, and the record counts both to the end.
+  Keys({"p", "t"});
+  const cv::Mat toolkit = Shot("toolkit");
+  EXPECT_GT(ChangedShare(started, toolkit, layout_.figures), kTextChanged);
+
   Keys({"q"});
   const ProcessResult quit = station_->Wait(seconds(90));
   EXPECT_EQ(quit.exit_code, 0) << quit.out << quit.err;
   EXPECT_NE(quit.out.find("aids: fluoroscopy OFF, wireframe view OFF"), std::string::npos)
       << quit.out;
   EXPECT_NE(quit.out.find("xray_s=0"), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find(" press_mid_s=0.0 position_changes=1 "), std::string::npos)
+      << quit.out;
+  EXPECT_EQ(quit.out.find(" press_llq_s=0.0 "), std::string::npos) << quit.out;
   // The server replays the input log: no X-ray, no wire-frame reached the model.
   EXPECT_NE(quit.out.find("fluoroscopy not allowed: xray_s 0 = 0: ok"), std::string::npos)
       << quit.out;

@@ -9,6 +9,7 @@
 #include "station/training/case_model.h"
 #include "station/training/case_run.h"
 #include "station/training/input_log.h"
+#include "tests/station/training/toolkit_operator.h"
 
 namespace ves::training {
 namespace {
@@ -146,6 +147,27 @@ TEST_F(LessonJudge, AnHonestRecordIsJudgedOnItsExactReplay) {
   const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
   EXPECT_TRUE(g.passed) << ::testing::PrintToString(g.checks);
   EXPECT_DOUBLE_EQ(g.score, r.score());  // replay is bit-exact on the same build
+}
+
+// The abdominal press and the patient's turns are in the log: `ves-station
+// replay` (ReplayRecord) and the server's judge replay them as they ran.
+TEST_F(LessonJudge, PressAndTurnsReplayToTheSameSummaryAndVerdict) {
+  const CaseRun run = PrepareCaseRun(*colon_case_, DefaultEndoscopeSpec(), {}, 5.0);
+  ToolkitNovice op;
+  v1::SessionRecord r;
+  const RunResult live = RunScriptedSession(run.params, run.config, op, "toolkit-novice", 1000, &r);
+  *r.mutable_replay_setup() = MakeReplaySetup(*colon_case_, {}, 5.0);
+  r.set_lesson_id("l1");
+  r.set_case_sha256_hex(patient_db::CasePayloadSha256Hex(*colon_case_));
+  ASSERT_EQ(live.metrics.position_changes, 3u);
+  ASSERT_GT(live.metrics.press_llq_s, 0.0);
+  ASSERT_GT(live.metrics.press_mid_s, 0.0);
+  const RunResult replayed = ReplayRecord(r);
+  EXPECT_EQ(SummaryLine(replayed), SummaryLine(live));
+  EXPECT_EQ(replayed, live);
+  const GateResult g = JudgeLessonSession(LessonFor(r), *colon_case_, r);
+  EXPECT_TRUE(g.passed) << PrintToString(g.checks);
+  EXPECT_DOUBLE_EQ(g.score, live.score);
 }
 
 TEST_F(LessonJudge, AForgedRecordIsJudgedByItsReplayNotItsClaims) {

@@ -273,6 +273,37 @@ TEST(Metrics, ViewModeSwitchesAreEvents) {
   EXPECT_EQ(CountEvents(Accumulate(steps), EventKind::kViewMode), 2);
 }
 
+TEST(Metrics, ToolkitTimesArePerSiteAndPositionAndTurnsAreCountedFromSupine) {
+  // Press: none, LLQ, LLQ, mid, none, LLQ, none, none -> LLQ 0.75 s, mid 0.25 s.
+  // Position: left, left, supine, right, right, right, supine, supine -> left
+  // 0.5 s, right 0.75 s; turns: to left (from the supine start), to supine,
+  // to right, to supine = 4.
+  auto steps = Steps(8);
+  using P = AbdominalPress;
+  using Q = PatientPosition;
+  const P press[] = {P::kNone, P::kLeftLowerQuadrant, P::kLeftLowerQuadrant, P::kMidAbdomen,
+                     P::kNone, P::kLeftLowerQuadrant, P::kNone,              P::kNone};
+  const Q position[] = {Q::kLeftLateral,  Q::kLeftLateral,  Q::kSupine, Q::kRightLateral,
+                        Q::kRightLateral, Q::kRightLateral, Q::kSupine, Q::kSupine};
+  for (int i = 0; i < 8; ++i) {
+    steps[i].abdominal_press = press[i];
+    steps[i].patient_position = position[i];
+  }
+  const Metrics m = Accumulate(steps).Result();
+  EXPECT_EQ(m.press_llq_s, 0.75);
+  EXPECT_EQ(m.press_mid_s, 0.25);
+  EXPECT_EQ(m.left_lateral_s, 0.5);
+  EXPECT_EQ(m.right_lateral_s, 0.75);
+  EXPECT_EQ(m.position_changes, 4u);
+  // Through the record's proto and back.
+  EXPECT_EQ(FromProto(ToProto(m)), m);
+  // A session that never used them records zeros.
+  const Metrics plain = Accumulate(Steps(8)).Result();
+  EXPECT_EQ(plain.press_llq_s + plain.press_mid_s + plain.left_lateral_s + plain.right_lateral_s,
+            0.0);
+  EXPECT_EQ(plain.position_changes, 0u);
+}
+
 TEST(Metrics, TipPathIsTheSumOfTipDisplacements) {
   // (0,0,0) -> (0.03,0.04,0) -> (0.03,0.04,0.12): 0.05 + 0.12 = 0.17 m.
   auto steps = Steps(3);

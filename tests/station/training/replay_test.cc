@@ -6,6 +6,7 @@
 
 #include "station/training/case_model.h"
 #include "station/training/session_file.h"
+#include "tests/station/training/toolkit_operator.h"
 
 namespace ves::training {
 namespace {
@@ -63,6 +64,73 @@ TEST(Replay, ReproducesAScriptedSessionExactly) {
   }
 }
 
+// A log of format version 1 (no abdominal press, no patient position) replays
+// exactly as the session it records ran, and as the same inputs in the
+// current format.
+TEST(Replay, AVersion1LogReplaysExactlyAsItsSessionRan) {
+  const auto params = TubeParams();
+  for (const char* kind : {"novice", "expert"}) {
+    v1::SessionRecord record;
+    const RunResult live = RunScriptedSession(params, Config(params, 2.0), kind, 1000, &record);
+    const auto inputs = DecodeInputLog(record.input_log());
+    const v1::InputLog old = MakeInputLog(inputs, params.dt_s, 1);
+    ASSERT_EQ(PeekInputLogFormatVersion(old.encoded()), 1u);
+    const RunResult replayed = Replay(params, Config(params, 2.0), old);
+    EXPECT_EQ(replayed, live) << kind << "\nlive:   " << SummaryLine(live)
+                              << "\nreplay: " << SummaryLine(replayed);
+    EXPECT_EQ(replayed, Replay(params, Config(params, 2.0), record.input_log())) << kind;
+  }
+}
+
+TEST(Replay, PressAndTurnsReplayToTheSameSummary) {
+  const auto params = TubeParams();
+  ToolkitNovice op;
+  v1::SessionRecord record;
+  const RunResult live =
+      RunScriptedSession(params, Config(params, 2.0), op, "toolkit-novice", 1000, &record);
+  ASSERT_EQ(live.steps, 2000u);
+  EXPECT_NEAR(live.metrics.press_llq_s, 0.5, 1e-9);
+  EXPECT_NEAR(live.metrics.press_mid_s, 0.3, 1e-9);
+  EXPECT_NEAR(live.metrics.left_lateral_s, 0.7, 1e-9);
+  EXPECT_NEAR(live.metrics.right_lateral_s, 0.4, 1e-9);
+  EXPECT_EQ(live.metrics.position_changes, 3u);
+  const std::string line = SummaryLine(live);
+  EXPECT_NE(line.find(" press_llq_s=0.5 press_mid_s=0.3 position_changes=3 "), std::string::npos)
+      << line;
+  const v1::SessionRecord back = DecodeSessionFile(EncodeSessionFile(record));
+  EXPECT_EQ(back.input_log().format_version(), kInputLogFormatVersion);
+  const RunResult replayed = Replay(params, Config(params, 2.0), back.input_log());
+  EXPECT_EQ(replayed, live) << "live:   " << SummaryLine(live)
+                            << "\nreplay: " << SummaryLine(replayed);
+  EXPECT_EQ(SummaryLine(replayed), line);
+  EXPECT_EQ(FromProto(back.metrics()), replayed.metrics);
+}
+
+TEST(ToStepInput, ThePressHoldsTheRegionsUnderTheHandAndThePositionTurnsThePatient) {
+  InputSample in;
+  model::StepInput s = ToStepInput(in);
+  for (double pressure : s.abdominal_pressure) EXPECT_EQ(pressure, 0.0);
+  EXPECT_EQ(s.patient_position, model::PatientPosition::kSupine);
+  const auto pressed = [](const model::StepInput& step) {
+    std::vector<model::Region> regions;
+    for (std::size_t r = 0; r < step.abdominal_pressure.size(); ++r) {
+      if (step.abdominal_pressure[r] == 1.0) regions.push_back(static_cast<model::Region>(r));
+      else EXPECT_EQ(step.abdominal_pressure[r], 0.0) << r;
+    }
+    return regions;
+  };
+  // Left lower quadrant: the sigmoid apex and a mobile descending colon under the hand.
+  in.abdominal_press = AbdominalPress::kLeftLowerQuadrant;
+  EXPECT_EQ(pressed(ToStepInput(in)),
+            (std::vector<model::Region>{model::Region::kSigmoid, model::Region::kDescending}));
+  in.abdominal_press = AbdominalPress::kMidAbdomen;
+  EXPECT_EQ(pressed(ToStepInput(in)), std::vector<model::Region>{model::Region::kTransverse});
+  in.patient_position = PatientPosition::kLeftLateral;
+  EXPECT_EQ(ToStepInput(in).patient_position, model::PatientPosition::kLeftLateral);
+  in.patient_position = PatientPosition::kRightLateral;
+  EXPECT_EQ(ToStepInput(in).patient_position, model::PatientPosition::kRightLateral);
+}
+
 TEST(SummaryLine, SaysWhatDidNotHappenWithADashAndGivesTheScoresScale) {
   RunResult r;
   r.outcome = Outcome::kTimedOut;
@@ -75,7 +143,7 @@ TEST(SummaryLine, SaysWhatDidNotHappenWithADashAndGivesTheScoresScale) {
   EXPECT_EQ(SummaryLine(r),
             "outcome=timed_out time_to_cecum_s=- inserted_at_cecum_m=- deepest_tip_arc_m=0.812 "
             "deepest_region=sigmoid pain_s=12.3 loop_s=0.0 peak_force_N=3.14 xray_s=0.0 "
-            "score=34.2/100");
+            "press_llq_s=0.0 press_mid_s=0.0 position_changes=0 score=34.2/100");
   r.outcome = Outcome::kCecumReached;
   r.metrics.completed = true;
   r.metrics.time_to_cecum_s = 212.46;

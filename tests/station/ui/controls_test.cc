@@ -70,6 +70,36 @@ TEST(ApplyKey, ViewModeFluoroscopyDamageRepeatAndQuit) {
   EXPECT_TRUE(state.quit_requested);
 }
 
+TEST(ApplyKey, PCyclesTheAssistantsPressAndTTurnsThePatient) {
+  ControlState state;
+  const KeyboardHand hand;
+  EXPECT_EQ(state.abdominal_press, AbdominalPress::kNone);
+  EXPECT_EQ(state.patient_position, PatientPosition::kSupine);
+  EXPECT_TRUE(ApplyKey('p', hand, &state));
+  EXPECT_EQ(state.abdominal_press, AbdominalPress::kLeftLowerQuadrant);
+  ApplyKey('p', hand, &state);
+  EXPECT_EQ(state.abdominal_press, AbdominalPress::kMidAbdomen);
+  ApplyKey('p', hand, &state);
+  EXPECT_EQ(state.abdominal_press, AbdominalPress::kNone);  // the hand comes off
+  EXPECT_EQ(state.patient_position, PatientPosition::kSupine);
+  EXPECT_TRUE(ApplyKey('t', hand, &state));
+  EXPECT_EQ(state.patient_position, PatientPosition::kLeftLateral);
+  ApplyKey('t', hand, &state);
+  EXPECT_EQ(state.patient_position, PatientPosition::kRightLateral);
+  ApplyKey('t', hand, &state);
+  EXPECT_EQ(state.patient_position, PatientPosition::kSupine);
+  EXPECT_EQ(state.abdominal_press, AbdominalPress::kNone);
+  // Nothing else moves: the hand, the knobs and the views stay.
+  ControlState expected;
+  ApplyKey('p', hand, &state);
+  ApplyKey('t', hand, &state);
+  expected.abdominal_press = AbdominalPress::kLeftLowerQuadrant;
+  expected.patient_position = PatientPosition::kLeftLateral;
+  EXPECT_EQ(state, expected);
+  EXPECT_STREQ(PressName(state.abdominal_press), "left lower quadrant");
+  EXPECT_STREQ(PositionName(state.patient_position), "left lateral");
+}
+
 TEST(ApplyKey, UnknownKeyChangesNothing) {
   ControlState state;
   EXPECT_FALSE(ApplyKey('z', KeyboardHand{}, &state));
@@ -100,7 +130,8 @@ TEST(FluoroWheel, ZoomsGeometricallyWithinLimits) {
 TEST(KeyHelpText, NamesEveryBoundKey) {
   const std::string help = KeyHelpText();
   for (const char* word : {"insert", "withdraw", "roll", "knob", "view mode", "fluoroscopy",
-                           "damage", "repeat", "next case", "scope"}) {
+                           "damage", "repeat", "next case", "scope", "abdominal press",
+                           "left lower quadrant", "mid-abdomen", "patient position"}) {
     EXPECT_NE(help.find(word), std::string::npos) << word;
   }
 }

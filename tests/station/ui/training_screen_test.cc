@@ -185,6 +185,33 @@ TEST_F(Compose, FiguresChangeOnlyTheFigures) {
   EXPECT_EQ(ChangedIn(before, after, layout_.status), 0.0);
 }
 
+TEST_F(Compose, ThePressAndThePatientsPositionShowInTheFiguresOnly) {
+  const cv::Mat before = Draw();
+  controls_.abdominal_press = AbdominalPress::kMidAbdomen;
+  const cv::Mat pressed = Draw();
+  controls_.patient_position = PatientPosition::kRightLateral;
+  const cv::Mat turned = Draw();
+  for (const auto& [a, b] : {std::pair{&before, &pressed}, std::pair{&pressed, &turned}}) {
+    EXPECT_GT(ChangedIn(*a, *b, layout_.figures), 0.0);
+    EXPECT_EQ(ChangedIn(*a, *b, layout_.endoscope), 0.0);
+    EXPECT_EQ(ChangedIn(*a, *b, layout_.fluoroscopy), 0.0);
+    EXPECT_EQ(ChangedIn(*a, *b, layout_.gauge), 0.0);
+    EXPECT_EQ(ChangedIn(*a, *b, layout_.status), 0.0);
+  }
+  // Each on its own line: the press on the left, the position on the right.
+  const cv::Rect& f = layout_.figures;
+  const cv::Rect last_line(f.x, f.y + f.height * 4 / 5, f.width, f.height - f.height * 4 / 5);
+  const cv::Rect left(last_line.x, last_line.y, last_line.width / 2, last_line.height);
+  const cv::Rect right(last_line.x + last_line.width * 3 / 5, last_line.y,
+                       last_line.width - last_line.width * 3 / 5, last_line.height);
+  EXPECT_GT(ChangedIn(before, pressed, left), 0.0);
+  EXPECT_EQ(ChangedIn(before, pressed, right), 0.0);
+  EXPECT_GT(ChangedIn(pressed, turned, right), 0.0);
+  EXPECT_EQ(ChangedIn(pressed, turned, left), 0.0);
+  const cv::Rect upper_lines(f.x, f.y, f.width, f.height * 4 / 5 - 2);
+  EXPECT_EQ(ChangedIn(before, turned, upper_lines), 0.0);
+}
+
 TEST_F(Compose, ForceGaugeGrowsWithForceAndTurnsRedWhenExcessive) {
   model_.force_gauge_max_N = 10.0;
   model_.excessive_force_N = 5.0;
