@@ -567,7 +567,7 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   EXPECT_NE(quit.out.find("sitting: 2 sessions\n"), std::string::npos) << quit.out;
   EXPECT_NE(quit.out.find("  1. standard-adult  outcome=aborted "), std::string::npos) << quit.out;
   EXPECT_NE(quit.out.find("  2. standard-adult  outcome=aborted "), std::string::npos) << quit.out;
-  EXPECT_NE(quit.out.find(" xray_s=0.0 score="), std::string::npos) << quit.out;
+  EXPECT_NE(quit.out.find(" xray_s=0.0 press_llq_s="), std::string::npos) << quit.out;
   EXPECT_NE(quit.out.find("\nbest: "), std::string::npos) << quit.out;
   // `status` lists them: when, who, which case, how it went, the score.
   const std::string status = Station({"status", "--data-dir", data.string()}).out;

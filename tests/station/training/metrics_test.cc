@@ -357,7 +357,7 @@ TEST(Metrics, DamageMapAccumulatesPerSegmentImpulse) {
 
 // At 1 ms steps a wall force counts as damage once its 10 ms mean is over
 // the threshold: the model's contact transients of 1-3 steps (a sample
-// changing segment at a sharp fold, docs/model-shortening-notes.md) do not,
+// changing segment at a sharp fold, docs/model.md "Known limits") do not,
 // a press held for 20 ms does, and the map marks only the pressed segment.
 TEST(Metrics, DamageNeedsTheWallForceHeldOverTheForceWindow) {
   constexpr int kSteps = 400;  // the two are further apart than the 0.2 s merge gap
