@@ -46,16 +46,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: loop_probe CASE_FILE novice:F|expert SECONDS [key=value ...]\n");
     return 2;
   }
-  std::map<std::string, double> kv;
-  std::string tag;
-  for (int i = 4; i < argc; ++i) {
-    const std::string a = argv[i];
-    const auto eq = a.find('=');
-    if (eq == std::string::npos) continue;
-    kv[a.substr(0, eq)] = std::atof(a.substr(eq + 1).c_str());
-    tag += a + " ";
-  }
-  auto get = [&](const char* k, double fallback) { return kv.count(k) ? kv[k] : fallback; };
+  const ves::bench::CommandLineOverrides overrides = ves::bench::ParseOverrides(argc, argv, 4);
+  const std::string& tag = overrides.tag;
+  auto get = [&](const char* k, double fallback) { return overrides.Get(k, fallback); };
   auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
   ves::bench::ApplyCaseOverrides(get, &colon_case);
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),

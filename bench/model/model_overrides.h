@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 #include <functional>
+#include <map>
 #include <string>
 
 #include "ves/v1/case.pb.h"
@@ -26,6 +27,29 @@
 namespace ves::bench {
 
 using OverrideGetter = std::function<double(const char* key, double fallback)>;
+
+// The key=value arguments from argv[first] on (others are skipped), and
+// their text joined for a result line's tag.
+struct CommandLineOverrides {
+  std::map<std::string, double> values;
+  std::string tag;
+  double Get(const char* key, double fallback) const {
+    const auto it = values.find(key);
+    return it != values.end() ? it->second : fallback;
+  }
+};
+
+inline CommandLineOverrides ParseOverrides(int argc, char** argv, int first) {
+  CommandLineOverrides o;
+  for (int i = first; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto eq = a.find('=');
+    if (eq == std::string::npos) continue;
+    o.values[a.substr(0, eq)] = std::atof(a.substr(eq + 1).c_str());
+    o.tag += a + " ";
+  }
+  return o;
+}
 
 // The settings that shape the colon at rest, set on the case before it is
 // resampled: reserve_sig, reserve_trans (TissueParams::gathered_reserve of
