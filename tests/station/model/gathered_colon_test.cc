@@ -129,14 +129,14 @@ double SigmoidDescendingJunction_m(const ModelParams& params) {
   return params.colon.points.back().arc_m;
 }
 
-// The push-only novice (6 N): with the sigmoid's reserve a loop forms in the
+// The push-only novice (6 N) for 45 s: with the sigmoid's reserve a loop forms in the
 // sigmoid (the tip stays short of the sigmoid-descending junction, a 10 cm
 // stretch of insertion moves it less than half as far, the apex rises), the
 // wall itself strains little; without the reserve none of that happens.
 TEST(GatheredColon, APushLoopsTheSigmoidWhereItsReserveStraightens) {
   const ModelParams gathered = LoadStandardAdult(0.3);
-  const PushFigures f = Push(gathered, 6.0, 90.0);
-  const PushFigures taut = Push(LoadStandardAdult(0.0), 6.0, 90.0);
+  const PushFigures f = Push(gathered, 6.0, 45.0);
+  const PushFigures taut = Push(LoadStandardAdult(0.0), 6.0, 45.0);
   std::printf("6 N push, reserve 0.3: tip %.3f m (at 0.6 m in %.3f), least ratio %.2f, apex +%.3f m, "
               "wall strain %.3f; reserve 0: least ratio %.2f, apex +%.3f m\n",
               f.tip_after_m, f.tip_at_60cm_m, f.least_advance_ratio, f.apex_rise_m,
