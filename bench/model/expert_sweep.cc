@@ -122,12 +122,7 @@ int main(int argc, char** argv) {
   const ves::bench::CommandLineOverrides overrides = ves::bench::ParseOverrides(argc, argv, 4);
   const std::string& tag = overrides.tag;
   auto get = [&](const char* k, double fallback) { return overrides.Get(k, fallback); };
-  auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
-  ves::bench::ApplyCaseOverrides(get, &colon_case);
-  ves::training::CaseModelOptions options;
-  auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
-                                               options);
-  ves::bench::ApplyModelOverrides(get, &params);
+  const auto params = ves::bench::LoadParamsWithOverrides(argv[1], get);
   auto op = ves::training::MakeScriptedOperator(argv[2], params.dt_s,
                                                 ves::bench::ExpertSettingsWithOverrides(get));
   const double seconds = std::atof(argv[3]);

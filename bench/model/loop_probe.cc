@@ -49,11 +49,7 @@ int main(int argc, char** argv) {
   const ves::bench::CommandLineOverrides overrides = ves::bench::ParseOverrides(argc, argv, 4);
   const std::string& tag = overrides.tag;
   auto get = [&](const char* k, double fallback) { return overrides.Get(k, fallback); };
-  auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
-  ves::bench::ApplyCaseOverrides(get, &colon_case);
-  auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
-                                               ves::training::CaseModelOptions{});
-  ves::bench::ApplyModelOverrides(get, &params);
+  const auto params = ves::bench::LoadParamsWithOverrides(argv[1], get);
   const std::string op_name = argv[2];
   std::unique_ptr<ves::training::ScriptedOperator> op;
   if (op_name.rfind("novice:", 0) == 0) {

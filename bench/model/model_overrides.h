@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 
+#include "patient_db/case_format.h"
+#include "station/training/case_model.h"
 #include "ves/v1/case.pb.h"
 #include "station/model/model.h"
 #include "station/training/scripted_operator.h"
@@ -115,6 +117,18 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   params->abdominal_pressure_stiffness_N_per_m2 =
       get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
   params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
+}
+
+// A case file as the model's parameters with every override applied: the
+// case's (ApplyCaseOverrides) before it is resampled, the model's after.
+inline model::ModelParams LoadParamsWithOverrides(const std::string& case_file,
+                                                  const OverrideGetter& get) {
+  auto colon_case = patient_db::LoadCaseFile(case_file);
+  ApplyCaseOverrides(get, &colon_case);
+  auto params = training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(),
+                                          training::CaseModelOptions{});
+  ApplyModelOverrides(get, &params);
+  return params;
 }
 
 // The scripted expert's settings by key: advance, withdraw, push, pull,
