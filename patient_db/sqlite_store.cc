@@ -26,6 +26,19 @@ StoreStatus FromStep(SqliteDb& db, int rc, const std::string& what) {
   return Internal(db, what);
 }
 
+// The rows of a prepared audit listing (its columns in AuditRow's order).
+StoreResult<std::vector<AuditRow>> ReadAuditRows(SqliteDb& db, SqliteStatement* s) {
+  int rc = SQLITE_OK;
+  std::vector<AuditRow> out;
+  while (s->Step(&rc)) {
+    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
+                   s->Text(6), s->Text(7), s->Text(8)});
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(db, "list audit");
+  return out;
+}
+
 }  // namespace
 
 SqliteStore::SqliteStore(const std::string& path) : path_(path) {
@@ -231,15 +244,7 @@ StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms,
       nullptr);
   if (!s) return Internal(r.db(), "list audit");
   s->Bind(1, since_unix_ms).Bind(2, after_id).Bind(3, int64_t{limit});
-  int rc = SQLITE_OK;
-  std::vector<AuditRow> out;
-  while (s->Step(&rc)) {
-    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
-                   s->Text(6), s->Text(7), s->Text(8)});
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list audit");
-  return out;
+  return ReadAuditRows(r.db(), s);
 }
 
 StoreResult<std::vector<AuditRow>> SqliteStore::ListAuditNewest(const AuditQuery& q) {
@@ -254,15 +259,7 @@ StoreResult<std::vector<AuditRow>> SqliteStore::ListAuditNewest(const AuditQuery
   if (!s) return Internal(r.db(), "list audit");
   s->Bind(1, q.actor).Bind(2, q.action).Bind(3, q.from_unix_ms).Bind(4, q.to_unix_ms);
   s->Bind(5, q.before_id).Bind(6, int64_t{q.limit > 0 ? q.limit : -1});
-  int rc = SQLITE_OK;
-  std::vector<AuditRow> out;
-  while (s->Step(&rc)) {
-    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
-                   s->Text(6), s->Text(7), s->Text(8)});
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list audit");
-  return out;
+  return ReadAuditRows(r.db(), s);
 }
 
 StoreStatus SqliteStore::WriteAudit(const AuditRow& a) {
