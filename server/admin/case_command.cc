@@ -91,6 +91,19 @@ std::string Identify(const ves::v1::ColonCase& colon_case) {
          " sha256=" + pdb::CasePayloadSha256Hex(colon_case);
 }
 
+// Writes the case to `out` (.textproto or .vescase) and says so; a case the
+// writer refuses prints its problems and fails.
+int WriteCaseAndSay(const ves::v1::ColonCase& colon_case, const std::string& out) {
+  try {
+    pdb::WriteCaseFile(colon_case, out);
+  } catch (const pdb::CaseError& e) {
+    for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
+    return kFailed;
+  }
+  std::cout << "wrote " << out << " " << Identify(colon_case) << "\n";
+  return kOk;
+}
+
 int RunValidate(const CommandArgs& args) {
   po::options_description options("options");
   options.add_options()("file", po::value<std::vector<std::string>>()->required(), "case files");
@@ -174,14 +187,7 @@ int RunConvert(const CommandArgs& args) {
               << "' must end in .textproto or .vescase\n";
     return kInvalid;
   }
-  try {
-    pdb::WriteCaseFile(colon_case, out);
-  } catch (const pdb::CaseError& e) {
-    for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
-    return kFailed;
-  }
-  std::cout << "wrote " << out << " " << Identify(colon_case) << "\n";
-  return kOk;
+  return WriteCaseAndSay(colon_case, out);
 }
 
 int RunInfo(const CommandArgs& args) {
@@ -290,14 +296,7 @@ int RunGenerate(const CommandArgs& args) {
     std::cout << pdb::FormatCaseTextproto(colon_case);
     return kOk;
   }
-  try {
-    pdb::WriteCaseFile(colon_case, out);
-  } catch (const pdb::CaseError& e) {
-    for (const auto& problem : e.problems()) std::cerr << problem.ToString() << "\n";
-    return kFailed;
-  }
-  std::cout << "wrote " << out << " " << Identify(colon_case) << "\n";
-  return kOk;
+  return WriteCaseAndSay(colon_case, out);
 }
 
 // Actions of `ves-admin case`; the server work appends upload, list, download.
