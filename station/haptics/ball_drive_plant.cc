@@ -1,5 +1,6 @@
 #include "station/haptics/ball_drive_plant.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ves::haptics {
@@ -26,6 +27,9 @@ void CalcHandLoad(const HandProfile& hand, const PlantState& state, double t_s, 
                   double* torque_Nm) {
   *force_N = AxisHandLoad(hand.thrust, hand.thrust_stiffness_N_per_m, hand.thrust_damping_N_s_per_m,
                           state.insertion_m, state.insertion_velocity_m_per_s, t_s);
+  if (hand.thrust.drive == HandDrive::kPosition) {
+    *force_N = std::clamp(*force_N, -hand.thrust_force_limit_N, hand.thrust_force_limit_N);
+  }
   *torque_Nm =
       AxisHandLoad(hand.roll, hand.roll_stiffness_Nm_per_rad, hand.roll_damping_Nm_s_per_rad,
                    state.roll_scope_rad, state.roll_scope_velocity_rad_per_s, t_s);

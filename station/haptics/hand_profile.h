@@ -4,6 +4,8 @@
 // position (the hand, a spring-damper, pulls the scope toward a moving target)
 // or in force (the hand pushes with a scripted force), the two ways the
 // paper's Fig. 5 and 6 experiments were run by an operator.
+#include <limits>
+
 namespace ves::haptics {
 
 enum class HandDrive { kPosition, kForce };
@@ -31,6 +33,9 @@ struct HandProfile {
   double thrust_damping_N_s_per_m{20.0};
   double roll_stiffness_Nm_per_rad{2.0};
   double roll_damping_Nm_s_per_rad{0.02};
+  // The most a position-driven hand pushes or pulls along the scope, N (the
+  // keyboard's hand is bounded to what a hand gives: station/app/keyboard_push.h).
+  double thrust_force_limit_N{std::numeric_limits<double>::infinity()};
   bool operator==(const HandProfile&) const = default;
 };
 
