@@ -5,6 +5,8 @@
 #include <limits>
 #include <utility>
 
+#include "station/render/cecum_landmarks.h"
+
 namespace ves::render {
 namespace {
 
@@ -120,9 +122,10 @@ void AppendWireMeridians(std::uint32_t row, std::uint32_t next, int sectors, int
 // last point, the tube is closed by a dome (half an ellipsoid) this deep,
 // as a share of the last ring's radius, in this many rings of vertices. An
 // open end showed the view at the cecum, the goal of the procedure, as a
-// sharp black disc (the background behind the mesh).
+// sharp black disc (the background behind the mesh). Rings enough for the
+// appendiceal orifice at the pole and the triradiate fold (cecum_landmarks.h).
 constexpr double kCecalPoleDepth = 0.6;
-constexpr int kCecalPoleRings = 6;
+constexpr int kCecalPoleRings = 16;
 
 // Appends the dome on the mesh's last ring: each vertex of that ring is
 // carried toward the pole along a quarter ellipse (its folds and dents
@@ -152,16 +155,37 @@ void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
       const Eigen::Vector3d out = Load(base.position_m) - center;  // in the ring's plane
       const double radius_m = out.norm();
       ColonVertex& v = mesh->vertices[first + (m - 1) * columns + j];
-      Store(center + std::cos(phi) * out + depth_m * std::sin(phi) * tangent, v.position_m);
-      // The ellipsoid's normal: (cos phi / a) a-direction + (sin phi / d) tangent.
+      // The ellipsoid's outward normal: (cos phi / a) a-direction + (sin phi / d) tangent.
       Eigen::Vector3d normal = std::sin(phi) / depth_m * tangent;
       if (radius_m > 1e-12) normal += std::cos(phi) / (radius_m * radius_m) * out;
-      Store(normal.normalized(), v.normal);
+      normal.normalize();
+      // The cecum's landmarks raise the dome into the lumen (or sink it, the orifice).
+      const double relief_m = options.cecum_landmarks
+                                  ? CecalPoleRelief_m(phi, 2.0 * kPi * j / sectors, mean_radius_m)
+                                  : 0.0;
+      Store(center + std::cos(phi) * out + depth_m * std::sin(phi) * tangent - relief_m * normal,
+            v.position_m);
+      Store(normal, v.normal);
       v.uv[0] = base.uv[0];
       v.uv[1] = base.uv[1] + static_cast<float>(options.texture_length_m > 0.0
                                                     ? meridian_m / options.texture_length_m
                                                     : 0.0);
       v.ring = base.ring;
+    }
+  }
+  // Normals by central differences, as the tube's (the landmarks' relief is
+  // lit like the rest of the wall); the pole keeps the ellipsoid's.
+  const auto row_of = [&](int m) { return m == 0 ? rim : first + (m - 1) * columns; };
+  for (int m = 1; m < kCecalPoleRings; ++m) {
+    for (int j = 0; j < columns; ++j) {
+      const int j0 = (j + sectors - 1) % sectors;
+      const int j1 = (j + 1) % sectors;
+      const Eigen::Vector3d along = Load(mesh->vertices[row_of(m + 1) + j].position_m) -
+                                    Load(mesh->vertices[row_of(m - 1) + j].position_m);
+      const Eigen::Vector3d around = Load(mesh->vertices[row_of(m) + j1].position_m) -
+                                     Load(mesh->vertices[row_of(m) + j0].position_m);
+      const Eigen::Vector3d normal = around.cross(along);
+      if (normal.norm() > 1e-12) Store(normal.normalized(), mesh->vertices[row_of(m) + j].normal);
     }
   }
   const int sector_stride = std::max(1, options.wire_sector_stride);
@@ -244,6 +268,13 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
   const int columns = sectors + 1;
   mesh->vertices.resize(rings * columns);
   Eigen::Vector3d normal_axis = AnyPerpendicular(mesh->ring_tangents[0]);
+  // The ileocaecal valve sits on the cecum's medial wall: the side facing
+  // the middle of the colon's frame (cecum_landmarks.h).
+  Eigen::Vector3d colon_middle = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& c : scene.colon_centers_m) colon_middle += c;
+  colon_middle /= static_cast<double>(n);
+  const double valve_reach_m =
+      kValveFromPole_m + 0.5 * kValveLipGap_m + 4.0 * kValveLipSpread_m;
   for (size_t k = 0; k < rings; ++k) {
     const Eigen::Vector3d& t = mesh->ring_tangents[k];
     normal_axis -= normal_axis.dot(t) * t;
@@ -258,11 +289,16 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       if (in_plane.norm() < 1e-9) continue;
       dents.emplace_back(in_plane.normalized(), dent.depth_m * std::exp(-along * along));
     }
+    const double from_pole_m = last_arc - arc[k];
+    const bool at_valve = options.cecum_landmarks && from_pole_m < valve_reach_m;
+    const Eigen::Vector3d medial = colon_middle - mesh->ring_centers_m[k];
+    const double medial_angle = std::atan2(medial.dot(binormal_axis), medial.dot(normal_axis));
     for (int j = 0; j < columns; ++j) {
       const double angle = 2.0 * kPi * j / sectors;
       const Eigen::Vector3d radial =
           std::cos(angle) * normal_axis + std::sin(angle) * binormal_axis;
       double radius = mesh->ring_radius_m[k] * HaustralFoldFactor(options, arc[k], angle);
+      if (at_valve) radius *= IleocaecalValveFactor(from_pole_m, angle - medial_angle);
       for (const auto& [direction, depth_m] : dents) {
         const double c = std::max(0.0, radial.dot(direction));
         radius += depth_m * c * c * c * c;

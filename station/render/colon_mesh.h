@@ -36,6 +36,9 @@ struct ColonMeshOptions {
   double dent_spread_m{0.012};
   double wire_ring_spacing_m{0.01};  // wireframe: a ring loop every this much arc
   int wire_sector_stride{2};         // wireframe: every n-th sector drawn lengthwise
+  // The cecum's landmarks (cecum_landmarks.h): the ileocaecal valve, the
+  // triradiate fold and the appendiceal orifice; off: a plain dome.
+  bool cecum_landmarks{true};
 };
 
 // One vertex of the colon surface, as uploaded to the GPU.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "station/render/cecum_landmarks.h"
 #include "tests/station/render/test_scenes.h"
 
 namespace ves::render {
@@ -23,11 +24,14 @@ ColonMeshOptions NoFolds() {
   return options;
 }
 
-// Whole colon at the finest step: no window, no level of detail.
+// Whole colon at the finest step: no window, no level of detail, and a
+// plain tube: these short tubes are all cecum, whose landmarks
+// (TheCecumsLandmarksShapeItsEnd) would stand in the way of their radii.
 ColonMeshOptions Uniform() {
   ColonMeshOptions options = NoFolds();
   options.lod_distance_m = 0.0;
   options.ahead_m = 0.0;
+  options.cecum_landmarks = false;
   return options;
 }
 
@@ -41,14 +45,14 @@ void Build(const SceneGeometry& scene, const ColonMeshOptions& options, double t
 TEST(ColonMesh, SparseModelRingsAreResampledOnTheFineGrid) {
   // Model rings 1 cm apart over 0.1 m, mesh step 2.5 mm: rings at
   // 0, 2.5, ..., 100 mm, 41 of them; 10 mm is model ring 1, 15 mm is 1.5.
-  // The whole tube is drawn, so its end is closed by the cecal pole's six
+  // The whole tube is drawn, so its end is closed by the cecal pole's 16
   // rings of vertices (TheColonsLastPointIsClosedByADome).
   const SceneGeometry scene = testing::StraightTube(0.10, 0.01);
   ColonMesh mesh;
   Build(scene, Uniform(), 0.0, &mesh);
   ASSERT_EQ(mesh.ring_centers_m.size(), 41u);
-  EXPECT_EQ(mesh.vertices.size(), (41u + 6u) * 33u);
-  EXPECT_EQ(mesh.triangles.size(), (40u + 6u) * 32u * 6u);
+  EXPECT_EQ(mesh.vertices.size(), (41u + 16u) * 33u);
+  EXPECT_EQ(mesh.triangles.size(), (40u + 16u) * 32u * 6u);
   EXPECT_NEAR(mesh.ring_index[4], 1.0, 1e-9);
   EXPECT_NEAR(mesh.ring_index[6], 1.5, 1e-9);
   EXPECT_NEAR(mesh.ring_centers_m[6].z(), 0.015, 1e-12);
@@ -234,6 +238,59 @@ TEST(ColonMesh, TheColonsLastPointIsClosedByADome) {
     EXPECT_NEAR(p[2], pole_z, kLengthTolerance_m) << "vertex " << i;
   }
   EXPECT_GT(pole_z, kLength_m + 0.25 * kRadius_m);
+}
+
+// The cecum a trainee can confirm (cecum_landmarks.h), as the mesh's shape:
+// the triradiate fold raises the dome on the taeniae's meridians (not
+// between them), the appendiceal orifice sinks the pole, and the ileocaecal
+// valve's lips narrow the lumen on one side 3.5 cm before the pole.
+TEST(ColonMesh, TheCecumsLandmarksShapeItsEnd) {
+  constexpr double kLength_m = 0.5, kRadius_m = 0.025;
+  const SceneGeometry scene = testing::StraightTube(kLength_m, 0.005, kRadius_m);
+  ColonMeshOptions options = NoFolds();
+  const size_t columns = static_cast<size_t>(options.sectors) + 1;
+  ColonMesh plain;
+  options.cecum_landmarks = false;
+  Build(scene, options, 0.45, &plain);  // the finest rings from 0.42 m to the end
+  ColonMesh marked;
+  options.cecum_landmarks = true;
+  Build(scene, options, 0.45, &marked);
+  ASSERT_EQ(marked.vertices.size(), plain.vertices.size());
+  const size_t tube = marked.ring_centers_m.size() * columns;
+  const size_t dome_rows = (marked.vertices.size() - tube) / columns;
+  const auto radial = [&](const ColonMesh& mesh, size_t row, size_t j) {
+    const float* p = mesh.vertices[row * columns + j].position_m;
+    return std::hypot(static_cast<double>(p[0]), static_cast<double>(p[1]));
+  };
+  // Mid-dome: j = 16 of 32 is a taenia (cos 3θ = -1 at θ = π), j = 0 between two.
+  const size_t mid = marked.ring_centers_m.size() + dome_rows / 2;
+  EXPECT_NEAR(radial(plain, mid, 16), radial(plain, mid, 0), kLengthTolerance_m);
+  EXPECT_LT(radial(marked, mid, 16), radial(marked, mid, 0) - 0.03 * kRadius_m);
+  // The pole: the orifice's pit, a fifth of the radius deeper than the plain dome.
+  const float* plain_pole = plain.vertices.back().position_m;
+  const float* marked_pole = marked.vertices.back().position_m;
+  EXPECT_GT(marked_pole[2], plain_pole[2] + 0.2 * kRadius_m);
+  // The valve: a lip 3.5 cm - 5 mm before the rim narrows one side only.
+  size_t lip = 0;
+  for (size_t k = 0; k < marked.ring_arc_m.size(); ++k) {
+    if (std::abs(marked.ring_arc_m[k] - (kLength_m - kValveFromPole_m - 0.5 * kValveLipGap_m)) <
+        std::abs(marked.ring_arc_m[lip] - (kLength_m - kValveFromPole_m - 0.5 * kValveLipGap_m))) {
+      lip = k;
+    }
+  }
+  double narrowest = kRadius_m;
+  double widest = 0.0;
+  for (size_t j = 0; j < columns; ++j) {
+    narrowest = std::min(narrowest, radial(marked, lip, j));
+    widest = std::max(widest, radial(marked, lip, j));
+    EXPECT_NEAR(radial(plain, lip, j), kRadius_m, kLengthTolerance_m);
+  }
+  EXPECT_LT(narrowest, (1.0 - 0.8 * kValveDepth) * kRadius_m);
+  EXPECT_GT(widest, 0.99 * kRadius_m);
+  // Away from the cecum the tube is the plain one.
+  for (size_t j = 0; j < columns; ++j) {
+    EXPECT_EQ(radial(marked, 0, j), radial(plain, 0, j));
+  }
 }
 
 TEST(SceneGeometry, InconsistentScenesAreRejectedByName) {

@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "tests/station/render/image_checks.h"
 #include "tests/station/render/test_scenes.h"
@@ -53,6 +57,46 @@ TEST(EndoscopeView, TheCecumsPoleIsLitAtTheEndOfTheColon) {
     EXPECT_GT(cv::mean(centre)[2], 60.0) << EndoscopeModeName(mode);
     EXPECT_EQ(frame.red_out_share, 0.0) << EndoscopeModeName(mode);
     EXPECT_FALSE(frame.lens_in_wall) << EndoscopeModeName(mode);
+  }
+}
+
+// The cecum a trainee can confirm (cecum_landmarks.h): from 6 cm before the
+// tube's end, the ileocaecal valve on the wall, the triradiate fold and the
+// appendiceal orifice on the pole change the image in every view mode, and
+// the end stays lit like the wall (the relief takes the wall's light, not a
+// shadow over the whole pole). With VES_TEST_SHOTS_DIR set the views are
+// written there as cecum_<mode>.png.
+TEST(EndoscopeView, TheCecumsLandmarksAreDrawnInEveryModeAndLit) {
+  EndoscopeViewOptions options;
+  options.width = 640;
+  options.height = 480;
+  const SceneGeometry scene = testing::StraightTube(0.5, 0.005, 0.025, 0.44);
+  GlContext context;
+  for (EndoscopeMode mode :
+       {EndoscopeMode::kWireframe, EndoscopeMode::kPolygon, EndoscopeMode::kTexture}) {
+    options.mesh.cecum_landmarks = false;
+    EndoscopeView plain_view(&context, options);
+    plain_view.set_mode(mode);
+    const cv::Mat plain = plain_view.Render(scene).image.clone();
+    options.mesh.cecum_landmarks = true;
+    EndoscopeView view(&context, options);
+    view.set_mode(mode);
+    const cv::Mat marked = view.Render(scene).image.clone();
+    cv::Mat diff;
+    cv::absdiff(plain, marked, diff);
+    cv::Mat grey;
+    cv::cvtColor(diff, grey, cv::COLOR_BGR2GRAY);
+    const double changed = static_cast<double>(cv::countNonZero(grey > 20)) / grey.total();
+    EXPECT_GT(changed, 0.01) << EndoscopeModeName(mode) << ": the landmarks do not show";
+    if (mode != EndoscopeMode::kWireframe) {
+      const double plain_light = cv::mean(plain)[2];
+      const double marked_light = cv::mean(marked)[2];
+      EXPECT_GT(marked_light, 0.8 * plain_light) << EndoscopeModeName(mode) << ": the cecum dimmed";
+    }
+    if (const char* dir = std::getenv("VES_TEST_SHOTS_DIR")) {
+      cv::imwrite(std::string(dir) + "/cecum_" + EndoscopeModeName(mode) + ".png", marked);
+      cv::imwrite(std::string(dir) + "/cecum_" + EndoscopeModeName(mode) + "_plain.png", plain);
+    }
   }
 }
 
