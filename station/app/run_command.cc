@@ -76,7 +76,8 @@ constexpr char kUsage[] =
     "                       [--tls-ca FILE]]\n"
     "                       [--device sim|can:IFACE] [--scope FILE] [--data-dir DIR]\n"
     "                       [--headless --operator novice|expert --out DIR] [--seconds LIMIT]\n"
-    "                       [--can-log FILE] [--no-live] [--realtime]\n\n"
+    "                       [--can-log FILE] [--gamepad /dev/input/eventN] [--no-live]\n"
+    "                       [--realtime]\n\n"
     "Gets the case (the server's latest version into the offline cache, else the cached one;\n"
     "a case FILE is read and put into the cache),\n"
     "runs one session through the haptic device (the simulated VES-IV over a CAN socketpair,\n"
@@ -105,6 +106,7 @@ struct RunOptions {
   std::string operator_kind;
   std::string can_interface;  // empty: the simulated device
   std::string can_log;
+  std::string gamepad;  // evdev device of a game controller; empty: none
   std::filesystem::path out_dir;
   double seconds{600.0};
   double frame_period_s{5.0};
@@ -161,6 +163,13 @@ RunOptions ParseRunOptions(const po::variables_map& vm) {
     throw UsageError("--device '" + device + "' must be sim or can:IFACE");
   }
   if (vm.count("can-log")) o.can_log = vm["can-log"].as<std::string>();
+  if (vm.count("gamepad")) {
+    o.gamepad = vm["gamepad"].as<std::string>();
+    if (!o.can_interface.empty() || vm.count("headless")) {
+      throw UsageError("--gamepad moves the simulated hand of an interactive run: it needs "
+                       "--device sim and no --headless");
+    }
+  }
   if (vm.count("scope")) o.scope_path = vm["scope"].as<std::string>();
   o.data_dir = vm["data-dir"].as<std::string>();
   o.station_id = vm.count("station-id") ? vm["station-id"].as<std::string>() : HostName();
@@ -642,6 +651,7 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
 InteractiveDevice OpenInteractiveDevice(const RunOptions& o) {
   InteractiveDevice device;
   device.can_log = o.can_log;
+  device.gamepad = o.gamepad;
   if (!o.can_interface.empty()) device.can_bus = haptics::CanBus::OpenSocketCan(o.can_interface);
   return device;
 }
@@ -772,7 +782,7 @@ int Run(RunOptions o) {
           o.lesson_plan ? &o.lesson_plan->lesson.aids() : nullptr,
           o.lesson_plan ? nullptr : &choices, &live,
           [&sitting](EndedSession ended) { sitting.Keep(std::move(ended)); },
-          paths.journal());
+          paths.journal(), &sitting.sitting());
     } catch (const render::RenderError& error) {  // no EGL/OpenGL ES here
       // One line that says what to do (the error names what is missing).
       std::cerr << kName << ": the views cannot render (" << error.what()
@@ -861,6 +871,8 @@ int RunRunCommand(const CommandArgs& args) {
       "upload-attempts", po::value<int>()->default_value(3),
       "upload passes (with backoff) before leaving the session pending")(
       "can-log", po::value<std::string>(), "every CAN frame of the device, candump log format")(
+      "gamepad", po::value<std::string>(),
+      "with --device sim: a game controller's evdev device (/dev/input/eventN) as the hand")(
       "no-live", "with --server: do not stream the running session for live proctoring")(
       "realtime", "headless: pace the session to the wall clock (a live demo)");
   po::variables_map vm;

@@ -27,6 +27,7 @@
 #include "station/app/run_views.h"
 #include "station/haptics/candump_log.h"
 #include "station/haptics/haptic_loop.h"
+#include "station/haptics/keyboard_push.h"
 #include "station/haptics/realtime.h"
 #include "station/haptics/seqlock.h"
 #include "station/haptics/sim_rig.h"
@@ -38,22 +39,24 @@
 #include "station/training/replay.h"
 #include "station/training/session_runner.h"
 #include "station/training/uuid.h"
+#include "station/ui/gamepad.h"
 #include "station/ui/training_screen.h"
 #include "station/ui/training_window.h"
 
 namespace ves::station {
 namespace {
 
-// The simulated hand follows the keyboard's insertion target no faster than a
-// person pushes a colonoscope, so a key press is a push, not a jump.
-constexpr double kHandSpeed_m_per_s = 0.15;
+// The keys' insertion target leads the scope by at most two key steps: a
+// held key against a blocked scope does not wind up a push that goes on
+// after the key is released.
+constexpr double kKeyLead_m = 0.010;
 // The screen is shown at most at a display's refresh rate, and at 10 Hz
 // once nothing has moved for a second (a session over, the trainee reading
 // the results: the force gauge still moves). The views are rendered only
 // when the model published a new state or a view's controls changed. An
 // idle screen took a whole core redrawing the same picture
 // (docs/station-ui.md, "CPU").
-constexpr std::chrono::steady_clock::duration kScreenPeriod = std::chrono::microseconds(16'667);
+constexpr std::chrono::steady_clock::duration kScreenPeriod = ui::kRunningScreenPeriod;
 constexpr std::chrono::steady_clock::duration kIdleScreenPeriod = std::chrono::milliseconds(100);
 constexpr std::chrono::steady_clock::duration kIdleAfter = std::chrono::seconds(1);
 
@@ -81,11 +84,11 @@ struct PanelNumbers {
   double score{0.0};  // when finished
   double elapsed_s{0.0};
   double time_limit_s{0.0};
-  double excessive_force_N{5.0};
-  double pain_s{0.0};
-  double loop_s{0.0};
-  double xray_s{0.0};
-  double redout_s{0.0};
+  // What the score weighs, live (ui/score_panel.h), and its thresholds.
+  ui::ScoreFigures score_figures;
+  double excessive_wall_force_N{4.0};
+  double damage_wall_force_N{14.0};
+  double damage_penalty_points{10.0};
   // For live proctoring (the UI thread streams them): the session's uuid
   // (the record's) and the figures of its latest step; fixed sizes, so the
   // loop copies them without allocating.
@@ -110,22 +113,22 @@ std::string OutcomeText(training::Outcome outcome) {
   return "-";
 }
 
+// The simulated hand on the keyboard's target: it follows no faster than a
+// person pushes a colonoscope, with a force that ramps and is bounded to what
+// a hand gives (haptics::KeyboardPush, docs/station-ui.md).
 class KeyboardHand {
  public:
   KeyboardHand(const haptics::SeqLock<HandTarget>* target, double period_s)
-      : target_(target), period_s_(period_s) {}
+      : target_(target), push_(haptics::KeyboardPushCurve{}, period_s) {}
   void Move(haptics::SimulatedBallDrive* device) {
     HandTarget target;
     target_->Load(&target);
-    const double max_move_m = kHandSpeed_m_per_s * period_s_;
-    commanded_m_ += std::clamp(target.insertion_m - commanded_m_, -max_move_m, max_move_m);
-    device->set_hand(HandAtTargets(commanded_m_, target.roll_rad));
+    device->set_hand(push_.Next(target.insertion_m, target.roll_rad, device->plant().insertion_m));
   }
 
  private:
   const haptics::SeqLock<HandTarget>* target_;
-  double period_s_;
-  double commanded_m_{0.0};
+  haptics::KeyboardPush push_;
 };
 
 // Loop thread -> UI thread, for the journal of the running session: a
@@ -340,11 +343,10 @@ class LoopSession {
         session.state() == training::SessionState::kFinished ? session.score() : 0.0;
     numbers.elapsed_s = metrics.duration_s;
     numbers.time_limit_s = session.config().time_limit_s;
-    numbers.excessive_force_N = session.config().thresholds.excessive_wall_force_N;
-    numbers.pain_s = metrics.pain_s;
-    numbers.loop_s = metrics.loop_s;
-    numbers.xray_s = metrics.xray_s;
-    numbers.redout_s = metrics.redout_s;
+    numbers.excessive_wall_force_N = session.config().thresholds.excessive_wall_force_N;
+    numbers.damage_wall_force_N = session.config().thresholds.damage_wall_force_N;
+    numbers.damage_penalty_points = session.config().score.damage_penalty_points;
+    ui::TrackScoreFigures(metrics, runner_.observation().max_wall_force_N, &numbers.score_figures);
     numbers.session_uuid = UuidCharsOf(session_uuid_);
     numbers.live = LiveFiguresOf(runner_);
     ++published_->sequence;
@@ -382,7 +384,7 @@ class LoopSession {
     handed_over_.store(true, std::memory_order_release);
   }
 
-  static constexpr int kPublishSteps = 16;  // ~60 Hz to the UI at 1 kHz
+  static constexpr int kPublishSteps = ui::kPanelPublishSteps;  // ~60 Hz to the UI at 1 kHz
   training::SessionRunner runner_;
   SessionModelSource source_;
   const ves::v1::ColonCase& colon_case_;
@@ -516,11 +518,10 @@ void FillScreenModel(const PanelNumbers& numbers, const haptics::HapticSnapshot&
   screen->tip_region = patient_db::RegionName(patient_db::CalcRegionAt(colon_case, state.tip_arc_m));
   screen->roll_rad = state.roll_rad;
   screen->hand_force_N = snapshot.force_N;
-  screen->excessive_force_N = numbers.excessive_force_N;
-  screen->pain_s = numbers.pain_s;
-  screen->loop_s = numbers.loop_s;
-  screen->xray_s = numbers.xray_s;
-  screen->redout_s = numbers.redout_s;
+  screen->score_figures = numbers.score_figures;
+  screen->excessive_wall_force_N = numbers.excessive_wall_force_N;
+  screen->damage_wall_force_N = numbers.damage_wall_force_N;
+  screen->damage_penalty_points = numbers.damage_penalty_points;
   DescribeDevice(snapshot, device_label, screen);
 }
 
@@ -666,7 +667,8 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
                              const InteractiveChoices* choices, const std::string& device_label,
                              ui::TrainingWindow* window, SessionViews* views, CoupledLoop* loop,
                              haptics::SeqLock<HandTarget>* hand, InteractiveLive* live,
-                             JournalKeeper* journal,
+                             JournalKeeper* journal, const training::Sitting* sitting,
+                             ui::EvdevGamepad* gamepad,
                              const std::function<void(EndedSession)>& keep) {
   ui::ControlState controls;
   // A lesson's aids that are off stay off, whatever the keys and panel ask.
@@ -679,6 +681,7 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   };
   enforce_aids(&controls);
   ui::ScreenModel screen;
+  training::Sitting own_sitting;
   screen.case_names = {colon_case.id()};
   screen.scope_names = {"default"};
   screen.fluoroscopy_allowed = lesson_aids == nullptr || lesson_aids->fluoroscopy_allowed();
@@ -698,11 +701,20 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
   std::optional<ViewControls> rendered_with;  // the controls of the views shown; none yet
   auto next_screen = std::chrono::steady_clock::now();
   auto last_activity = next_screen;  // a new state, a view change or an input
+  auto last_gamepad_poll = next_screen;
   while (!controls.quit_requested) {
     const bool fresh =
         loop->TakePublication(&shown_sequence, &shown_state, &shown_output, &numbers);
     loop->DrainJournal(journal);  // before the records: an ended session's inputs are all in
-    for (auto& session : loop->TakeEndedRecords()) keep(std::move(session));
+    for (auto& session : loop->TakeEndedRecords()) {
+      // The debrief of the session that just ended, with the sitting's best
+      // and last (the caller's sitting, which keep() adds it to; else this
+      // run's own).
+      screen.debrief = session.result.debrief;
+      if (sitting == nullptr) own_sitting.Add(session.record, session.result);
+      keep(std::move(session));
+      screen.sitting_line = ui::SittingLine(sitting != nullptr ? *sitting : own_sitting);
+    }
     if (fresh) render::FillSceneFromModel(run.params, shown_state, &shown_output, {}, &scene);
     const haptics::HapticSnapshot snapshot = loop->Latest();
     FillScreenModel(numbers, snapshot, shown_state, colon_case, device_label, &screen);
@@ -740,6 +752,15 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       last_activity = std::chrono::steady_clock::now();
       next_screen = last_activity;  // show the key's effect at once
     }
+    if (gamepad != nullptr) {
+      // The controller's axes held since the last frame move the hand and knobs.
+      const auto polled = std::chrono::steady_clock::now();
+      if (gamepad->Poll()) last_activity = polled;
+      ui::ApplyGamepad(gamepad->axes(),
+                       std::chrono::duration<double>(polled - last_gamepad_poll).count(),
+                       ui::GamepadRates{}, ui::KeyboardHand{}, &controls);
+      last_gamepad_poll = polled;
+    }
     enforce_aids(&controls);
     if (controls.repeat_requested && choices != nullptr &&
         (controls.case_choice != choices->current_case ||
@@ -755,6 +776,8 @@ ScreenExit RunTrainingScreen(const training::CaseRun& run, const ves::v1::ColonC
       enforce_aids(&controls);
       loop->Repeat(snapshot.fault);
     }
+    controls.hand_insertion_m = std::clamp(controls.hand_insertion_m, snapshot.insertion_m - kKeyLead_m,
+                                           snapshot.insertion_m + kKeyLead_m);
     hand->Store(HandTarget{controls.hand_insertion_m, controls.hand_roll_rad});
     loop->SetControls(ModelControls{controls.knob_up_rad, controls.knob_right_rad,
                                     controls.view_mode, controls.fluoroscopy_visible,
@@ -771,8 +794,11 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const InteractiveChoices* choices,
                                  const InteractiveLiveTarget* live_target,
                                  const SessionEndedCallback& on_session_ended,
-                                 const std::filesystem::path& journal_dir) {
+                                 const std::filesystem::path& journal_dir,
+                                 const training::Sitting* sitting) {
   ui::TrainingWindow window;  // throws first when there is no display
+  std::optional<ui::EvdevGamepad> gamepad;
+  if (!device.gamepad.empty()) gamepad.emplace(device.gamepad);
   SessionViews views(run.params, colon_case);
   haptics::SeqLock<HandTarget> hand;
   InteractiveRig rig(std::move(device), run.params.dt_s, &hand);
@@ -796,7 +822,8 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
   };
   const ScreenExit exit = RunTrainingScreen(run, colon_case, lesson_aids, choices, rig.label(),
                                             &window, &views, &loop, &hand, &live,
-                                            journal ? &*journal : nullptr, keep);
+                                            journal ? &*journal : nullptr, sitting,
+                                            gamepad ? &*gamepad : nullptr, keep);
   loop.Stop();
   InteractiveResult result = loop.Finish();
   if (on_session_ended) {

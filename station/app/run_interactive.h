@@ -10,6 +10,7 @@
 #include "station/sync/server_client.h"
 #include "station/training/case_run.h"
 #include "station/training/replay.h"
+#include "station/training/sitting.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
 #include "ves/v1/session.pb.h"
@@ -56,6 +57,9 @@ struct InteractiveDevice {
   // on a socketpair, its hand moved by the keyboard.
   std::optional<haptics::CanBus> can_bus;
   std::string can_log;  // candump log of every frame; empty: none
+  // A game controller's evdev device moving the simulated hand with the
+  // keyboard (ui/gamepad.h); empty: none.
+  std::string gamepad;
 };
 
 // Live proctoring of the run's sessions (docs/station-run.md): each session
@@ -89,6 +93,9 @@ using SessionEndedCallback = std::function<void(EndedSession)>;
 // once its session's record is safely stored; with `on_session_ended` each
 // journal stays locked (sync::JournalInUse) until that call returns, so a
 // `ves-station sync` meanwhile cannot recover the session a second time.
+// `sitting`: the trainee's sitting so far, which `on_session_ended` adds each
+// session to; the debrief on the screen names its best and last (null: this
+// run's sessions only).
 InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const ves::v1::ColonCase& colon_case, double time_limit_s,
                                  InteractiveDevice device,
@@ -96,6 +103,7 @@ InteractiveResult RunInteractive(const training::CaseRun& run,
                                  const InteractiveChoices* choices = nullptr,
                                  const InteractiveLiveTarget* live = nullptr,
                                  const SessionEndedCallback& on_session_ended = {},
-                                 const std::filesystem::path& journal_dir = {});
+                                 const std::filesystem::path& journal_dir = {},
+                                 const training::Sitting* sitting = nullptr);
 
 }  // namespace ves::station

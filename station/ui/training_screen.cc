@@ -150,7 +150,8 @@ ScreenLayout MakeScreenLayout(cv::Size canvas) {
   layout.panel = R(1280, 498, 616, 558);
   layout.figures = R(1280, 810, 616, 194);
   layout.gauge = R(1280, 1012, 616, 40);
-  layout.banner = R(24, 24 + 924 * 0.28, 1232, 924 * 0.44);
+  layout.banner = R(24 + 24, 24 + 924 * 0.06, 1232 - 48, 924 * 0.90);
+  layout.warning = R(24 + 24, 24 + 44, 1232 - 48, 64);
 
   const double row = 44;
   const double gap = 8;
@@ -272,9 +273,12 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
   DrawTextFitted(canvas, "Scope: " + NameAt(model.scope_names, controls.scope_choice),
                  choice_box(PanelAction::kPreviousScope), 0.62 * s, kText);
 
-  // Live figures: two columns of five lines.
+  // Live figures: two columns of six lines; on the right what the score
+  // weighs, amber once it costs points, damage red.
+  const ScoreFigures& sf = model.score_figures;
   const cv::Rect& f = layout.figures;
-  const int line = f.height / 5;
+  constexpr int kLines = 6;
+  const int line = f.height / kLines;
   const int left_width = f.width * 55 / 100;
   const std::string left[] = {
       Format("Inserted    %.2f m", model.inserted_m),
@@ -283,43 +287,68 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       Format("Knobs  U/D %+.0f  L/R %+.0f deg", Shown(controls.knob_up_rad * kDegPerRad, 1.0),
              Shown(controls.knob_right_rad * kDegPerRad, 1.0)),
       Format("Roll   %+.0f deg", Shown(model.roll_rad * kDegPerRad, 1.0)),
+      Format("Wall   %.1f N  (over %.0f N costs)", sf.wall_force_N, model.excessive_wall_force_N),
       std::string("Press  ") + PressName(controls.abdominal_press),
   };
   const std::string right[] = {
-      Format("Pain      %.1f s", model.pain_s),
-      Format("Loop      %.1f s", model.loop_s),
-      Format("X-ray     %.1f s", model.xray_s),
-      Format("Red-out   %.1f s", model.redout_s),
+      Format("Pain      %.1f s", sf.pain_s),
+      Format("Loop      %.1f s", sf.loop_s),
+      Format("X-ray     %.1f s", sf.xray_s),
+      Format("Red-out   %.1f s", sf.redout_s),
+      sf.damage_events == 0 ? std::string("Damage    none")
+                            : Format("Damage    %.0f  (-%.0f points)", sf.damage_events,
+                                     sf.damage_events * model.damage_penalty_points),
       std::string("Patient   ") + PositionName(controls.patient_position),
   };
+  const auto costs = [](double value) { return value > 0.0 ? kAmber : kText; };
   // The toolkit's line in amber while a press or a turned patient is in use.
   const cv::Scalar left_color[] = {
       kText, kText, kText, kText,
+      sf.wall_force_N > model.damage_wall_force_N       ? kRed
+      : sf.wall_force_N > model.excessive_wall_force_N ? kAmber
+                                                       : kText,
       controls.abdominal_press == AbdominalPress::kNone ? kText : kAmber};
   const cv::Scalar right_color[] = {
-      kText, kText, kText, kText,
+      costs(sf.pain_s), costs(sf.loop_s), costs(sf.xray_s), costs(sf.redout_s),
+      sf.damage_events > 0 ? kRed : kText,
       controls.patient_position == PatientPosition::kSupine ? kText : kAmber};
-  for (int i = 0; i < 5; ++i) {
+  for (int i = 0; i < kLines; ++i) {
     DrawTextFitted(canvas, left[i], {f.x, f.y + i * line, left_width - px(8), line}, 0.62 * s,
                    left_color[i]);
     DrawTextFitted(canvas, right[i], {f.x + left_width, f.y + i * line, f.width - left_width, line},
                    0.62 * s, right_color[i]);
   }
 
-  // Force gauge: the hand's axial force against the device's range.
+  // Force gauge: the hand's axial force against the device's range, the
+  // hand's limit marked and labelled.
   const cv::Rect& g = layout.gauge;
   cv::rectangle(canvas, g, kButton, cv::FILLED);
   const double share =
       std::clamp(std::abs(model.hand_force_N) / model.force_gauge_max_N, 0.0, 1.0);
-  const bool excessive = std::abs(model.hand_force_N) > model.excessive_force_N;
+  const bool excessive = std::abs(model.hand_force_N) > model.hand_limit_N;
   cv::rectangle(canvas, {g.x, g.y, static_cast<int>(share * g.width), g.height},
                 excessive ? kRed : kGreen, cv::FILLED);
   const int limit_x =
-      g.x + static_cast<int>(g.width * std::clamp(model.excessive_force_N / model.force_gauge_max_N,
+      g.x + static_cast<int>(g.width * std::clamp(model.hand_limit_N / model.force_gauge_max_N,
                                                   0.0, 1.0));
   cv::line(canvas, {limit_x, g.y}, {limit_x, g.y + g.height - 1}, kText, std::max(1, px(2)));
   DrawTextFitted(canvas, Format("Hand force %.1f N", Shown(model.hand_force_N, 0.1)),
-                 g - cv::Size(px(16), 0) + cv::Point(px(8), 0), 0.62 * s, kText);
+                 cv::Rect(g.x + px(8), g.y, limit_x - g.x - px(16), g.height), 0.62 * s, kText);
+  DrawTextFitted(canvas, Format("| limit %.0f N (hand)", model.hand_limit_N),
+                 cv::Rect(limit_x + px(4), g.y, g.br().x - limit_x - px(8), g.height), 0.55 * s,
+                 kText);
+
+  // A damage episode: a red warning across the endoscope the moment the
+  // model reports it, for kDamageWarningHold_s.
+  if (model.phase == SessionPhase::kRunning && DamageWarningOn(sf, model.elapsed_s)) {
+    const cv::Rect& w = layout.warning;
+    cv::rectangle(canvas, w, kRed, cv::FILLED);
+    DrawTextFitted(canvas,
+                   Format("DAMAGE: the wall held over %.0f N - ease off  (-%.0f points)",
+                          model.damage_wall_force_N, model.damage_penalty_points),
+                   w - cv::Size(px(24), 0) + cv::Point(px(12), 0), 0.9 * s, kText, true,
+                   std::max(1, px(2)));
+  }
 
   // Status strip: clock and state, device, keys.
   const cv::Rect& st = layout.status;
@@ -344,23 +373,26 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       "+/- zoom  drag X-ray: rotate  p press  t patient  n/m case/scope  r repeat  q quit",
       bottom, 0.55 * s, kDim);
 
-  // Session over: a banner across the endoscope image.
+  // Session over: a banner across the endoscope image with the debrief.
   if (model.phase == SessionPhase::kOver) {
     const cv::Rect& b = layout.banner;
     cv::Mat roi = canvas(b);
-    roi *= 0.25;
+    roi *= 0.2;
     cv::rectangle(canvas, b, kAmber, std::max(1, px(3)));
     const int h = b.height;
-    DrawTextFitted(canvas, "SESSION OVER", {b.x, b.y + h * 5 / 100, b.width, h * 30 / 100},
-                   2.2 * s, kText, true, std::max(1, px(4)));
-    DrawTextFitted(canvas, "Outcome: " + model.outcome,
-                   {b.x, b.y + h * 38 / 100, b.width, h * 18 / 100}, 1.1 * s, kText, true,
-                   std::max(1, px(2)));
+    const cv::Rect inner(b.x + px(24), b.y, b.width - px(48), h);
+    DrawTextFitted(canvas, "SESSION OVER: " + model.outcome,
+                   {inner.x, b.y + h * 2 / 100, inner.width, h * 10 / 100}, 1.5 * s, kText, true,
+                   std::max(1, px(3)));
     DrawTextFitted(canvas, Format("Score %.0f of %.0f", model.score, model.score_max),
-                   {b.x, b.y + h * 58 / 100, b.width, h * 18 / 100}, 1.1 * s, kAmber, true,
+                   {inner.x, b.y + h * 12 / 100, inner.width, h * 8 / 100}, 1.1 * s, kAmber, true,
                    std::max(1, px(2)));
+    if (!model.debrief.parts.empty()) {
+      DrawDebrief(canvas, {inner.x, b.y + h * 22 / 100, inner.width, h * 68 / 100}, model.debrief,
+                  model.sitting_line, s);
+    }
     DrawTextFitted(canvas, "r: train again     q: finish",
-                   {b.x, b.y + h * 80 / 100, b.width, h * 15 / 100}, 0.8 * s, kDim, true);
+                   {inner.x, b.y + h * 91 / 100, inner.width, h * 7 / 100}, 0.8 * s, kDim, true);
   }
   return canvas;
 }

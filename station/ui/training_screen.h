@@ -13,7 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "station/training/debrief.h"
 #include "station/ui/controls.h"
+#include "station/ui/score_panel.h"
 
 namespace ves::ui {
 
@@ -49,12 +51,20 @@ struct ScreenModel {
   std::string tip_region;  // "sigmoid", ...
   double roll_rad{0.0};
   double hand_force_N{0.0};  // measured at the device, + pushes in
-  double force_gauge_max_N{10.0};
-  double excessive_force_N{5.0};  // the gauge turns red above it
-  double pain_s{0.0};
-  double loop_s{0.0};
-  double xray_s{0.0};
-  double redout_s{0.0};  // time with the tip against the wall (the score weighs it)
+  double force_gauge_max_N{20.0};
+  // The gauge's labelled mark; the bar turns red above it: the steady push of
+  // a colonoscopist's hand, 10 N (over it 5 % of the time: Appleyard et al.,
+  // GIE 2000), which the keyboard's hand never exceeds (haptics::KeyboardPush).
+  double hand_limit_N{10.0};
+  // What the score weighs, live (score_panel.h), and its thresholds.
+  ScoreFigures score_figures;
+  double excessive_wall_force_N{4.0};  // the force part counts time over it
+  double damage_wall_force_N{14.0};    // a damage episode: held over it
+  double damage_penalty_points{10.0};  // per damage episode
+  // When over: the session's score in its weighed parts (none: no record,
+  // e.g. nothing went in) and the sitting's line (SittingLine).
+  training::Debrief debrief;
+  std::string sitting_line;
   DeviceStatus device_status{DeviceStatus::kOk};
   std::string device_text;  // "force feedback on", "SAFE STATE: bus-off (r re-arms)", ...
   bool fluoroscopy_allowed{true};
@@ -71,7 +81,8 @@ struct ScreenLayout {
   cv::Rect panel;    // buttons, case/scope, figures, force gauge
   cv::Rect figures;  // the live figures inside the panel
   cv::Rect gauge;    // the force gauge bar
-  cv::Rect banner;   // "session over", across the endoscope image
+  cv::Rect banner;   // "session over" and the debrief, across the endoscope image
+  cv::Rect warning;  // the damage warning, across the top of the endoscope image
   std::vector<PanelButton> buttons;
 };
 

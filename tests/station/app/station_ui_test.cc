@@ -25,12 +25,15 @@
 #include <iostream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "station/sync/outbox.h"
 #include "station/sync/station_paths.h"
+#include "station/training/session_file.h"
 #include "station/ui/training_screen.h"
 #include "tests/server/web_client.h"
 #include "tests/server/ws_viewer.h"
@@ -312,6 +315,46 @@ class StationUi : public StationFixture {
   fs::path shots_dir_;
 };
 
+// `replay --debrief`'s output: the summary line's score, then one line per
+// weighed part, indented by two ("  pain 8.0 of 10.0 (pain 2.1 s): at ...").
+struct DebriefLines {
+  std::vector<std::string> parts;  // without the indent
+  double sum{0.0};                 // of the parts' points
+  double score{-1.0};
+};
+DebriefLines ParseDebrief(const std::string& replay_out) {
+  DebriefLines lines;
+  const size_t score_at = replay_out.find(" score=");
+  if (score_at != std::string::npos) lines.score = std::stod(replay_out.substr(score_at + 7));
+  size_t start = replay_out.find('\n');
+  while (start != std::string::npos && start + 1 < replay_out.size()) {
+    const size_t end = replay_out.find('\n', start + 1);
+    const std::string line = replay_out.substr(start + 1, end - start - 1);
+    start = end;
+    if (line.rfind("  ", 0) != 0 || line.rfind("  (", 0) == 0) continue;
+    lines.parts.push_back(line.substr(2));
+    const size_t space = line.find(' ', 2);
+    if (space != std::string::npos) lines.sum += std::stod(line.substr(space + 1));
+  }
+  return lines;
+}
+
+// Lines of text in `region`: runs of rows with bright pixels between blank ones.
+int TextLines(const cv::Mat& shot, const cv::Rect& region) {
+  if (shot.empty()) return 0;
+  cv::Mat grey;
+  cv::cvtColor(shot(region), grey, cv::COLOR_BGR2GRAY);
+  const cv::Mat bright = grey > 120;
+  int lines = 0;
+  bool in_line = false;
+  for (int y = 4; y < bright.rows - 4; ++y) {  // inside the banner's frame
+    const bool ink = cv::countNonZero(bright.row(y).colRange(4, bright.cols - 4)) > 3;
+    if (ink && !in_line) ++lines;
+    in_line = ink;
+  }
+  return lines;
+}
+
 // How many times `needle` occurs in `text`.
 size_t Occurrences(const std::string& text, const std::string& needle) {
   size_t count = 0;
@@ -569,6 +612,26 @@ TEST_F(StationUi, ChoosingAnotherCaseOnThePanelAndRepeatingRunsThatCase) {
   EXPECT_NE(quit.out.find("  2. standard-adult  outcome=aborted "), std::string::npos) << quit.out;
   EXPECT_NE(quit.out.find(" xray_s=0.0 press_llq_s="), std::string::npos) << quit.out;
   EXPECT_NE(quit.out.find("\nbest: "), std::string::npos) << quit.out;
+  // Each session's debrief (the lines under its summary) is what `replay
+  // --debrief` prints for its stored record, and its parts sum to the score.
+  for (size_t i = 0; i < stored.size(); ++i) {
+    const fs::path file = dir_ / ("stored-" + std::to_string(i) + ".vessession");
+    std::ofstream(file, std::ios::binary) << training::EncodeSessionFile(stored[i].record);
+    const ProcessResult replay = Station({"replay", file.string(), "--debrief"});
+    ASSERT_EQ(replay.exit_code, 0) << replay.err;
+    const DebriefLines debrief = ParseDebrief(replay.out);
+    ASSERT_GE(debrief.parts.size(), 7u) << replay.out;
+    if (replay.out.find("(the parts sum to ") == std::string::npos) {
+      EXPECT_NEAR(debrief.sum, debrief.score, 0.05 * debrief.parts.size()) << replay.out;
+    } else {  // bounded to the scale
+      EXPECT_TRUE(debrief.score == 0.0 || debrief.score == 100.0) << replay.out;
+    }
+    for (const std::string& part : debrief.parts) {
+      EXPECT_NE(quit.out.find("\n       " + part + "\n"), std::string::npos)
+          << "the terminal's debrief of session " << i + 1 << " lacks '" << part << "':\n"
+          << quit.out;
+    }
+  }
   // `status` lists them: when, who, which case, how it went, the score.
   const std::string status = Station({"status", "--data-dir", data.string()}).out;
   EXPECT_NE(status.find("sessions stored: 2\n"), std::string::npos) << status;
@@ -596,6 +659,12 @@ TEST_F(StationUi, EachSessionIsInTheOutboxAsSoonAsItEndsSoACrashLosesNone) {
   ASSERT_TRUE(WaitForOutput(out, "committed to the outbox")) << ReadFile(out)
                                                                << ReadFile(dir_ / "interactive.err");
   ASSERT_TRUE(station_->Running()) << "the station quit by itself: " << ReadFile(out);
+  // The screen shows its debrief: over the endoscope, a line per weighed
+  // part, the score and the sitting (docs/station-ui.md, "What the score weighs").
+  std::this_thread::sleep_for(kSettle);
+  const cv::Mat debrief = Shot("debrief");
+  ASSERT_TRUE(BannerShown(debrief, layout_.banner)) << "no 'session over' banner";
+  EXPECT_GE(TextLines(debrief, layout_.banner), 12) << "no debrief on the screen";
   // Repeat and in: a second session, which also ends on its own and is committed.
   Keys({"r", "w"});
   for (int i = 0; i < 300 && committed() < 2 && station_->Running(); ++i) {

@@ -200,7 +200,7 @@ TEST_F(Compose, ThePressAndThePatientsPositionShowInTheFiguresOnly) {
   }
   // Each on its own line: the press on the left, the position on the right.
   const cv::Rect& f = layout_.figures;
-  const cv::Rect last_line(f.x, f.y + f.height * 4 / 5, f.width, f.height - f.height * 4 / 5);
+  const cv::Rect last_line(f.x, f.y + f.height * 5 / 6, f.width, f.height - f.height * 5 / 6);
   const cv::Rect left(last_line.x, last_line.y, last_line.width / 2, last_line.height);
   const cv::Rect right(last_line.x + last_line.width * 3 / 5, last_line.y,
                        last_line.width - last_line.width * 3 / 5, last_line.height);
@@ -208,13 +208,13 @@ TEST_F(Compose, ThePressAndThePatientsPositionShowInTheFiguresOnly) {
   EXPECT_EQ(ChangedIn(before, pressed, right), 0.0);
   EXPECT_GT(ChangedIn(pressed, turned, right), 0.0);
   EXPECT_EQ(ChangedIn(pressed, turned, left), 0.0);
-  const cv::Rect upper_lines(f.x, f.y, f.width, f.height * 4 / 5 - 2);
+  const cv::Rect upper_lines(f.x, f.y, f.width, f.height * 5 / 6 - 2);
   EXPECT_EQ(ChangedIn(before, turned, upper_lines), 0.0);
 }
 
 TEST_F(Compose, ForceGaugeGrowsWithForceAndTurnsRedWhenExcessive) {
   model_.force_gauge_max_N = 10.0;
-  model_.excessive_force_N = 5.0;
+  model_.hand_limit_N = 5.0;
   const cv::Rect& g = layout_.gauge;
   const cv::Point probe(g.x + g.width * 6 / 10, g.y + 2);  // right of the threshold mark
   model_.hand_force_N = 2.0;
