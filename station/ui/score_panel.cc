@@ -44,7 +44,7 @@ std::string SittingLine(const training::Sitting& sitting) {
   const auto& sessions = sitting.sessions();
   if (sessions.empty()) return "";
   const auto number_and_score = [&](std::size_t i) {
-    return Points("%.0f (%.0f/100)", static_cast<double>(i + 1), sessions[i].score);
+    return Points("%.0f (%.1f/100)", static_cast<double>(i + 1), sessions[i].score);
   };
   return "session " + std::to_string(sessions.size()) + " of this sitting     best: " +
          number_and_score(*sitting.best()) + "     last: " + number_and_score(sessions.size() - 1);

@@ -52,7 +52,7 @@ void TrackScoreFigures(const training::Metrics& metrics, double wall_force_N,
 bool DamageWarningOn(const ScoreFigures& figures, double elapsed_s);
 
 // The sitting's line under the debrief: "session 3 of this sitting   best: 2
-// (45/100)   last: 3 (38/100)"; empty for an empty sitting.
+// (45.0/100)   last: 3 (38.2/100)"; empty for an empty sitting.
 std::string SittingLine(const training::Sitting& sitting);
 
 // The debrief over `box`: one line per weighed part ("pain  9.1 of 10.0

@@ -384,7 +384,7 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
     DrawTextFitted(canvas, "SESSION OVER: " + model.outcome,
                    {inner.x, b.y + h * 2 / 100, inner.width, h * 10 / 100}, 1.5 * s, kText, true,
                    std::max(1, px(3)));
-    DrawTextFitted(canvas, Format("Score %.0f of %.0f", model.score, model.score_max),
+    DrawTextFitted(canvas, Format("Score %.1f of %.0f", model.score, model.score_max),
                    {inner.x, b.y + h * 12 / 100, inner.width, h * 8 / 100}, 1.1 * s, kAmber, true,
                    std::max(1, px(2)));
     if (!model.debrief.parts.empty()) {

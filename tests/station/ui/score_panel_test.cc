@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <iostream>
 
 #include "station/training/metrics.h"
 #include "station/training/sitting.h"
@@ -76,6 +77,8 @@ TEST(ScorePanel, ADamageEpisodeShowsOnThePanelWithin100msOfTheModelReportingIt) 
   }
   ASSERT_GT(reported_step, 2000) << "the 0.3 s press was not reported as damage";
   ASSERT_GT(shown_step, 0) << "the warning never showed";
+  std::cout << "damage reported at step " << reported_step << ", on the panel from the publication at step "
+            << shown_step << "\n";
   const int frame_steps = static_cast<int>(
       std::ceil(std::chrono::duration<double>(kRunningScreenPeriod).count() / kDt_s));
   EXPECT_LE(shown_step - reported_step + frame_steps, 100)
@@ -198,7 +201,7 @@ TEST(ScorePanel, TheSittingLineNamesTheBestAndTheLast) {
     sitting.Add(record, result);
   }
   EXPECT_EQ(SittingLine(sitting),
-            "session 3 of this sitting     best: 2 (38/100)     last: 3 (4/100)");
+            "session 3 of this sitting     best: 2 (38.0/100)     last: 3 (3.5/100)");
 }
 
 }  // namespace
