@@ -183,13 +183,4 @@ haptics::HandProfile HandForSample(const training::InputSample& sample, double m
   return hand;
 }
 
-haptics::HandProfile HandAtTargets(double insertion_m, double roll_rad) {
-  haptics::HandProfile hand;
-  hand.thrust.drive = haptics::HandDrive::kPosition;
-  hand.thrust.offset = insertion_m;
-  hand.roll.drive = haptics::HandDrive::kPosition;
-  hand.roll.offset = roll_rad;
-  return hand;
-}
-
 }  // namespace ves::station

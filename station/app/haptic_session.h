@@ -164,7 +164,4 @@ ves::v1::StationHealth MakeStationHealth(const std::string& device, const Health
 // coordinates). Roll is always the hand turning the scope toward roll_rad.
 haptics::HandProfile HandForSample(const training::InputSample& sample, double model_offset_m);
 
-// A position-driven hand (keyboard): grips and pulls toward the targets.
-haptics::HandProfile HandAtTargets(double insertion_m, double roll_rad);
-
 }  // namespace ves::station
