@@ -18,6 +18,9 @@
 // steps (show_damage=1 prints these). ring_hold is the peak 10 ms mean of
 // the ring contacts' push along the shaft toward the anus (N), ring_hold_s
 // the time they hold more than half of a push of 4 N or more.
+// show_reduce=1 prints each turn of the hand between pushing and pulling;
+// op_press_from/op_press_s/op_turns/op_turn_from give when and how long the
+// operator had the assistant press and how often it turned the patient.
 // state_hash=1 also prints a hash of the final model state (every colon and
 // scope array, bit for bit): a speed change that must not change one result
 // gives the same hash before and after it.
@@ -193,10 +196,34 @@ int main(int argc, char** argv) {
   double last_over10_shown_s = -1.0;
   bool pressing[9] = {false};
   double press_from_s[9] = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+  double help_press_from_s = -1.0, help_press_s = 0.0, first_turn_s = -1.0;
+  int position_changes = 0;
+  const bool show_reduce = get("show_reduce", 0.0) != 0.0;
+  double last_hand_N = 0.0;
+  ves::training::LoopIndex loop_watch;
+  auto last_position = ves::training::PatientPosition::kSupine;
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     const auto sample = op->Act(p);
     auto input = ves::training::ToStepInput(sample);
+    if (show_reduce && (sample.push_force_N < 0.0) != (last_hand_N < 0.0)) {
+      std::printf("  hand %s t=%.1f inserted %.3f tip %.3f loop %.3f stretch %.3f press %d pos %d\n",
+                  sample.push_force_N < 0.0 ? "pulls" : "pushes", state.time_s, state.inserted_m,
+                  state.tip_arc_m, loop_watch.Update(state.inserted_m, state.tip_arc_m),
+                  out.peak_stretch_m, static_cast<int>(sample.abdominal_press),
+                  static_cast<int>(sample.patient_position));
+    }
+    last_hand_N = sample.push_force_N;
+    // The operator's own calls for help: the assistant's hand and the patient's position.
+    if (sample.abdominal_press != ves::training::AbdominalPress::kNone) {
+      if (help_press_from_s < 0.0) help_press_from_s = state.time_s;
+      help_press_s += params.dt_s;
+    }
+    if (sample.patient_position != last_position) {
+      ++position_changes;
+      if (first_turn_s < 0.0) first_turn_s = state.time_s;
+      last_position = sample.patient_position;
+    }
     // A reduction (the hand pulling for a while) straightens what the tip
     // has passed; from then on the assistant holds it.
     pull_s = sample.push_force_N < -1.0 ? pull_s + params.dt_s : 0.0;
@@ -303,13 +330,15 @@ int main(int argc, char** argv) {
   const std::string name = std::string(argv[1]).substr(std::string(argv[1]).rfind('/') + 1);
   std::printf("RESULT case=%s op=%s cecum_s=%.1f inserted_at_cecum=%.3f max_tip=%.3f cecum_at=%.3f "
               "over10=%.2f%% peak_force=%.1f peak_roll=%.2f peak_roll_10ms=%.2f roll_over1=%.2f%% peak_wall=%.1f damage=%d damage_1ms=%d fixed_mm=%.1f pain15=%.0f pain20=%.0f "
-              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f ring_hold=%.1f ring_hold_s=%.0f %s\n",
+              "pain=%.0f press_sig_from=%.0f press_trans_from=%.0f ring_hold=%.1f ring_hold_s=%.0f "
+              "op_press_from=%.0f op_press_s=%.0f op_turns=%d op_turn_from=%.0f %s\n",
               name.c_str(), argv[2], t_cecum, inserted_at_cecum, max_tip, cecum_m,
               100.0 * over10 / std::max(1L, steps), peak_force, peak_roll, peak_roll_10ms,
               100.0 * roll_over1 / std::max(1L, steps), peak_wall_N, damage10_events, damage_events,
               1e3 * peak_fixed,
               pain15_s, pain20_s, pain_s, press_from_s[2], press_from_s[5], peak_ring_hold_N,
-              ring_hold_s, tag.c_str());
+              ring_hold_s, help_press_from_s, help_press_s, position_changes, first_turn_s,
+              tag.c_str());
   if (get("state_hash", 0.0) != 0.0) {
     std::printf("STATE_HASH %016llx\n", static_cast<unsigned long long>(HashModelState(state)));
   }

@@ -74,6 +74,21 @@
 
 namespace {
 
+// How far the tip has gone into the fixed (retroperitoneal) colon it is in,
+// 0 in colon that hangs on a mesentery: the probe's reduction rule reads the
+// case's regions (the scripted expert does not).
+double TipIntoFixedColon(const ves::model::ModelParams& params, double tip_arc_m) {
+  const auto& pts = params.colon.points;
+  auto at = std::upper_bound(
+      pts.begin(), pts.end(), tip_arc_m,
+      [](double arc_m, const ves::model::ColonPoint& point) { return arc_m < point.arc_m; });
+  if (at != pts.begin()) --at;  // the last point at or before the tip
+  if (at->tissue.mobile) return 0.0;
+  auto start = at;
+  while (start != pts.begin() && !(start - 1)->tissue.mobile) --start;
+  return tip_arc_m - start->arc_m;
+}
+
 using ves::bench::ProbeEnv;
 using ves::model::StepInput;
 
@@ -264,7 +279,7 @@ int main(int argc, char** argv) {
       if (reduce_rule) {
         // Loop reduction by the loop index (as the expert does it, by position).
         const double loop_m = loop_index.Update(state.inserted_m, state.tip_arc_m);
-        const double limit_m = p.tip_into_fixed_colon_m >= 0.08 ? fixed_limit_m : mobile_limit_m;
+        const double limit_m = TipIntoFixedColon(params, state.tip_arc_m) >= 0.08 ? fixed_limit_m : mobile_limit_m;
         // After a reduction, the next one waits until the tip has gone
         // PROBE_REDUCE_AGAIN_M (default 0.10 m) deeper: a loop re-formed by
         // pushing on is taut before the tip moves.
@@ -282,7 +297,7 @@ int main(int argc, char** argv) {
           pinned_tip_W = state.X_WTip.translation();
           std::printf("  reduce at t=%.2f: loop %.3f m, tip %.3f m (%s), inserted %.3f m\n",
                       state.time_s, loop_m, state.tip_arc_m,
-                      p.tip_into_fixed_colon_m >= 0.08 ? "hooked" : "not hooked", state.inserted_m);
+                      TipIntoFixedColon(params, state.tip_arc_m) >= 0.08 ? "hooked" : "not hooked", state.inserted_m);
           phase = 1;
           reduce_tip_max_m = state.tip_arc_m;
           withdraw_at_reached_m = command_m;

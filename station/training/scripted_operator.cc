@@ -24,16 +24,6 @@ Perception Perceive(const model::ModelParams& params, const model::ModelState& s
   p.angulation_right_rad =
       std::min(params.scope.angulation_right_rad, params.scope.angulation_left_rad);
   p.working_length_m = params.scope.working_length_m;
-  const auto& pts = params.colon.points;
-  auto at = std::upper_bound(
-      pts.begin(), pts.end(), state.tip_arc_m,
-      [](double arc_m, const model::ColonPoint& point) { return arc_m < point.arc_m; });
-  if (at != pts.begin()) --at;  // the last point at or before the tip
-  if (!at->tissue.mobile) {
-    auto start = at;
-    while (start != pts.begin() && !(start - 1)->tissue.mobile) --start;
-    p.tip_into_fixed_colon_m = state.tip_arc_m - start->arc_m;
-  }
   return p;
 }
 
@@ -75,46 +65,49 @@ InputSample ExpertOperator::Act(const Perception& p) {
   // loop, as the insertion that did not move the image tells it.
   const double loop_m = loop_index_.Update(p.inserted_m, p.tip_arc_m);
   if (!reducing_) {
-    // Only with the tip hooked in fixed colon can a loop be taken out (or
-    // when the scope is nearly all in); and not again before the tip has
-    // gone deeper than at the last reduction.
-    const bool hooked = p.tip_into_fixed_colon_m >= kHookDepth_m;
     const bool scope_used_up = p.inserted_m > p.working_length_m - kScopeLeft_m;
     const bool deeper = p.tip_arc_m > last_reduce_tip_m_ + kReduceAgainDepth_m;
+    // A pull-back that found the tip loose waits only until the tip is a
+    // little deeper, where it may be round the next corner.
+    const bool past_loose = p.tip_arc_m > loose_tip_m_ + kReprobeDepth_m;
     if (p.tip_arc_m > stall_tip_m_ + kStallAdvance_m) {
       stall_tip_m_ = p.tip_arc_m;
       stall_since_s_ = p.t_s;
     }
-    const bool stalled = p.t_s - stall_since_s_ > kStall_s;
-    // Stalled in fixed colon (the tip has not moved for kStall_s), it pulls
-    // back to straighten the scope even without a hook or a loop reading,
-    // once per kReduceAgainDepth_m of depth: repeated pull-backs at one
-    // place pressed the rectosigmoid (redundant-sigmoid, docs/scoring.md).
-    const bool stalled_in_fixed = stalled && p.tip_into_fixed_colon_m > 0.0;
-    const bool stall_reduce =
-        stalled_in_fixed && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
+    // Stalled (the tip has not moved for kStall_s) while the patient does
+    // not complain: the tip is against a wall, not stretching a loop (a tip
+    // stalled in mobile colon that stretches it is pushed on through).
+    const bool stalled =
+        p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m < kComplaintStretch_m;
+    // Stalled, it pulls back to straighten the scope whatever the loop index reads, once per
+    // kReduceAgainDepth_m of depth: repeated pull-backs at one place pressed
+    // the rectosigmoid (redundant-sigmoid, docs/scoring.md).
+    const bool stall_reduce = stalled && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
     if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
-    // Hooked with more scope in than a straight route needs: a loop the
-    // loop index has not seen (it counts from the shortest insertion for this
-    // depth, and a reduction that slipped resets that).
-    const bool looped_by_length =
-        hooked && p.inserted_m > kLoopedLength_m &&
-        p.tip_arc_m > last_reduce_tip_m_ + kLengthReduceAgainDepth_m;
-    const bool loop_reading = deeper && hooked && loop_m > k.loop_limit_m;
+    // More scope in than a straight route needs: a loop the loop index has
+    // not seen (it counts from the shortest insertion for this depth, and a
+    // reduction that slipped resets that).
+    const bool looped_by_length = p.inserted_m > kLoopedLength_m && past_loose &&
+                                  p.tip_arc_m > last_reduce_tip_m_ + kLengthReduceAgainDepth_m;
+    const bool loop_reading = deeper && past_loose && loop_m > k.loop_limit_m;
     const bool reduce = loop_reading || looped_by_length ||
-                        (scope_used_up && (deeper || stalled)) || stall_reduce;
-    // Stalled again in fixed colon where it already pulled back: it backs the
-    // tip off a little and steers again ("pull back to find the lumen"); a
-    // back-off is not a reduction, so the next one still waits only for depth.
-    const bool back_off = !reduce && stalled_in_fixed;
+                        (scope_used_up && past_loose && (deeper || stalled)) || stall_reduce;
+    // Stalled again where it already pulled back: it backs the tip off a
+    // little and steers again ("pull back to find the lumen"), once per
+    // kBackOffAgainDepth_m of depth (a tip that the back-off did not free
+    // goes on under the hand's steady push); a back-off is not a reduction,
+    // so the next one still waits only for depth.
+    const bool back_off =
+        !reduce && stalled && p.tip_arc_m > last_back_off_tip_m_ + kBackOffAgainDepth_m;
+    if (back_off) last_back_off_tip_m_ = p.tip_arc_m;
     if (reduce || back_off) {
       reducing_ = true;
       backing_off_ = back_off;
       stall_since_s_ = p.t_s;
-      if (reduce) last_reduce_tip_m_ = p.tip_arc_m;
       length_reduce_ = looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
       reduce_start_s_ = p.t_s;
       reduce_start_inserted_m_ = p.inserted_m;
+      reduce_start_loop_m_ = loop_m;
       reduce_tip_max_m_ = p.tip_arc_m;
     }
   } else {
@@ -122,19 +115,50 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // image move one to one again); also stop after a long pull or a while,
     // and a reduction for the length alone once the length is well under it.
     reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
-    if (p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m ||
-        reduce_start_inserted_m_ - p.inserted_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
+    const double withdrawn_m = reduce_start_inserted_m_ - p.inserted_m;
+    const bool tip_back = p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m;
+    if (tip_back || withdrawn_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
         p.t_s - reduce_start_s_ > k.max_reduce_s ||
         (length_reduce_ && p.inserted_m < kLoopedLength_m - kLoopedLengthMargin_m)) {
       reducing_ = false;
       settle_until_s_ = p.t_s + k.settle_s;
+      if (!backing_off_) {
+        // The tip came back with the scope before the loop gave: the tip is
+        // not anchored beyond the loop, and turning the shaft did not take the
+        // loop out. The loop resists; the assistant's hand or the patient's
+        // position must hold the colon while the scope advances.
+        const bool loose = tip_back && withdrawn_m < kLoosePull_m + kTipBack_m;
+        if (loose) {
+          loose_tip_m_ = p.tip_arc_m;
+          if (reduce_start_loop_m_ > k.loop_limit_m) CallForHelp(p);
+        } else {
+          last_reduce_tip_m_ = reduce_tip_max_m_;
+        }
+      }
     }
+  }
+  // Turned, a patient who complains for kTurnedComplaint_s is turned back
+  // onto the back, and not onto that side again.
+  if (position_ != PatientPosition::kSupine) {
+    if (p.peak_stretch_m < kComplaintStretch_m) complaint_since_s_ = p.t_s;
+    if (p.t_s - complaint_since_s_ > kTurnedComplaint_s) {
+      refused_position_ = position_;
+      position_ = PatientPosition::kSupine;
+    }
+  }
+  // The assistant keeps pressing until the tip is well past where the loop
+  // formed, then lets go.
+  if (press_ != AbdominalPress::kNone &&
+      (p.tip_arc_m > press_until_tip_m_ || p.t_s > press_until_s_)) {
+    press_ = AbdominalPress::kNone;
   }
 
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
   in.view_mode = ViewMode::kTextured;
   in.fluoroscopy_on = false;
+  in.abdominal_press = press_;
+  in.patient_position = position_;
   double target_speed_m_per_s = 0.0;
   if (reducing_) {
     // Tip hooked (knobs held), withdraw and turn clockwise (+ roll about the
@@ -166,6 +190,30 @@ InputSample ExpertOperator::Act(const Perception& p) {
   in.knob_up_rad = knob_up_rad_;
   in.knob_right_rad = knob_right_rad_;
   return in;
+}
+
+void ExpertOperator::CallForHelp(const Perception& p) {
+  // Where the loop is, judged by how far the image shows the tip to be: short
+  // of kSigmoidTip_m the scope bows the sigmoid, and the assistant presses
+  // over the left lower quadrant, then the patient is turned if that loop
+  // resists again; deeper the transverse colon sags, and the patient is
+  // turned first, then the assistant presses mid-abdomen.
+  const bool sigmoid = p.tip_arc_m < kSigmoidTip_m;
+  const AbdominalPress where =
+      sigmoid ? AbdominalPress::kLeftLowerQuadrant : AbdominalPress::kMidAbdomen;
+  const PatientPosition turn_to =
+      sigmoid ? PatientPosition::kRightLateral : PatientPosition::kLeftLateral;
+  const bool turned_here = position_ == turn_to;
+  const bool pressed_here = press_ == where || pressed_before_ == where;
+  if (sigmoid ? !pressed_here : turned_here) {
+    press_ = where;
+    pressed_before_ = where;
+    press_until_tip_m_ = p.tip_arc_m + kPressHoldDepth_m;
+    press_until_s_ = p.t_s + kPressHold_s;
+  } else if (turn_to != refused_position_) {
+    position_ = turn_to;
+    complaint_since_s_ = p.t_s;
+  }
 }
 
 std::unique_ptr<ScriptedOperator> MakeScriptedOperator(std::string_view kind, double dt_s,

@@ -27,10 +27,6 @@ struct Perception {
   double angulation_up_rad{model::kPi};  // knob limits of the scope in hand
   double angulation_right_rad{model::kPi};
   double working_length_m{0.0};  // of the scope in hand
-  // How far the tip has gone into the fixed (retroperitoneal) colon it is
-  // in, 0 in colon that hangs on a mesentery (sigmoid, transverse): the
-  // endoscopist knows the anatomy the image shows.
-  double tip_into_fixed_colon_m{0.0};
 };
 
 // How far ahead of the tip the image shows the lumen: the deformed centerline
@@ -75,17 +71,22 @@ class NoviceOperator final : public ScriptedOperator {
 };
 
 // The technique of an experienced endoscopist (docs/scoring.md, "Scripted
-// operators"): it steers the tip toward the lumen with the knobs and advances
-// gently, pushing through mobile colon even as a loop forms there. It
-// recognises the loop as insertion without tip motion (the loop index), and
-// once the tip is hooked round into fixed colon it keeps the tip hooked
-// (knobs held), pulls back and turns the shaft clockwise: the loop comes out
-// and the colon pleats onto the scope while the tip holds or even advances.
-// It stops pulling once the tip starts to come back with the scope (the loop
-// is out), and advances again. When more scope is in than a straight route
-// needs (kLoopedLength_m), when little scope is left, or when the tip has
-// stalled in fixed colon, it takes the loops out too. Fluoroscopy off,
-// textured view.
+// operators"), from what a trainee at the station can know: the hand's force,
+// the scope's length in, the image (where the lumen is, how far the tip
+// moves) and its own hands; never the case's anatomy. It steers the tip
+// toward the lumen with the knobs and advances gently. It recognises a loop
+// as insertion without tip motion (the loop index) and reduces it: knobs
+// held, it pulls back and turns the shaft clockwise, so the loop comes out
+// and the colon pleats onto the scope while the tip holds. A tip that comes
+// back with the scope at once is not anchored beyond the loop: it pushes on
+// and tries again deeper, and if the loop was large it asks for help: the
+// assistant presses the abdomen over the sigmoid or the patient is turned
+// for the transverse colon, then the other if that loop resists again
+// (CallForHelp). It stops pulling once the tip
+// starts to come back with the scope (the loop is out), and advances again.
+// When more scope is in than a straight route needs (kLoopedLength_m), when
+// little scope is left, or when the tip has stalled, it takes the loops out
+// too. Fluoroscopy off, textured view.
 class ExpertOperator final : public ScriptedOperator {
  public:
   // The main settings; each must keep the expert working when moved by 20 %.
@@ -120,9 +121,21 @@ class ExpertOperator final : public ScriptedOperator {
   static constexpr double kSteerGain_per_s = 8.0;  // knob angle rate per radian of lumen offset
   static constexpr double kKnobMax_rad = 2.0;      // the hand turns the knobs no further
   static constexpr double kHandGain_N_s_per_m = 200.0;  // force rate per speed error
-  // The tip is hooked once it is this far into fixed colon (its bending
-  // section is round the corner).
-  static constexpr double kHookDepth_m = 0.08;
+  // A pull-back whose tip comes kTipBack_m back within this much more
+  // withdrawal found the tip loose (not anchored beyond the loop); it tries
+  // again once the tip is kReprobeDepth_m deeper.
+  static constexpr double kLoosePull_m = 0.02;
+  static constexpr double kReprobeDepth_m = 0.10;
+  // A loop that resists with the tip short of this (as the image shows the
+  // tip's progress) is in the sigmoid, beyond it in the transverse colon.
+  static constexpr double kSigmoidTip_m = 0.80;
+  // The assistant presses until the tip is this much deeper than where the
+  // loop resisted, or this long at most (a hand pressing for minutes tires,
+  // and a press that has not helped by then hurts).
+  static constexpr double kPressHoldDepth_m = 0.30;
+  static constexpr double kPressHold_s = 60.0;
+  // A turned patient who complains this long is turned back.
+  static constexpr double kTurnedComplaint_s = 10.0;
   // After a reduction, the next waits until the tip is this much deeper: a
   // loop re-formed by pushing on is taut before the tip moves again.
   static constexpr double kReduceAgainDepth_m = 0.10;
@@ -130,12 +143,15 @@ class ExpertOperator final : public ScriptedOperator {
   // tip is deeper than at the last reduction, or has stalled this long.
   static constexpr double kScopeLeft_m = 0.08;
   static constexpr double kStall_s = 15.0;
+  // The patient complains of a stretch beyond this (MetricThresholds::pain_stretch_m).
+  static constexpr double kComplaintStretch_m = 0.02;
   static constexpr double kStallAdvance_m = 0.005;
   static constexpr double kTipBack_m = 0.015;     // the tip coming back this far: loop out
   // Stalled again where it has already pulled back, it only backs the tip
   // off the wall this far (no roll) and steers on.
   static constexpr double kBackOff_m = 0.03;
-  // More scope in than this with the tip hooked short of the cecum means a
+  static constexpr double kBackOffAgainDepth_m = 0.05;
+  // More scope in than this short of the cecum means a
   // loop, whatever the loop index says (a straight scope reaches the cecum
   // with 0.7-0.8 m in, the mean with loops is 1.08 m; docs/scoring.md): it
   // reduces again once the tip is kLengthReduceAgainDepth_m deeper than at
@@ -154,6 +170,10 @@ class ExpertOperator final : public ScriptedOperator {
   InputSample Act(const Perception& perception) override;
 
  private:
+  // A loop resisted a pull-back: the assistant presses over it or the
+  // patient is turned (docs/scoring.md, "Calling for help").
+  void CallForHelp(const Perception& perception);
+
   double dt_s_;
   Settings settings_;
   bool reducing_{false};
@@ -162,7 +182,8 @@ class ExpertOperator final : public ScriptedOperator {
   bool started_{false};
   LoopIndex loop_index_;
   double last_reduce_tip_m_{-1.0};
-  double last_stall_reduce_tip_m_{-1.0};  // tip at the last pull-back for a stall
+  double last_stall_reduce_tip_m_{-1.0};  // tip at the last reduction for a stall
+  double last_back_off_tip_m_{-1.0};      // and at the last back-off
   double stall_tip_m_{0.0};
   double stall_since_s_{0.0};
   double settle_until_s_{0.0};
@@ -173,6 +194,16 @@ class ExpertOperator final : public ScriptedOperator {
   double reduce_start_s_{0.0};
   double reduce_start_inserted_m_{0.0};
   double reduce_tip_max_m_{0.0};
+  double reduce_start_loop_m_{0.0};
+  double loose_tip_m_{-1.0};  // tip where the last pull-back found it loose
+  // The assistant's hand and the patient's position.
+  AbdominalPress press_{AbdominalPress::kNone};
+  AbdominalPress pressed_before_{AbdominalPress::kNone};
+  double press_until_tip_m_{0.0};
+  double press_until_s_{0.0};
+  PatientPosition position_{PatientPosition::kSupine};
+  PatientPosition refused_position_{PatientPosition::kSupine};  // turned back from
+  double complaint_since_s_{0.0};  // turned: since when the patient complains
   double knob_up_rad_{0.0};
   double knob_right_rad_{0.0};
   double roll_rad_{0.0};

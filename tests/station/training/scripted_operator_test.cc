@@ -21,12 +21,11 @@ struct LengthRun {
 
 // The scope advances with the tip one to one (no loop the loop index could
 // see) from 1.10 m in; pulled, the scope comes out and the tip holds, as a
-// hooked tip does.
-LengthRun AdvanceWithTheTip(double tip_into_fixed_colon_m) {
+// tip anchored beyond a loop does.
+LengthRun AdvanceWithTheTip() {
   ExpertOperator expert(kDt_s);
   Perception p;
   p.working_length_m = 1.68;
-  p.tip_into_fixed_colon_m = tip_into_fixed_colon_m;
   double inserted_m = 1.10, tip_m = 1.50;
   LengthRun run;
   for (int step = 0; step < 120000 && inserted_m < 1.50; ++step) {
@@ -46,12 +45,12 @@ LengthRun AdvanceWithTheTip(double tip_into_fixed_colon_m) {
   return run;
 }
 
-// Hooked in fixed colon with more scope in than a straight route needs, the
-// expert takes the loop out though the loop index reads none, and stops once
-// the scope is kLoopedLengthMargin_m under the limit (not after the 0.30 m
-// a reduction may take).
+// With more scope in than a straight route needs, the expert takes the loop
+// out though the loop index reads none, and stops once the scope is
+// kLoopedLengthMargin_m under the limit (not after the 0.30 m a reduction
+// may take).
 TEST(ExpertOperator, ReducesWhenTheScopesLengthShowsALoop) {
-  const LengthRun run = AdvanceWithTheTip(ExpertOperator::kHookDepth_m + 0.02);
+  const LengthRun run = AdvanceWithTheTip();
   ASSERT_GT(run.reduce_started_at_m, 0.0) << "no reduction";
   // The hand turns from pushing to pulling within a centimetre or two.
   EXPECT_GT(run.reduce_started_at_m, ExpertOperator::kLoopedLength_m);
@@ -62,15 +61,69 @@ TEST(ExpertOperator, ReducesWhenTheScopesLengthShowsALoop) {
   EXPECT_GT(run.reduce_ended_at_m, stop_m - 0.02);
 }
 
-// Not hooked (the tip in mobile colon) it does not pull back for the length:
-// a tip that is not round a corner would come back with the scope.
-TEST(ExpertOperator, DoesNotReduceForTheLengthUnhooked) {
-  const LengthRun run = AdvanceWithTheTip(0.0);
-  EXPECT_LT(run.reduce_started_at_m, 0.0) << "reduced at " << run.reduce_started_at_m << " m in";
+// What the expert did with a loop whose tip is loose: the tip advances one to
+// one for 5 cm, then stops while the scope goes on (a loop forms); pulled, the
+// tip comes back with the scope.
+struct LooseLoopRun {
+  int pull_backs{0};
+  double longest_pull_m{0.0};  // scope withdrawn in one pull-back
+  AbdominalPress first_press{AbdominalPress::kNone};
+  double pressed_at_tip_m{-1.0};
+  PatientPosition last_position{PatientPosition::kSupine};
+};
+
+LooseLoopRun PushALooseLoop(double start_tip_m, double seconds) {
+  ExpertOperator expert(kDt_s);
+  Perception p;
+  p.working_length_m = 1.68;
+  const double start_inserted_m = start_tip_m + 0.05;
+  double inserted_m = start_inserted_m, tip_m = start_tip_m;
+  double pull_from_m = -1.0;
+  LooseLoopRun run;
+  for (int step = 0; step < seconds / kDt_s; ++step) {
+    p.t_s = step * kDt_s;
+    p.inserted_m = inserted_m;
+    p.tip_arc_m = tip_m;
+    const InputSample in = expert.Act(p);
+    if (in.push_force_N < 0.0 && pull_from_m < 0.0) {
+      pull_from_m = inserted_m;
+      ++run.pull_backs;
+    }
+    if (in.push_force_N > 0.0 && pull_from_m >= 0.0) {
+      run.longest_pull_m = std::max(run.longest_pull_m, pull_from_m - inserted_m);
+      pull_from_m = -1.0;
+    }
+    if (in.abdominal_press != AbdominalPress::kNone && run.first_press == AbdominalPress::kNone) {
+      run.first_press = in.abdominal_press;
+      run.pressed_at_tip_m = tip_m;
+    }
+    run.last_position = in.patient_position;
+    const double move_m = in.push_force_N / kDrag_N_s_per_m * kDt_s;
+    inserted_m += move_m;
+    // The tip follows the scope out, and in only for the first 5 cm.
+    if (move_m < 0.0 || inserted_m < start_inserted_m + 0.05) tip_m += move_m;
+  }
+  return run;
 }
 
-// A scope that does not move however hard it is pushed (the tip in mobile
-// colon, so no stall in fixed colon calls for a pull-back): the hand's force
+// The tip comes back with the scope: the pull-back ends within a few
+// centimetres, and a loop that resists it makes the expert ask the assistant
+// to press over it: the left lower quadrant with the tip short of
+// kSigmoidTip_m, mid-abdomen beyond. When the loop resists again the patient
+// is turned.
+TEST(ExpertOperator, AsksForThePressWhereALoopResistsAPullBack) {
+  const LooseLoopRun sigmoid = PushALooseLoop(0.40, 120.0);
+  ASSERT_GE(sigmoid.pull_backs, 1);
+  EXPECT_LT(sigmoid.longest_pull_m, ExpertOperator::kLoosePull_m + ExpertOperator::kTipBack_m + 0.005);
+  EXPECT_EQ(sigmoid.first_press, AbdominalPress::kLeftLowerQuadrant);
+  const LooseLoopRun transverse = PushALooseLoop(1.00, 120.0);
+  EXPECT_EQ(transverse.first_press, AbdominalPress::kMidAbdomen);
+  ASSERT_GE(sigmoid.pull_backs, 2) << "the loop never resisted twice";
+  EXPECT_NE(sigmoid.last_position, PatientPosition::kSupine);
+}
+
+// A scope that does not move however hard it is pushed (for less than the
+// stall that calls for a pull-back): the hand's force
 // rises toward the speed it wants until its limit, 10 N by default (the level
 // real hands stay under 95 % of the time, docs/scoring.md), and no further.
 TEST(ExpertOperator, PushesAStuckScopeUpToItsLimitAndNoFurther) {
@@ -83,7 +136,7 @@ TEST(ExpertOperator, PushesAStuckScopeUpToItsLimitAndNoFurther) {
     p.inserted_m = 0.50;
     p.tip_arc_m = 0.45;
     double peak_N = 0.0, last_N = 0.0;
-    for (int step = 0; step < 20000; ++step) {
+    for (int step = 0; step < 14000; ++step) {
       p.t_s = step * kDt_s;
       const InputSample in = expert.Act(p);
       ASSERT_GE(in.push_force_N, 0.0) << "pulled at " << p.t_s << " s";

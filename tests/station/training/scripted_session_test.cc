@@ -13,6 +13,7 @@
 #include "station/training/lesson_gate.h"
 #include "station/training/scripted_operator.h"
 #include "station/training/session.h"
+#include "station/training/session_runner.h"
 #include "station/training/session_file.h"
 
 namespace ves::training {
@@ -29,6 +30,7 @@ struct Pair {
   RunResult novice;
   RunResult expert;
   v1::SessionRecord expert_record;
+  double expert_over_10N_share{0.0};  // of the expert's steps, base force over 10 N
 };
 
 Pair RunBoth(const char* case_id, double seconds) {
@@ -39,8 +41,13 @@ Pair RunBoth(const char* case_id, double seconds) {
   v1::SessionRecord novice_record;
   p.novice = RunScriptedCase(colon_case, DefaultEndoscopeSpec(), options, "novice", seconds, 0,
                              &novice_record);
+  long steps = 0, over_10N = 0;
   p.expert = RunScriptedCase(colon_case, DefaultEndoscopeSpec(), options, "expert", seconds, 0,
-                             &p.expert_record);
+                             &p.expert_record, [&](const InputSample&, const SessionRunner& runner) {
+                               ++steps;
+                               if (runner.output().base_force_N > 10.0) ++over_10N;
+                             });
+  p.expert_over_10N_share = steps > 0 ? static_cast<double>(over_10N) / steps : 0.0;
   std::printf("%s novice: %s max_tip_arc_m=%.3f\n%s expert: %s max_tip_arc_m=%.3f\n", case_id,
               SummaryLine(p.novice).c_str(), p.novice.metrics.max_tip_arc_m, case_id,
               SummaryLine(p.expert).c_str(), p.expert.metrics.max_tip_arc_m);
@@ -77,14 +84,17 @@ TEST_P(SkillSeparation, ExpertLoopsNoMoreAndUsesNoXrayEarly) {
   EXPECT_EQ(replayed, p.expert);
 }
 
-// Issue #17's criteria for the expert on every full colon: the cecum within
-// 600 s (the issue's limit), no damage event (the 14 N level, docs/scoring.md),
-// within 10 N at the hand (10 ms means) for the whole run, and the session
-// replays from its file alone to the same result.
+// Issue #47's criteria for the expert on every full colon: the cecum within
+// 600 s, no damage event (the 14 N level, docs/scoring.md), the force at the
+// hand within 10 N 95 % of the time and within 45 N at its peak (10 ms means;
+// real hands, Appleyard et al., GIE 2000: the assistant's press pushes the
+// colon back against the scope), and the session replays from its file alone
+// to the same result.
 void ExpectTheExpertArrivesCleanly(const Pair& p) {
   ASSERT_EQ(p.expert.outcome, Outcome::kCecumReached) << SummaryLine(p.expert);
   EXPECT_EQ(p.expert.metrics.damage_events, 0u) << SummaryLine(p.expert);
-  EXPECT_LE(p.expert.metrics.peak_insertion_force_N, 10.0) << SummaryLine(p.expert);
+  EXPECT_LE(p.expert_over_10N_share, 0.05) << SummaryLine(p.expert);
+  EXPECT_LE(p.expert.metrics.peak_insertion_force_N, 45.0) << SummaryLine(p.expert);
   const RunResult replayed = ReplayRecord(DecodeSessionFile(EncodeSessionFile(p.expert_record)));
   EXPECT_EQ(replayed, p.expert);
 }
