@@ -85,6 +85,8 @@ class PgStore final : public Store {
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
   StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
+  StoreStatus PutSessionSeries(const SessionSeriesRow& row) override;
+  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) override;
 
   int schema_version() const { return schema_version_; }
 

@@ -252,6 +252,20 @@ struct LessonVerdictRow {
   bool operator==(const LessonVerdictRow&) const = default;
 };
 
+// The web pages' series of one session (docs/web.md, "Session series"): the
+// plots' data and a thinned replay track as JSON text, computed once from the
+// input log. A newer `format_version` replaces an older one.
+struct SessionSeriesRow {
+  std::string session_uuid;
+  int format_version = 0;
+  int64_t computed_unix_ms = 0;
+  std::string json;  // at most kMaxSessionSeriesBytes
+  bool operator==(const SessionSeriesRow&) const = default;
+};
+inline constexpr size_t kMaxSessionSeriesBytes = 2u << 20;
+// Ok, or kInvalidArgument naming what is wrong (no uuid, empty, over the bound).
+StoreStatus CheckSessionSeries(const SessionSeriesRow& row);
+
 // What one group commit writes, in one durable transaction.
 struct WriteBatch {
   std::vector<SessionRow> sessions;
@@ -361,6 +375,14 @@ class Store {
   // replay and takes it back when it stops cleanly, so what remains counts
   // replays that never finished (a crash).
   virtual StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) = 0;
+
+  // ---- Session series (docs/web.md) ----
+  // Stores (or replaces) the session's series; kNotFound when no such
+  // session, kInvalidArgument when the JSON is empty or over
+  // kMaxSessionSeriesBytes.
+  virtual StoreStatus PutSessionSeries(const SessionSeriesRow& row) = 0;
+  // kNotFound when none was stored.
+  virtual StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

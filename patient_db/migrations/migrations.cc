@@ -160,6 +160,14 @@ CREATE TABLE stations (
   PRIMARY KEY (institution, station_id)
 );
 )sql"},
+      {6, "session series: the web pages' plots and replay track, computed once", R"sql(
+CREATE TABLE session_series (
+  session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
+  format_version INTEGER NOT NULL,
+  computed_unix_ms BIGINT NOT NULL,
+  series BLOB NOT NULL
+);
+)sql"},
   };
   return kMigrations;
 }

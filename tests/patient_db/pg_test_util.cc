@@ -120,6 +120,10 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
+  StoreStatus PutSessionSeries(const SessionSeriesRow&) override { return Skipped(); }
+  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string&) override {
+    return Skipped();
+  }
 
  private:
   static StoreStatus Skipped() {
