@@ -11,6 +11,7 @@
 #include "server/pipeline.h"
 #include "server/services.h"
 #include "server/session_check.h"
+#include "server/session_series.h"
 
 namespace ves::server {
 
@@ -324,10 +325,11 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.station = StationReportOf(rec, institution.value, row.stored_unix_ms);
   const std::string body_sha = row.body_sha256_hex;
   LessonJudge* judge = rec.lesson_id().empty() ? nullptr : deps_.judge;
+  SessionSeries* series = deps_.series;
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
-      [reactor, response, body_sha, judge, institution = institution.value](
+      [reactor, response, body_sha, judge, series, institution = institution.value](
           const patient_db::StoreStatus& status,
                                            const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
@@ -352,6 +354,9 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
         }
         if (judge && result.outcome == patient_db::SessionPut::kStored) {
           judge->Enqueue(result.first.uuid);  // durable now; judged off the gRPC threads
+        }
+        if (series && result.outcome == patient_db::SessionPut::kStored) {
+          series->Enqueue(result.first.uuid);  // the session page's plots, computed once
         }
         response->set_uuid(result.first.uuid);
         response->set_body_sha256_hex(result.first.body_sha256_hex);

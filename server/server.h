@@ -13,6 +13,7 @@
 #include "server/live_pg_relay.h"
 #include "server/live_service.h"
 #include "server/services.h"
+#include "server/session_series.h"
 #include "server/session_writer.h"
 
 // The ves-server process in a class: services, group-commit writer, TLS,
@@ -60,6 +61,7 @@ class VesServer {
   void Shutdown(std::chrono::milliseconds grace);
   uint64_t commit_batches() const { return writer_->batches(); }
   LessonJudge& judge() { return *judge_; }
+  SessionSeries& series() { return *series_; }
 
  private:
   ServerOptions options_;
@@ -73,6 +75,7 @@ class VesServer {
   std::unique_ptr<TraineesService> trainees_;
   std::unique_ptr<AdminService> admin_;
   std::unique_ptr<LessonJudge> judge_;
+  std::unique_ptr<SessionSeries> series_;
   std::unique_ptr<LessonsService> lessons_;
   std::unique_ptr<LiveService> live_service_;
   std::unique_ptr<grpc::Server> server_;

@@ -15,6 +15,7 @@
 #include "server/live_hub.h"
 #include "server/pipeline.h"
 #include "server/session_check.h"
+#include "server/session_series.h"
 #include "server/web_assets.h"
 #include "ves/v1/lesson.pb.h"
 
@@ -659,6 +660,18 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                            {"lessons", lessons}});
   }
 
+  // sessions/{uuid}/series: the page's plots and replay track, computed once
+  if (path.size() == 3 && path[0] == "sessions" && path[2] == "series") {
+    v1::GetSessionRequest req;
+    req.set_uuid(path[1]);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    HttpReply r;
+    s = SessionSeriesCall(deps_, who, req, &r.body);
+    if (!s.ok()) return ErrorOf(s);
+    return r;
+  }
+
   // sessions/{uuid} and sessions/{uuid}/replay
   if ((path.size() == 2 || (path.size() == 3 && path[2] == "replay")) && path[0] == "sessions") {
     v1::GetSessionRequest req;
@@ -683,7 +696,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                  has_health ? StationHealthJson(resp.record().station_health()) : json(nullptr)},
                 {"station_health_flags", has_health
                                              ? json(StationHealthFlags(resp.record().station_health()))
-                                             : json::array()}});
+                                             : json::array()},
+                {"lesson_verdict", LessonVerdictJson(*deps_.store, resp.record())}});
     }
     static const CallSpec spec{"session.replay",
                                {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},

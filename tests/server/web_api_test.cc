@@ -92,6 +92,7 @@ const std::vector<std::string>& ApiGetRoutes() {
       "/api/v1/trainees/t1/curve",
       "/api/v1/sessions/00000000-0000-4000-8000-000000000000",
       "/api/v1/sessions/00000000-0000-4000-8000-000000000000/replay",
+      "/api/v1/sessions/00000000-0000-4000-8000-000000000000/series",
       "/api/v1/groups/g1/progress",
       "/api/v1/audit",
       "/api/v1/live",
