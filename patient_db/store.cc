@@ -93,8 +93,8 @@ StoreStatus CheckSessionSeries(const SessionSeriesRow& row) {
   }
   if (row.json.empty() || row.json.size() > kMaxSessionSeriesBytes) {
     return StoreStatus::Error(StoreCode::kInvalidArgument,
-                              "session series of '" + row.session_uuid + "': " +
-                                  std::to_string(row.json.size()) + " bytes, not 1.." +
+                              "session series of '" + row.session_uuid +
+                                  "': " + std::to_string(row.json.size()) + " bytes, not 1.." +
                                   std::to_string(kMaxSessionSeriesBytes));
   }
   return StoreStatus::Ok();

@@ -330,8 +330,7 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
       [reactor, response, body_sha, judge, series, institution = institution.value](
-          const patient_db::StoreStatus& status,
-                                           const patient_db::SessionPutResult& result) {
+          const patient_db::StoreStatus& status, const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
           reactor->Finish(ToGrpcStatus(status));
           return;

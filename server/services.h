@@ -41,7 +41,7 @@ struct ServiceDeps {
   Authenticator* auth = nullptr;
   LessonJudge* judge = nullptr;  // lesson sessions are queued here once stored (may be null)
   LiveHub* live = nullptr;       // live proctoring (may be null: no Live service)
-  SessionSeries* series = nullptr;  // the session pages' series, computed after upload (may be null)
+  SessionSeries* series = nullptr;  // session pages' series, computed on upload (may be null)
 };
 
 // Recently served case bundles by hash (content-addressed, so never stale).

@@ -33,14 +33,14 @@ bool Kept(size_t i, size_t n, size_t stride) { return i % stride == 0 || i + 1 =
 json SeriesJson(const std::string& uuid, const SessionReplay& replay, double series_hz,
                 double shape_hz) {
   const size_t n = replay.frames.size();
-  const size_t plot_stride = std::max<size_t>(1, (n + kSeriesMaxPlotFrames - 2) /
-                                                     (kSeriesMaxPlotFrames - 1));
+  const size_t plot_stride =
+      std::max<size_t>(1, (n + kSeriesMaxPlotFrames - 2) / (kSeriesMaxPlotFrames - 1));
   size_t shapes = 0;
   for (size_t i = 0; i < n; ++i) {
     if (Kept(i, n, plot_stride) && !replay.frames[i].scope_mm.empty()) ++shapes;
   }
-  const size_t shape_stride = std::max<size_t>(
-      1, (shapes + kSeriesMaxShapeFrames - 2) / (kSeriesMaxShapeFrames - 1));
+  const size_t shape_stride =
+      std::max<size_t>(1, (shapes + kSeriesMaxShapeFrames - 2) / (kSeriesMaxShapeFrames - 1));
   json frames = json::array();
   size_t shape_index = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -120,7 +120,9 @@ json LessonVerdictJson(patient_db::Store& store, const v1::SessionRecord& record
     }
     checks.push_back({{"text", line}, {"passed", passed}});
   }
-  return {{"status", v.rejected ? "rejected" : v.passed ? "passed" : "failed"},
+  return {{"status", v.rejected ? "rejected"
+                     : v.passed ? "passed"
+                                : "failed"},
           {"lesson_id", v.lesson_id},
           {"curriculum_id", v.curriculum_id},
           {"score", v.score},
@@ -244,9 +246,9 @@ Status SessionSeries::Get(const std::string& uuid, const v1::SessionRecord& reco
   {
     std::lock_guard lock(mutex_);
     if (computing_.count(uuid) > 0) {
-      return Status(StatusCode::RESOURCE_EXHAUSTED,
-                    "the series of session " + uuid +
-                        " is being computed; ask again in a few seconds");
+      return Status(
+          StatusCode::RESOURCE_EXHAUSTED,
+          "the series of session " + uuid + " is being computed; ask again in a few seconds");
     }
     if (lazy_running_ >= kMaxConcurrentLazySeries) {
       return Status(StatusCode::RESOURCE_EXHAUSTED,

@@ -42,8 +42,8 @@ inline constexpr int kMaxConcurrentLazySeries = 2;
 // The series of a replay, thinned to the bounds above: {"v", "uuid",
 // "duration_s", "series_hz", "shape_hz", "pain_stretch_m", "cecum_arc_m",
 // "final_tip_arc_m", "summary", "frames"} (frames as the /replay route's).
-nlohmann::json SeriesJson(const std::string& uuid, const SessionReplay& replay,
-                          double series_hz, double shape_hz);
+nlohmann::json SeriesJson(const std::string& uuid, const SessionReplay& replay, double series_hz,
+                          double shape_hz);
 
 // Re-runs the record and returns its series as JSON text (HTML-safe). Throws
 // as ReplaySession does (ReplayCancelled once `cancel` is true).
@@ -99,11 +99,12 @@ class SessionSeries {
   patient_db::Store* store_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<std::string> queue_;   // guarded by mutex_
-  std::set<std::string> computing_;  // guarded by mutex_
-  int lazy_running_ = 0;            // guarded by mutex_
-  bool stopping_ = false;           // guarded by mutex_
-  uint64_t computed_in_background_ = 0, computed_on_view_ = 0;  // guarded by mutex_
+  std::deque<std::string> queue_;        // guarded by mutex_
+  std::set<std::string> computing_;      // guarded by mutex_
+  int lazy_running_ = 0;                 // guarded by mutex_
+  bool stopping_ = false;                // guarded by mutex_
+  uint64_t computed_in_background_ = 0;  // guarded by mutex_
+  uint64_t computed_on_view_ = 0;        // guarded by mutex_
   std::atomic<bool> cancel_{false};
   std::thread thread_;
 };

@@ -204,8 +204,8 @@ int main(int argc, char** argv) {
   // the cecum, so the session runs to its time limit).
   const auto t_run = Clock::now();
   ves::v1::SessionRecord long_session;
-  const auto colon_case = ves::patient_db::LoadCaseFile(std::filesystem::path(VES_SOURCE_DIR) /
-                                                        "patient_db/cases/standard-adult.textproto");
+  const auto colon_case = ves::patient_db::LoadCaseFile(
+      std::filesystem::path(VES_SOURCE_DIR) / "patient_db/cases/standard-adult.textproto");
   ves::training::RunScriptedCase(colon_case, ves::v1::EndoscopeSpec(), {}, "novice",
                                  session_seconds, 1'700'000'000'000, &long_session);
   long_session.set_trainee_id("trainee-0");
@@ -282,8 +282,8 @@ int main(int argc, char** argv) {
                                 "/api/v1/sessions/" + uuid, "/api/v1/sessions/" + uuid + "/series"},
                                port, token, page_loads, &page_bytes);
   size_t series_bytes = 0;
-  const Stats ss = MeasurePage({"/api/v1/sessions/" + uuid + "/series"}, port, token, page_loads,
-                               &series_bytes);
+  const Stats ss =
+      MeasurePage({"/api/v1/sessions/" + uuid + "/series"}, port, token, page_loads, &series_bytes);
   const double cpu = CpuSeconds() - cpu0;
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
   std::printf(

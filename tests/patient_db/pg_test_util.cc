@@ -121,9 +121,7 @@ class SkippedStore final : public Store {
   }
   StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
   StoreStatus PutSessionSeries(const SessionSeriesRow&) override { return Skipped(); }
-  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string&) override {
-    return Skipped();
-  }
+  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string&) override { return Skipped(); }
 
  private:
   static StoreStatus Skipped() {

@@ -609,8 +609,8 @@ TEST_P(StoreContract, SessionSeriesAreStoredReadBackAndBounded) {
 
   EXPECT_EQ(store_->PutSessionSeries({"no-such-session", 1, 1, "{}"}).code, StoreCode::kNotFound);
   EXPECT_EQ(store_->GetSessionSeries("no-such-session").status.code, StoreCode::kNotFound);
-  const StoreStatus big = store_->PutSessionSeries(
-      {"s-series", 3, 1, std::string(kMaxSessionSeriesBytes + 1, 'x')});
+  const StoreStatus big =
+      store_->PutSessionSeries({"s-series", 3, 1, std::string(kMaxSessionSeriesBytes + 1, 'x')});
   EXPECT_EQ(big.code, StoreCode::kInvalidArgument);
   EXPECT_NE(big.message.find("bytes"), std::string::npos) << big.message;
   EXPECT_EQ(store_->PutSessionSeries({"s-series", 3, 1, ""}).code, StoreCode::kInvalidArgument);

@@ -235,14 +235,15 @@ int main(int argc, char** argv) {
         std::cerr << "web_seed: cannot store the session\n";
         return 1;
       }
-      std::cout << nlohmann::json{{"uuid", record.uuid()}, {"final_tip_arc_m", final_tip_arc_m}}
-                       .dump()
-                << "\n";
+      std::cout
+          << nlohmann::json{{"uuid", record.uuid()}, {"final_tip_arc_m", final_tip_arc_m}}.dump()
+          << "\n";
       return 0;
     }
     if (mode == "lesson" && argc == 6) return SeedPassedLesson(argv[2], argv[3], argv[4], argv[5]);
     std::cerr << "usage: web_seed setup DB_URL | web_seed upload ADDRESS TOKEN TRAINEE "
-                 "OPERATOR SECONDS [STATION_ID faulty] | web_seed store DB_URL TRAINEE OPERATOR SECONDS | "
+                 "OPERATOR SECONDS [STATION_ID faulty] | web_seed store DB_URL TRAINEE OPERATOR "
+                 "SECONDS | "
                  "web_seed lesson ADDRESS SUPERVISOR_TOKEN "
                  "STATION_TOKEN TRAINEE\n";
     return 2;

@@ -4,8 +4,6 @@
 // without one, then stored; a third concurrent computation answers 429 and a
 // later ask succeeds; bounded for long sessions; the lesson verdict on the
 // session's JSON.
-#include "server/session_series.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -15,6 +13,7 @@
 
 #include "patient_db/case_bundle.h"
 #include "server/auth.h"
+#include "server/session_series.h"
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
@@ -46,8 +45,8 @@ class WebSeriesTest : public ::testing::Test {
   ves::v1::SessionRecord Scripted(double seconds, double* final_tip_arc_m = nullptr) {
     ves::v1::SessionRecord record;
     training::RunScriptedCase(
-        SampleCase(), ves::v1::EndoscopeSpec(), {}, "expert", seconds, 1'700'000'000'000,
-        &record, [&](const training::InputSample&, const training::SessionRunner& runner) {
+        SampleCase(), ves::v1::EndoscopeSpec(), {}, "expert", seconds, 1'700'000'000'000, &record,
+        [&](const training::InputSample&, const training::SessionRunner& runner) {
           if (final_tip_arc_m) *final_tip_arc_m = runner.observation().tip_arc_m;
         });
     record.set_trainee_id("t1");
@@ -159,9 +158,8 @@ TEST_F(WebSeriesTest, AThirdConcurrentComputationIsBusyAndALaterAskSucceeds) {
   std::vector<HttpResult> results(3);
   std::vector<std::thread> threads;
   for (int i = 0; i < 3; ++i) {
-    threads.emplace_back([&, i] {
-      results[i] = Get("/api/v1/sessions/" + uuids[i] + "/series", supervisor_);
-    });
+    threads.emplace_back(
+        [&, i] { results[i] = Get("/api/v1/sessions/" + uuids[i] + "/series", supervisor_); });
   }
   for (auto& t : threads) t.join();
   int ok = 0, busy = 0;
