@@ -20,38 +20,18 @@
 #include <string>
 #include <vector>
 
+#include "bench/server/web_latency.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/server.h"
 #include "station/training/input_log.h"
-#include "tests/server/web_client.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-struct Stats {
-  double p50_ms, p99_ms, max_ms;
-};
-
-Stats Measure(const std::vector<std::string>& targets, int port, const std::string& token,
-              int requests) {
-  std::vector<double> ms;
-  for (int i = 0; i < requests; ++i) {
-    const std::string& target = targets[i % targets.size()];
-    const auto start = Clock::now();
-    const auto r =
-        ves::server::testing::HttpCall(port, "GET", target, {{"Authorization", "Bearer " + token}});
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-    if (r.status != 200) {
-      std::fprintf(stderr, "web_bench: %s answered %d: %s\n", target.c_str(), r.status,
-                   r.body.c_str());
-      std::exit(1);
-    }
-  }
-  std::sort(ms.begin(), ms.end());
-  return {ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 99 / 100)], ms.back()};
-}
+using Stats = ves::bench::LatencyStats;
+constexpr auto Measure = ves::bench::MeasureGets;
 
 double CpuSeconds() {
   rusage u{};

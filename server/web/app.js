@@ -108,7 +108,7 @@ async function traineesPage() {
         link(t.trainee_id, '/trainee.html?id=' + encodeURIComponent(t.trainee_id)),
         t.display_name,
         t.group ? link(t.group, '/group.html?group=' + encodeURIComponent(t.group)) : '—',
-        curriculaCell(t.curricula), t.sessions, when(t.last_activity_unix_ms)]));
+        t.sessions, when(t.last_activity_unix_ms), curriculaCell(t.curricula)]));
       if (t.group) groups.add(t.group);
     }
     token = page.next_page_token;
