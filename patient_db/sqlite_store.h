@@ -38,6 +38,10 @@ class SqliteStore final : public Store {
                                                     const std::string& case_id,
                                                     const ListPage& page = {}) override;
   StoreResult<int64_t> CountSessions() override;
+  StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string& institution,
+                                                            const std::string& case_id,
+                                                            const std::string& operator_kind,
+                                                            int limit) override;
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) override;
   StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,

@@ -167,6 +167,10 @@ struct SessionRow {
   double score = 0;
   std::string operator_kind;  // "human", "novice", "expert"; "" for rows stored before it
   double max_tip_arc_m = 0;   // the deepest tip position; 0 for rows stored before it
+  // Time in a loop and with fluoroscopy on (metrics loop_s, xray_s), for the
+  // cohort page; -1: not known (rows stored before they were kept).
+  double loop_s = -1;
+  double xray_s = -1;
   std::string body_sha256_hex;
   int64_t stored_unix_ms = 0;
   std::string body;  // serialized ves.v1.SessionRecord; empty in listings
@@ -322,6 +326,12 @@ class Store {
                                                             const std::string& case_id,
                                                             const ListPage& page = {}) = 0;
   virtual StoreResult<int64_t> CountSessions() = 0;
+  // The institution's sessions of a case run by `operator_kind` ("expert":
+  // the scripted expert), newest first, at most `limit`, without bodies or
+  // lesson ids: the expert band of a learning curve (docs/web.md).
+  virtual StoreResult<std::vector<SessionRow>> ListOperatorSessions(
+      const std::string& institution, const std::string& case_id,
+      const std::string& operator_kind, int limit) = 0;
   // The trainee's session count and latest end_unix_ms (0, 0 with none), for
   // each of `trainee_ids` in order: one read, without listing the rows.
   virtual StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(

@@ -317,6 +317,8 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.score = rec.score();
   row.operator_kind = rec.operator_kind();
   row.max_tip_arc_m = rec.metrics().max_tip_arc_m();
+  row.loop_s = rec.metrics().loop_s();
+  row.xray_s = rec.metrics().xray_s();
   row.body = DeterministicBytes(rec);
   row.body_sha256_hex = Sha256HexOf(row.body);
   row.stored_unix_ms = NowUnixMs();

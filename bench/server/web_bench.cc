@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/server/web_latency.h"
 #include "patient_db/case_format.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
@@ -40,28 +41,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-struct Stats {
-  double p50_ms, p99_ms, max_ms;
-};
-
-Stats Measure(const std::vector<std::string>& targets, int port, const std::string& token,
-              int requests) {
-  std::vector<double> ms;
-  for (int i = 0; i < requests; ++i) {
-    const std::string& target = targets[i % targets.size()];
-    const auto start = Clock::now();
-    const auto r =
-        ves::server::testing::HttpCall(port, "GET", target, {{"Authorization", "Bearer " + token}});
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-    if (r.status != 200) {
-      std::fprintf(stderr, "web_bench: %s answered %d: %s\n", target.c_str(), r.status,
-                   r.body.c_str());
-      std::exit(1);
-    }
-  }
-  std::sort(ms.begin(), ms.end());
-  return {ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 99 / 100)], ms.back()};
-}
+using Stats = ves::bench::LatencyStats;
+constexpr auto Measure = ves::bench::MeasureGets;
 
 // One load of a session page: what session.html asks for, one after another
 // (a browser asks some of them at once: this is the slower case).

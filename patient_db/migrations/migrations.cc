@@ -168,6 +168,12 @@ CREATE TABLE session_series (
   series BLOB NOT NULL
 );
 )sql"},
+      // -1: not known (stored before version 7; the record's body has it).
+      {7, "sessions: loop and X-ray time for cohort listings; scripted runs by case", R"sql(
+ALTER TABLE sessions ADD COLUMN loop_s DOUBLE PRECISION NOT NULL DEFAULT -1;
+ALTER TABLE sessions ADD COLUMN xray_s DOUBLE PRECISION NOT NULL DEFAULT -1;
+CREATE INDEX sessions_by_case_operator ON sessions(institution, case_id, operator_kind, start_unix_ms);
+)sql"},
   };
   return kMigrations;
 }

@@ -110,15 +110,17 @@ async function traineesPage() {
       body.appendChild(row([
         link(t.trainee_id, '/trainee.html?id=' + encodeURIComponent(t.trainee_id)),
         t.display_name,
-        t.group ? link(t.group, '/progress.html?group=' + encodeURIComponent(t.group)) : '—',
-        t.sessions, when(t.last_activity_unix_ms)]));
+        t.group ? link(t.group, '/group.html?group=' + encodeURIComponent(t.group)) : '—',
+        t.sessions, when(t.last_activity_unix_ms), curriculaCell(t.curricula)]));
       if (t.group) groups.add(t.group);
     }
     token = page.next_page_token;
   } while (token);
   for (const g of [...groups].sort()) {
     const li = el('li');
-    li.appendChild(link(g, '/progress.html?group=' + encodeURIComponent(g)));
+    li.appendChild(link(g, '/group.html?group=' + encodeURIComponent(g)));
+    li.appendChild(document.createTextNode(' · '));
+    li.appendChild(link('lesson progress', '/progress.html?group=' + encodeURIComponent(g)));
     $('groups').appendChild(li);
   }
 }
@@ -129,7 +131,10 @@ function lineChart(canvas, title, yLabel, datasets) {
     data: {datasets: datasets},
     options: {
       animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
-      plugins: {title: {display: true, text: title}, legend: {display: datasets.length > 1}},
+      plugins: {title: {display: true, text: title},
+                // The expert band's lower edge is drawn, not named.
+                legend: {display: datasets.length > 1,
+                         labels: {filter: (item) => item.text !== 'expert low'}}},
       scales: {x: {type: 'linear', title: {display: true, text: 'attempt'}, ticks: {precision: 0}},
                y: {title: {display: true, text: yLabel}, beginAtZero: true}}
     }
@@ -141,7 +146,8 @@ function outcomeText(outcome) {
   return String(outcome || '').replace(/^OUTCOME_/, '').toLowerCase().replace(/_/g, ' ');
 }
 
-function curveBlock(container, kind, name, points, median, pass) {
+// `band`: the scripted expert's runs of the case (docs/web.md, "Proficiency").
+function curveBlock(container, kind, name, points, median, pass, band) {
   const block = el('section', null, {class: 'curve', id: 'curve-' + kind + '-' + name});
   block.appendChild(el('h3', (kind === 'case' ? 'Case ' : 'Lesson ') + name));
   const metrics = [['score', 'Score', '/100'], ['time_to_cecum_s', 'Time to cecum', 's'],
@@ -163,6 +169,15 @@ function curveBlock(container, kind, name, points, median, pass) {
       sets.push({label: 'pass line', data: [{x: 1, y: pass[key]}, {x: Math.max(last, 2), y: pass[key]}],
                  borderColor: '#2a2', pointRadius: 0, backgroundColor: '#2a2'});
     }
+    if (band && band[key] && points.length) {
+      const last = Math.max(points[points.length - 1].attempt, 2);
+      const [lo, hi] = band[key];
+      sets.push({label: 'expert low', data: [{x: 1, y: lo}, {x: last, y: lo}],
+                 borderColor: 'rgba(220,120,0,0.7)', pointRadius: 0, borderWidth: 1});
+      sets.push({label: 'expert band (' + band.runs + ' runs)', data: [{x: 1, y: hi}, {x: last, y: hi}],
+                 borderColor: 'rgba(220,120,0,0.7)', pointRadius: 0, borderWidth: 1,
+                 fill: '-1', backgroundColor: 'rgba(220,120,0,0.18)'});
+    }
     container.appendChild(block);
     charts.push(lineChart(canvas, title, unit, sets));
   }
@@ -178,6 +193,7 @@ function curveBlock(container, kind, name, points, median, pass) {
                            link('open', '/session.html?uuid=' + encodeURIComponent(p.uuid))]));
   }
   block.appendChild(table);
+  if (band) block.appendChild(el('p', expertBandText(band), {class: 'expert-band'}));
   ves.charts[kind + ':' + name] = charts;
 }
 
@@ -187,8 +203,13 @@ async function traineePage() {
   $('trainee-id').textContent = id;
   const curve = await api('trainees/' + encodeURIComponent(id) + '/curve');
   $('trainee-group').textContent = curve.group || '—';
-  for (const c of curve.cases) curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null);
-  for (const l of curve.lessons) curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line);
+  $('report-link').href = '/report.html?id=' + encodeURIComponent(id);
+  for (const c of curve.cases) {
+    curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null, c.expert_band);
+  }
+  for (const l of curve.lessons) {
+    curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line, l.expert_band);
+  }
   // The CSV export of the sessions between the chosen days (docs/web.md, "Export").
   const exportLink = () => {
     let range = '';

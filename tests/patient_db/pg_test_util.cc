@@ -82,6 +82,10 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
+  StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string&, const std::string&,
+                                                            const std::string&, int) override {
+    return Skipped();
+  }
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>&) override {
     return Skipped();

@@ -308,6 +308,55 @@ TEST_P(StoreContract, SessionsReadBackTheLessonTheyName) {
   EXPECT_EQ(store_->GetSession("u2").value.lesson_id, "");
 }
 
+TEST_P(StoreContract, SessionsKeepLoopAndXrayTimeAndListAnOperatorsRunsOfACase) {
+  ASSERT_TRUE(store_->AddTrainee({"s1", "south", "South One", 10}).ok());
+  WriteBatch b;
+  SessionRow expert_old = Session("u1", "a", 100);
+  expert_old.operator_kind = "expert";
+  expert_old.loop_s = 2.5;
+  expert_old.xray_s = 7.25;
+  SessionRow expert_new = Session("u2", "b", 300);
+  expert_new.operator_kind = "expert";
+  SessionRow other_case = Session("u3", "c", 200);
+  other_case.operator_kind = "expert";
+  other_case.case_id = "redundant-sigmoid";
+  SessionRow novice = Session("u4", "d", 400);  // operator "novice"
+  SessionRow unknown = Session("u5", "e", 500);
+  unknown.operator_kind = "expert";
+  unknown.loop_s = -1;  // a row that never had them: read back as not known
+  unknown.xray_s = -1;
+  SessionRow south = Session("u6", "f", 600);
+  south.trainee_id = "s1";
+  south.institution = "south";
+  south.operator_kind = "expert";
+  b.sessions = {expert_old, expert_new, other_case, novice, unknown, south};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto one = store_->GetSession("u1");
+  ASSERT_TRUE(one.ok()) << one.status.message;
+  EXPECT_EQ(one.value.loop_s, 2.5);
+  EXPECT_EQ(one.value.xray_s, 7.25);
+  auto listed = store_->ListSessions("t1", "");
+  ASSERT_TRUE(listed.ok()) << listed.status.message;
+  ASSERT_EQ(listed.value.size(), 5u);
+  EXPECT_EQ(listed.value[0].loop_s, 2.5);
+  EXPECT_EQ(listed.value[0].xray_s, 7.25);
+  EXPECT_EQ(listed.value[4].loop_s, -1);
+  // The north expert's runs of standard-adult, newest first, bounded.
+  auto runs = store_->ListOperatorSessions("north", "standard-adult", "expert", 10);
+  ASSERT_TRUE(runs.ok()) << runs.status.message;
+  std::vector<std::string> uuids;
+  for (const auto& r : runs.value) uuids.push_back(r.uuid);
+  EXPECT_EQ(uuids, (std::vector<std::string>{"u5", "u2", "u1"}));
+  EXPECT_EQ(runs.value[2].loop_s, 2.5);
+  EXPECT_EQ(runs.value[2].body, "");
+  auto two = store_->ListOperatorSessions("north", "standard-adult", "expert", 2);
+  ASSERT_TRUE(two.ok());
+  EXPECT_EQ(two.value.size(), 2u);
+  EXPECT_TRUE(store_->ListOperatorSessions("south", "redundant-sigmoid", "expert", 10)
+                  .value.empty());
+}
+
 TEST_P(StoreContract, TraineeActivityCountsSessionsAndTheLatestEnd) {
   ASSERT_TRUE(store_->AddTrainee({"t2", "north", "Trainee Two", 10}).ok());
   WriteBatch b;
@@ -703,6 +752,72 @@ TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
   ASSERT_TRUE(store.CommitBatch(b).ok());
   ASSERT_EQ(store.ListStations("north").value.size(), 1u);
   EXPECT_EQ(store.ListStations("north").value[0], report);
+  std::filesystem::remove(path);
+}
+
+// A database of schema 6 with a session stored: migration 7 reads that
+// session's loop and X-ray time back as not known (-1), not as 0 s, and
+// keeps the figures of sessions stored after it.
+TEST(SqliteStore, MigrationSevenLeavesOlderSessionsLoopAndXrayTimeUnknown) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("ves_migrate7_" + std::to_string(::getpid()) + ".db");
+  std::filesystem::remove(path);
+  {
+    SqliteDb db(path.string());
+    std::string error;
+    ASSERT_TRUE(
+        db.Exec("CREATE TABLE schema_migrations (version INTEGER PRIMARY KEY, "
+                "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
+                &error))
+        << error;
+    for (const Migration& m : SqlMigrations()) {
+      if (m.version > 6) break;
+      ASSERT_TRUE(db.Exec(m.sql, &error)) << error;
+      ASSERT_TRUE(db.Exec(
+          "INSERT INTO schema_migrations VALUES (" + std::to_string(m.version) + ", 'old', 1)",
+          &error))
+          << error;
+    }
+    for (const char* sql :
+         {"INSERT INTO institutions (name, created_unix_ms) VALUES ('north', 1)",
+          "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
+          "VALUES ('t1', 'north', 'T', 1)",
+          "INSERT INTO sessions (uuid, trainee_id, institution, case_id, case_version, "
+          "station_id, start_unix_ms, end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, "
+          "score, body_sha256_hex, stored_unix_ms, body, operator_kind, max_tip_arc_m) VALUES "
+          "('old', 't1', 'north', 'c', 1, 'st', 10, 20, 1, 1, 5, 1, 50, 'h', 30, x'00', "
+          "'expert', 0.5)"}) {
+      ASSERT_TRUE(db.Exec(sql, &error)) << error;
+    }
+  }
+  SqliteStore store(path.string());
+  auto old = store.GetSession("old");
+  ASSERT_TRUE(old.ok()) << old.status.message;
+  EXPECT_EQ(old.value.loop_s, -1);
+  EXPECT_EQ(old.value.xray_s, -1);
+  EXPECT_EQ(old.value.score, 50);
+  SessionRow row;
+  row.uuid = "new";
+  row.trainee_id = "t1";
+  row.institution = "north";
+  row.case_id = "c";
+  row.case_version = 1;
+  row.operator_kind = "expert";
+  row.start_unix_ms = 40;
+  row.loop_s = 3.5;
+  row.xray_s = 0;
+  row.body_sha256_hex = "h2";
+  row.body = "b";
+  WriteBatch b;
+  b.sessions = {row};
+  ASSERT_TRUE(store.CommitBatch(b).ok());
+  auto runs = store.ListOperatorSessions("north", "c", "expert", 10);
+  ASSERT_TRUE(runs.ok()) << runs.status.message;
+  ASSERT_EQ(runs.value.size(), 2u);
+  EXPECT_EQ(runs.value[0].uuid, "new");
+  EXPECT_EQ(runs.value[0].loop_s, 3.5);
+  EXPECT_EQ(runs.value[0].xray_s, 0);
+  EXPECT_EQ(runs.value[1].loop_s, -1);
   std::filesystem::remove(path);
 }
 

@@ -18,6 +18,8 @@
 //     ("web-first-seconds": no damage, under 30 s of pain), uploads the
 //     scripted expert's session of it and waits (up to 60 s) for the
 //     server's verdict; prints {"uuid", "lesson_id", "passed", "score"}.
+//   web_seed assign GRPC_ADDRESS SUPERVISOR_TOKEN CURRICULUM GROUP
+//     assigns the curriculum to the group (Lessons.AssignCurriculum).
 #include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -241,11 +243,28 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (mode == "lesson" && argc == 6) return SeedPassedLesson(argv[2], argv[3], argv[4], argv[5]);
+    if (mode == "assign" && argc == 6) {
+      ves::server::ClientOptions supervisor{};
+      supervisor.address = argv[2];
+      supervisor.token = argv[3];
+      ves::v1::AssignCurriculumRequest req;
+      req.set_curriculum_id(argv[4]);
+      req.set_group(argv[5]);
+      ves::v1::AssignCurriculumResponse resp;
+      grpc::ClientContext ctx;
+      ves::server::PrepareContext(&ctx, supervisor);
+      const grpc::Status s = ves::v1::Lessons::NewStub(ves::server::MakeClientChannel(supervisor))
+                                 ->AssignCurriculum(&ctx, req, &resp);
+      if (!s.ok()) {
+        std::cerr << "web_seed: assignment refused: " << s.error_message() << "\n";
+        return 1;
+      }
+      return 0;
+    }
     std::cerr << "usage: web_seed setup DB_URL | web_seed upload ADDRESS TOKEN TRAINEE "
                  "OPERATOR SECONDS [STATION_ID faulty] | web_seed store DB_URL TRAINEE OPERATOR "
-                 "SECONDS | "
-                 "web_seed lesson ADDRESS SUPERVISOR_TOKEN "
-                 "STATION_TOKEN TRAINEE\n";
+                 "SECONDS | web_seed lesson ADDRESS SUPERVISOR_TOKEN STATION_TOKEN TRAINEE | "
+                 "web_seed assign ADDRESS SUPERVISOR_TOKEN CURRICULUM GROUP\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "web_seed: " << e.what() << "\n";
