@@ -25,7 +25,7 @@
 namespace ves::server {
 
 // Passwords: scrypt (OpenSSL's EVP_PBE_scrypt), N = 2^15, r = 8, p = 1
-// (32 MiB and ~0.1 s per hash), 16 random salt bytes, 32 hash bytes, stored as
+// (32 MiB, a third of a second per hash on a busy 2-core VM), 16 random salt bytes, 32 hash bytes, stored as
 // "$scrypt$ln=15,r=8,p=1$<salt base64>$<hash base64>" so the parameters can
 // be raised later without breaking stored hashes.
 inline constexpr size_t kMinPasswordBytes = 12;
