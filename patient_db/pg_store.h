@@ -46,6 +46,13 @@ class PgStore final : public Store {
   StoreResult<bool> HasInstitution(const std::string& name) override;
   StoreStatus AddToken(const TokenRow& token) override;
   StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) override;
+  StoreStatus AddAccount(const AccountRow& account) override;
+  StoreResult<AccountRow> GetAccount(const std::string& username) override;
+  StoreResult<AccountRow> FindAccountByIdentity(const std::string& identity) override;
+  StoreResult<std::vector<AccountRow>> ListAccounts(const std::string& institution) override;
+  StoreStatus RevokeAccount(const std::string& username, int64_t now_unix_ms) override;
+  StoreStatus SetAccountPassword(const std::string& username,
+                                 const std::string& password_hash) override;
   StoreStatus AddTrainee(const TraineeRow& trainee) override;
   StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) override;
   StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution,

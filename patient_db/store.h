@@ -53,6 +53,21 @@ struct TokenRow {
   bool operator==(const TokenRow&) const = default;
 };
 
+// A person's account for the web pages (docs/web.md, "Accounts"): an admin
+// or supervisor who signs in with a password or through the hospital's
+// identity provider. Stations and scripts keep their tokens.
+struct AccountRow {
+  std::string username;  // 1..64 of [a-z0-9._@-]
+  StoreRole role = StoreRole::kSupervisor;  // admin or supervisor
+  std::string institution;
+  std::string password_hash;  // scrypt, server/accounts.h; "" : no password sign-in
+  std::string idp_identity;   // the IdP's `sub` or verified email mapped here; "" : none
+  int64_t created_unix_ms = 0;
+  int64_t expires_unix_ms = 0;  // 0: never
+  int64_t revoked_unix_ms = 0;  // 0: not revoked
+  bool operator==(const AccountRow&) const = default;
+};
+
 struct TraineeRow {
   std::string trainee_id;
   std::string institution;
@@ -296,6 +311,20 @@ class Store {
 
   virtual StoreStatus AddToken(const TokenRow& token) = 0;
   virtual StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) = 0;
+
+  // ---- Accounts (docs/web.md, "Accounts") ----
+  // kAlreadyExists when the username, or a non-empty idp_identity, is taken;
+  // kInvalidArgument for an unknown institution.
+  virtual StoreStatus AddAccount(const AccountRow& account) = 0;
+  virtual StoreResult<AccountRow> GetAccount(const std::string& username) = 0;
+  // The account whose idp_identity is `identity` (kNotFound when none).
+  virtual StoreResult<AccountRow> FindAccountByIdentity(const std::string& identity) = 0;
+  // By username; institution empty: all.
+  virtual StoreResult<std::vector<AccountRow>> ListAccounts(const std::string& institution) = 0;
+  // Sets revoked_unix_ms (a second revocation keeps the first time); kNotFound.
+  virtual StoreStatus RevokeAccount(const std::string& username, int64_t now_unix_ms) = 0;
+  virtual StoreStatus SetAccountPassword(const std::string& username,
+                                         const std::string& password_hash) = 0;
 
   virtual StoreStatus AddTrainee(const TraineeRow& trainee) = 0;
   virtual StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) = 0;

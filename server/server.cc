@@ -254,6 +254,7 @@ void VesServer::Start() {
     http.tls_cert_file = options_.tls_cert_file;
     http.tls_key_file = options_.tls_key_file;
     http.log_calls = options_.log_calls;
+    http.oidc = options_.oidc;
     http_ =
         std::make_unique<HttpServer>(http, ServiceDeps{store_.get(), writer_.get(), auth_.get(),
                                                        judge_.get(), live_.get(), series_.get()});

@@ -276,7 +276,9 @@ std::string WebApi::HtmlSafeJson(std::string in) {
   return out;
 }
 
-WebApi::WebApi(ServiceDeps deps, WebOptions options) : deps_(deps), options_(options) {}
+WebApi::WebApi(ServiceDeps deps, WebOptions options) : deps_(deps), options_(options) {
+  if (options_.oidc.enabled()) oidc_ = std::make_unique<OidcClient>(options_.oidc);
+}
 
 std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
                                     std::string* session_id) {
@@ -301,6 +303,19 @@ std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
 
 HttpReply WebApi::SignIn(const HttpRequest& request) {
   json body = json::parse(request.body, nullptr, false);
+  if (body.is_object() && body.contains("username")) {
+    // A person's account (server/accounts.h): the session holds a secret of
+    // its own, resolved against the account on every request.
+    if (!body["username"].is_string() || !body.contains("password") ||
+        !body["password"].is_string()) {
+      return Error(400, "INVALID_ARGUMENT",
+                   "body: must be {\"username\": \"...\", \"password\": \"...\"}");
+    }
+    const SignInOutcome out = deps_.auth->accounts().PasswordSignIn(
+        body["username"].get<std::string>(), body["password"].get<std::string>(), request.peer,
+        options_.session_ttl);
+    return StartWebSession(out, request.peer);
+  }
   if (!body.is_object() || !body.contains("token") || !body["token"].is_string()) {
     return Error(400, "INVALID_ARGUMENT", "body: must be {\"token\": \"<token>\"}");
   }
@@ -314,6 +329,31 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
     return Error(a.code == AuthCode::kUnauthenticated ? 401 : 500,
                  a.code == AuthCode::kUnauthenticated ? "UNAUTHENTICATED" : "INTERNAL", a.message);
   }
+  return NewWebSession(token, who, "");
+}
+
+HttpReply WebApi::StartWebSession(const SignInOutcome& out, const std::string& peer) {
+  // The source address is the audit row's target: who tried from where.
+  const std::string where = "from " + SourceAddress(peer);
+  if (!out.ok()) {
+    if (out.audit) {
+      deps_.writer->SubmitAudit(MakeAudit(out.principal, "web.sign_in", where,
+                                          Status(out.http_status == 429
+                                                     ? StatusCode::RESOURCE_EXHAUSTED
+                                                     : StatusCode::UNAUTHENTICATED,
+                                                 out.message)));
+    }
+    HttpReply r = Error(out.http_status, out.code, out.message);
+    if (out.retry_after_s > 0) r.headers.emplace_back("Retry-After", std::to_string(out.retry_after_s));
+    return r;
+  }
+  HttpReply r = NewWebSession(out.secret, out.principal, where);
+  if (r.status != 200) deps_.auth->accounts().EndSession(out.secret);
+  return r;
+}
+
+HttpReply WebApi::NewWebSession(const std::string& token, const Principal& who,
+                                const std::string& audit_target) {
   WebSession session{
       token, RandomHex(),
       NowUnixMs() +
@@ -330,7 +370,7 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
     }
     sessions_[sid] = session;
   }
-  deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_in", "", Status::OK));
+  deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_in", audit_target, Status::OK));
   HttpReply r = JsonReply(200, {{"csrf_token", session.csrf_token},
                                 {"role", patient_db::RoleName(who.role)},
                                 {"institution", who.institution},
@@ -355,7 +395,11 @@ HttpReply WebApi::SignOut(const HttpRequest& request) {
   }
   {
     std::lock_guard lock(mutex_);
-    sessions_.erase(sid);
+    auto it = sessions_.find(sid);
+    if (it != sessions_.end()) {
+      deps_.auth->accounts().EndSession(it->second.token);
+      sessions_.erase(it);
+    }
   }
   HttpReply r = JsonReply(200, {{"signed_out", true}});
   r.headers.emplace_back("Set-Cookie", std::string(kCookieName) +
@@ -431,8 +475,18 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     return Error(415, "INVALID_ARGUMENT", "Content-Type: must be application/json");
   }
   if (path.size() == 1 && path[0] == "sign-in") {
-    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-in: POST only");
+    // GET: which ways of signing in this server offers (the sign-in page).
+    if (get) return JsonReply(200, {{"token", true}, {"password", true}, {"oidc", oidc_ != nullptr}});
+    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-in: GET or POST");
     return SignIn(request);
+  }
+  if (path.size() == 2 && path[0] == "oidc") {
+    if (!oidc_) {
+      return Error(404, "NOT_FOUND", "no identity provider is configured (ves-server --oidc-issuer)");
+    }
+    if (!get) return Error(405, "METHOD_NOT_ALLOWED", "oidc: GET only");
+    if (path[1] == "start") return OidcStart();
+    if (path[1] == "callback") return OidcCallback(request, query, CookieValue(request.cookie, kOidcCookieName));
   }
   if (path.size() == 1 && path[0] == "sign-out") {
     if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-out: POST only");

@@ -61,6 +61,12 @@ class SkippedStore final : public Store {
   StoreResult<bool> HasInstitution(const std::string&) override { return false; }
   StoreStatus AddToken(const TokenRow&) override { return {}; }
   StoreResult<TokenRow> FindToken(const std::string&) override { return Skipped(); }
+  StoreStatus AddAccount(const AccountRow&) override { return {}; }
+  StoreResult<AccountRow> GetAccount(const std::string&) override { return Skipped(); }
+  StoreResult<AccountRow> FindAccountByIdentity(const std::string&) override { return Skipped(); }
+  StoreResult<std::vector<AccountRow>> ListAccounts(const std::string&) override { return {}; }
+  StoreStatus RevokeAccount(const std::string&, int64_t) override { return {}; }
+  StoreStatus SetAccountPassword(const std::string&, const std::string&) override { return {}; }
   StoreStatus AddTrainee(const TraineeRow&) override { return {}; }
   StoreResult<TraineeRow> GetTrainee(const std::string&) override { return Skipped(); }
   StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string&,

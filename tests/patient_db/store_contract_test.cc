@@ -105,6 +105,49 @@ TEST_P(StoreContract, TokenForUnknownInstitutionIsRefused) {
   EXPECT_EQ(store_->AddToken(t).code, StoreCode::kInvalidArgument);
 }
 
+TEST_P(StoreContract, AccountsAreFoundByNameAndIdentityAndRevokedOnce) {
+  AccountRow a{"alice", StoreRole::kSupervisor, "north", "$scrypt$hash", "sub-1", 5, 900, 0};
+  AccountRow b{"bob", StoreRole::kAdmin, "south", "", "", 6, 0, 0};
+  AccountRow c{"carol", StoreRole::kSupervisor, "north", "h", "", 7, 0, 0};
+  ASSERT_TRUE(store_->AddAccount(a).ok());
+  ASSERT_TRUE(store_->AddAccount(b).ok());
+  ASSERT_TRUE(store_->AddAccount(c).ok());  // a second empty identity is no clash
+  auto got = store_->GetAccount("alice");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, a);
+  auto by_identity = store_->FindAccountByIdentity("sub-1");
+  ASSERT_TRUE(by_identity.ok());
+  EXPECT_EQ(by_identity.value.username, "alice");
+  EXPECT_EQ(store_->FindAccountByIdentity("").status.code, StoreCode::kNotFound);
+  EXPECT_EQ(store_->GetAccount("nobody").status.code, StoreCode::kNotFound);
+
+  EXPECT_EQ(store_->AddAccount({"alice", StoreRole::kAdmin, "north", "", "", 8, 0, 0}).code,
+            StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->AddAccount({"dave", StoreRole::kAdmin, "north", "", "sub-1", 8, 0, 0}).code,
+            StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->AddAccount({"erin", StoreRole::kAdmin, "nowhere", "", "", 8, 0, 0}).code,
+            StoreCode::kInvalidArgument);
+
+  auto north = store_->ListAccounts("north");
+  ASSERT_TRUE(north.ok());
+  ASSERT_EQ(north.value.size(), 2u);
+  EXPECT_EQ(north.value[0].username, "alice");
+  EXPECT_EQ(north.value[1].username, "carol");
+  auto all = store_->ListAccounts("");
+  ASSERT_TRUE(all.ok());
+  EXPECT_EQ(all.value.size(), 3u);
+
+  ASSERT_TRUE(store_->RevokeAccount("alice", 1000).ok());
+  ASSERT_TRUE(store_->RevokeAccount("alice", 2000).ok());  // the first time is kept
+  EXPECT_EQ(store_->GetAccount("alice").value.revoked_unix_ms, 1000);
+  EXPECT_EQ(store_->RevokeAccount("nobody", 1000).code, StoreCode::kNotFound);
+  ASSERT_TRUE(store_->SetAccountPassword("bob", "$scrypt$new").ok());
+  EXPECT_EQ(store_->GetAccount("bob").value.password_hash, "$scrypt$new");
+  EXPECT_EQ(store_->SetAccountPassword("nobody", "x").code, StoreCode::kNotFound);
+  Reopen();
+  EXPECT_EQ(store_->GetAccount("alice").value.revoked_unix_ms, 1000);
+}
+
 TEST_P(StoreContract, TraineesAreListedPerInstitution) {
   ASSERT_TRUE(store_->AddTrainee({"t2", "south", "Two", 11}).ok());
   ASSERT_TRUE(store_->AddTrainee({"t0", "north", "Zero", 12}).ok());
@@ -729,7 +772,7 @@ TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
     ASSERT_TRUE(db.Exec("SELECT * FROM stations", &error) == false);  // not there yet
   }
   SqliteStore store(path.string());
-  EXPECT_EQ(store.schema_version(), SqlMigrations().back().version);  // 5 and later
+  EXPECT_EQ(store.schema_version(), SqlMigrations().back().version);  // 5 and every later one
   ASSERT_TRUE(store.HasInstitution("north").value);
   ASSERT_TRUE(store.AddTrainee({"t1", "north", "T", 1}).ok());
   SessionRow row;

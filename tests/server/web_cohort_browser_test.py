@@ -110,6 +110,8 @@ def main():
 
         driver.get(base + '/')
         ready('sign-in')
+        # Tokens are under "Sign in with an access token" (people use accounts).
+        driver.find_element(By.CSS_SELECTOR, '#token-sign-in summary').click()
         driver.find_element(By.ID, 'token').send_keys(tokens['supervisor'])
         driver.find_element(By.ID, 'sign-in').click()
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/trainees.html'))

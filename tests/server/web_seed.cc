@@ -1,7 +1,8 @@
 // Test fixture for tests/server/web_browser_test.py (not installed):
 //   web_seed setup DB_URL
 //     tokens, institution "north", trainees t1, t2 and one named like
-//     markup, group g1, the sample case; prints {"admin": ..., ...} as JSON.
+//     markup, group g1, the sample case, supervisor account "dr.north"
+//     (password in "account_password"); prints {"admin": ..., ...} as JSON.
 //   web_seed upload GRPC_ADDRESS STATION_TOKEN TRAINEE OPERATOR SECONDS
 //     a scripted operator's session on the sample case, uploaded as a station
 //     does; prints {"uuid": ..., "final_tip_arc_m": ...} (the recording run's
@@ -26,6 +27,7 @@
 #include <thread>
 
 #include "patient_db/case_bundle.h"
+#include "server/accounts.h"
 #include "server/auth.h"
 #include "server/client.h"
 #include "station/training/case_run.h"
@@ -154,6 +156,15 @@ int main(int argc, char** argv) {
       nlohmann::json out = {{"admin", Token(*store, StoreRole::kAdmin)},
                             {"supervisor", Token(*store, StoreRole::kSupervisor)},
                             {"station", Token(*store, StoreRole::kStation)}};
+      const std::string password = "web test password " + ves::server::NewToken().substr(0, 8);
+      if (!store
+               ->AddAccount({"dr.north", StoreRole::kSupervisor, "north",
+                             ves::server::HashPassword(password), "", 1, 0, 0})
+               .ok()) {
+        throw std::runtime_error("cannot add an account");
+      }
+      out["account"] = "dr.north";
+      out["account_password"] = password;
       std::cout << out.dump() << "\n";
       return 0;
     }
