@@ -21,6 +21,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # the web front end (ves-server --http): Chart.js embedded at build time; browser tests
   libjs-chart.js chromium chromium-driver python3-selenium
+  # the test OpenID Connect provider of tests/server/oidc_test_idp.py (RS256 signing)
+  python3-cryptography
   # fuzzing (libFuzzer) and the sanitized CI stage: deploy/fuzz.sh, deploy/ci-hardening.sh
   clang-14 libclang-rt-14-dev
 )

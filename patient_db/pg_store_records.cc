@@ -42,9 +42,9 @@ CaseRow ReadCaseRow(const pqxx::row& r) {
 constexpr const char* kSessionColumns =
     "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
-    "stored_unix_ms, operator_kind, max_tip_arc_m";
+    "stored_unix_ms, operator_kind, max_tip_arc_m, loop_s, xray_s";
 
-// Column 17 of a session read back: the lesson the record names ('' when
+// Column 19 of a session read back: the lesson the record names ('' when
 // none), kept in lesson_sessions rather than in sessions.
 constexpr const char* kSessionLessonColumn =
     ", COALESCE((SELECT l.lesson_id FROM lesson_sessions l WHERE l.session_uuid = sessions.uuid), "
@@ -69,6 +69,8 @@ SessionRow ReadSessionRow(const pqxx::row& r) {
   s.stored_unix_ms = r[14].as<int64_t>();
   s.operator_kind = r[15].as<std::string>();
   s.max_tip_arc_m = r[16].as<double>();
+  s.loop_s = r[17].as<double>();
+  s.xray_s = r[18].as<double>();
   return s;
 }
 
@@ -368,7 +370,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
     for (size_t k = 0; k < order.size(); ++k) {
       const SessionRow& row = batch.sessions[order[k]];
       insert += k == 0 ? "(" : ", (";
-      for (int c = 1; c <= 18; ++c) {
+      for (int c = 1; c <= 20; ++c) {
         insert += (c == 1 ? "$" : ", $") + std::to_string(params.size() + c);
       }
       insert += ")";
@@ -379,7 +381,8 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
             std::string(row.completed ? "1" : "0"), pqxx::to_string(row.time_to_cecum_s),
             pqxx::to_string(row.pain_s), pqxx::to_string(row.score), row.body_sha256_hex,
             std::to_string(row.stored_unix_ms), row.operator_kind,
-            pqxx::to_string(row.max_tip_arc_m), ByteaHex(row.body)}) {
+            pqxx::to_string(row.max_tip_arc_m), pqxx::to_string(row.loop_s),
+            pqxx::to_string(row.xray_s), ByteaHex(row.body)}) {
         params.push_back(v);
       }
     }
@@ -477,8 +480,8 @@ StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
                        uuid);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
     out = ReadSessionRow(r[0]);
-    out.lesson_id = r[0][17].as<std::string>();
-    out.body = pqxx::binarystring(r[0][18]).str();
+    out.lesson_id = r[0][19].as<std::string>();
+    out.body = pqxx::binarystring(r[0][20]).str();
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;
@@ -500,7 +503,7 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
              sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
              page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
       out.push_back(ReadSessionRow(row));
-      out.back().lesson_id = row[17].as<std::string>();
+      out.back().lesson_id = row[19].as<std::string>();
     }
     return StoreStatus::Ok();
   });
@@ -540,6 +543,27 @@ StoreResult<std::vector<StationRow>> PgStore::ListStations(const std::string& in
     }
     return StoreStatus::Ok();
   });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreResult<std::vector<SessionRow>> PgStore::ListOperatorSessions(
+    const std::string& institution, const std::string& case_id, const std::string& operator_kind,
+    int limit) {
+  const std::string sql = std::string("SELECT ") + kSessionColumns +
+                          " FROM sessions WHERE institution = $1 AND case_id = $2 AND "
+                          "operator_kind = $3 ORDER BY start_unix_ms DESC, uuid COLLATE \"C\" "
+                          "DESC LIMIT $4";
+  std::vector<SessionRow> out;
+  StoreStatus st =
+      Transact("list operator sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+        out.clear();
+        for (const auto& row :
+             tx.exec_params(sql, institution, case_id, operator_kind, int64_t{limit})) {
+          out.push_back(ReadSessionRow(row));
+        }
+        return StoreStatus::Ok();
+      });
   if (!st.ok()) return st;
   return out;
 }

@@ -24,6 +24,13 @@ class SqliteStore final : public Store {
   StoreResult<bool> HasInstitution(const std::string& name) override;
   StoreStatus AddToken(const TokenRow& token) override;
   StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) override;
+  StoreStatus AddAccount(const AccountRow& account) override;
+  StoreResult<AccountRow> GetAccount(const std::string& username) override;
+  StoreResult<AccountRow> FindAccountByIdentity(const std::string& identity) override;
+  StoreResult<std::vector<AccountRow>> ListAccounts(const std::string& institution) override;
+  StoreStatus RevokeAccount(const std::string& username, int64_t now_unix_ms) override;
+  StoreStatus SetAccountPassword(const std::string& username,
+                                 const std::string& password_hash) override;
   StoreStatus AddTrainee(const TraineeRow& trainee) override;
   StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) override;
   StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution,
@@ -38,6 +45,10 @@ class SqliteStore final : public Store {
                                                     const std::string& case_id,
                                                     const ListPage& page = {}) override;
   StoreResult<int64_t> CountSessions() override;
+  StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string& institution,
+                                                            const std::string& case_id,
+                                                            const std::string& operator_kind,
+                                                            int limit) override;
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) override;
   StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,
@@ -63,6 +74,8 @@ class SqliteStore final : public Store {
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
   StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
+  StoreStatus PutSessionSeries(const SessionSeriesRow& row) override;
+  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) override;
 
   // The schema version after migration.
   int schema_version() const { return schema_version_; }

@@ -38,9 +38,9 @@ CaseRow ReadCaseRow(const SqliteStatement& s) {
 constexpr const char* kSessionColumns =
     "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
     "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
-    "stored_unix_ms, operator_kind, max_tip_arc_m";
+    "stored_unix_ms, operator_kind, max_tip_arc_m, loop_s, xray_s";
 
-// Column 17 of a session read back: the lesson the record names ('' when
+// Column 19 of a session read back: the lesson the record names ('' when
 // none), kept in lesson_sessions rather than in sessions.
 constexpr const char* kSessionLessonColumn =
     ", COALESCE((SELECT l.lesson_id FROM lesson_sessions l WHERE l.session_uuid = sessions.uuid), "
@@ -65,6 +65,8 @@ SessionRow ReadSessionRow(const SqliteStatement& s) {
   r.stored_unix_ms = s.Int(14);
   r.operator_kind = s.Text(15);
   r.max_tip_arc_m = s.Real(16);
+  r.loop_s = s.Real(17);
+  r.xray_s = s.Real(18);
   return r;
 }
 
@@ -353,7 +355,7 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
     return StoreStatus::Ok();
   }
   s = db.Prepare(std::string("INSERT INTO sessions (") + kSessionColumns +
-                     ", body) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                     ", body) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                  nullptr);
   if (!s) return Internal(db, "insert session");
   s->Bind(1, row.uuid).Bind(2, row.trainee_id).Bind(3, row.institution).Bind(4, row.case_id);
@@ -361,7 +363,8 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
   s->Bind(8, row.end_unix_ms).Bind(9, int64_t{row.outcome}).Bind(10, int64_t{row.completed});
   s->Bind(11, row.time_to_cecum_s).Bind(12, row.pain_s).Bind(13, row.score);
   s->Bind(14, row.body_sha256_hex).Bind(15, row.stored_unix_ms).Bind(16, row.operator_kind);
-  s->Bind(17, row.max_tip_arc_m).BindBlob(18, row.body);
+  s->Bind(17, row.max_tip_arc_m).Bind(18, row.loop_s).Bind(19, row.xray_s);
+  s->BindBlob(20, row.body);
   if (!Run(s, &rc)) return Internal(db, "insert session " + row.uuid);
   if (!row.lesson_id.empty()) {  // queued for the lesson judge with the session itself
     s = db.Prepare(
@@ -475,8 +478,8 @@ StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
   std::optional<SessionRow> row;
   if (s->Step(&rc)) {
     row = ReadSessionRow(*s);
-    row->lesson_id = s->Text(17);
-    row->body = s->Blob(18);
+    row->lesson_id = s->Text(19);
+    row->body = s->Blob(20);
   }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get session");
@@ -507,7 +510,7 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
   std::vector<SessionRow> out;
   while (s->Step(&rc)) {
     out.push_back(ReadSessionRow(*s));
-    out.back().lesson_id = s->Text(17);
+    out.back().lesson_id = s->Text(19);
   }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list sessions");
@@ -530,6 +533,25 @@ StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(
     if (rc != SQLITE_OK) return Internal(r.db(), "trainee activity");
     out.push_back(a);
   }
+  return out;
+}
+
+StoreResult<std::vector<SessionRow>> SqliteStore::ListOperatorSessions(
+    const std::string& institution, const std::string& case_id, const std::string& operator_kind,
+    int limit) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      std::string("SELECT ") + kSessionColumns +
+          " FROM sessions WHERE institution = ? AND case_id = ? AND operator_kind = ?"
+          " ORDER BY start_unix_ms DESC, uuid DESC LIMIT ?",
+      nullptr);
+  if (!s) return Internal(r.db(), "list operator sessions");
+  s->Bind(1, institution).Bind(2, case_id).Bind(3, operator_kind).Bind(4, int64_t{limit});
+  int rc = SQLITE_OK;
+  std::vector<SessionRow> out;
+  while (s->Step(&rc)) out.push_back(ReadSessionRow(*s));
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list operator sessions");
   return out;
 }
 

@@ -87,4 +87,17 @@ std::unique_ptr<Store> OpenStore(const std::string& url) {
                               "' (expected sqlite:PATH; postgresql comes later)");
 }
 
+StoreStatus CheckSessionSeries(const SessionSeriesRow& row) {
+  if (row.session_uuid.empty()) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument, "session series: no session uuid");
+  }
+  if (row.json.empty() || row.json.size() > kMaxSessionSeriesBytes) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument,
+                              "session series of '" + row.session_uuid +
+                                  "': " + std::to_string(row.json.size()) + " bytes, not 1.." +
+                                  std::to_string(kMaxSessionSeriesBytes));
+  }
+  return StoreStatus::Ok();
+}
+
 }  // namespace ves::patient_db

@@ -53,6 +53,21 @@ struct TokenRow {
   bool operator==(const TokenRow&) const = default;
 };
 
+// A person's account for the web pages (docs/web.md, "Accounts"): an admin
+// or supervisor who signs in with a password or through the hospital's
+// identity provider. Stations and scripts keep their tokens.
+struct AccountRow {
+  std::string username;  // 1..64 of [a-z0-9._@-]
+  StoreRole role = StoreRole::kSupervisor;  // admin or supervisor
+  std::string institution;
+  std::string password_hash;  // scrypt, server/accounts.h; "" : no password sign-in
+  std::string idp_identity;   // the IdP's `sub` or verified email mapped here; "" : none
+  int64_t created_unix_ms = 0;
+  int64_t expires_unix_ms = 0;  // 0: never
+  int64_t revoked_unix_ms = 0;  // 0: not revoked
+  bool operator==(const AccountRow&) const = default;
+};
+
 struct TraineeRow {
   std::string trainee_id;
   std::string institution;
@@ -167,6 +182,10 @@ struct SessionRow {
   double score = 0;
   std::string operator_kind;  // "human", "novice", "expert"; "" for rows stored before it
   double max_tip_arc_m = 0;   // the deepest tip position; 0 for rows stored before it
+  // Time in a loop and with fluoroscopy on (metrics loop_s, xray_s), for the
+  // cohort page; -1: not known (rows stored before they were kept).
+  double loop_s = -1;
+  double xray_s = -1;
   std::string body_sha256_hex;
   int64_t stored_unix_ms = 0;
   std::string body;  // serialized ves.v1.SessionRecord; empty in listings
@@ -252,6 +271,20 @@ struct LessonVerdictRow {
   bool operator==(const LessonVerdictRow&) const = default;
 };
 
+// The web pages' series of one session (docs/web.md, "Session series"): the
+// plots' data and a thinned replay track as JSON text, computed once from the
+// input log. A newer `format_version` replaces an older one.
+struct SessionSeriesRow {
+  std::string session_uuid;
+  int format_version = 0;
+  int64_t computed_unix_ms = 0;
+  std::string json;  // at most kMaxSessionSeriesBytes
+  bool operator==(const SessionSeriesRow&) const = default;
+};
+inline constexpr size_t kMaxSessionSeriesBytes = 2u << 20;
+// Ok, or kInvalidArgument naming what is wrong (no uuid, empty, over the bound).
+StoreStatus CheckSessionSeries(const SessionSeriesRow& row);
+
 // What one group commit writes, in one durable transaction.
 struct WriteBatch {
   std::vector<SessionRow> sessions;
@@ -278,6 +311,20 @@ class Store {
 
   virtual StoreStatus AddToken(const TokenRow& token) = 0;
   virtual StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) = 0;
+
+  // ---- Accounts (docs/web.md, "Accounts") ----
+  // kAlreadyExists when the username, or a non-empty idp_identity, is taken;
+  // kInvalidArgument for an unknown institution.
+  virtual StoreStatus AddAccount(const AccountRow& account) = 0;
+  virtual StoreResult<AccountRow> GetAccount(const std::string& username) = 0;
+  // The account whose idp_identity is `identity` (kNotFound when none).
+  virtual StoreResult<AccountRow> FindAccountByIdentity(const std::string& identity) = 0;
+  // By username; institution empty: all.
+  virtual StoreResult<std::vector<AccountRow>> ListAccounts(const std::string& institution) = 0;
+  // Sets revoked_unix_ms (a second revocation keeps the first time); kNotFound.
+  virtual StoreStatus RevokeAccount(const std::string& username, int64_t now_unix_ms) = 0;
+  virtual StoreStatus SetAccountPassword(const std::string& username,
+                                         const std::string& password_hash) = 0;
 
   virtual StoreStatus AddTrainee(const TraineeRow& trainee) = 0;
   virtual StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) = 0;
@@ -308,6 +355,12 @@ class Store {
                                                             const std::string& case_id,
                                                             const ListPage& page = {}) = 0;
   virtual StoreResult<int64_t> CountSessions() = 0;
+  // The institution's sessions of a case run by `operator_kind` ("expert":
+  // the scripted expert), newest first, at most `limit`, without bodies or
+  // lesson ids: the expert band of a learning curve (docs/web.md).
+  virtual StoreResult<std::vector<SessionRow>> ListOperatorSessions(
+      const std::string& institution, const std::string& case_id,
+      const std::string& operator_kind, int limit) = 0;
   // The trainee's session count and latest end_unix_ms (0, 0 with none), for
   // each of `trainee_ids` in order: one read, without listing the rows.
   virtual StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
@@ -361,6 +414,14 @@ class Store {
   // replay and takes it back when it stops cleanly, so what remains counts
   // replays that never finished (a crash).
   virtual StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) = 0;
+
+  // ---- Session series (docs/web.md) ----
+  // Stores (or replaces) the session's series; kNotFound when no such
+  // session, kInvalidArgument when the JSON is empty or over
+  // kMaxSessionSeriesBytes.
+  virtual StoreStatus PutSessionSeries(const SessionSeriesRow& row) = 0;
+  // kNotFound when none was stored.
+  virtual StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

@@ -5,6 +5,8 @@
 
 #include <stdexcept>
 
+#include "server/accounts.h"
+
 namespace ves::server {
 namespace {
 
@@ -42,6 +44,11 @@ std::string TokenIdOf(const std::string& token_sha256_hex) {
   return token_sha256_hex.substr(0, 12);
 }
 
+Authenticator::Authenticator(patient_db::Store* store)
+    : store_(store), accounts_(std::make_unique<Accounts>(store)) {}
+
+Authenticator::~Authenticator() = default;
+
 AuthStatus Authenticator::Authenticate(std::string_view authorization, Principal* principal) {
   constexpr std::string_view kBearer = "Bearer ";
   if (authorization.empty()) {
@@ -59,6 +66,8 @@ AuthStatus Authenticator::Authenticate(std::string_view authorization, Principal
       return {};
     }
   }
+  AuthStatus account_status;
+  if (accounts_->Resolve(hash, principal, &account_status)) return account_status;
   auto found = store_->FindToken(hash);
   if (found.status.code == patient_db::StoreCode::kNotFound) {
     return {AuthCode::kUnauthenticated, "unknown token"};

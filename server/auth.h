@@ -1,5 +1,6 @@
 #pragma once
 
+#include <memory>
 #include <mutex>
 #include <string>
 #include <string_view>
@@ -14,6 +15,7 @@
 namespace ves::server {
 
 using patient_db::StoreRole;
+class Accounts;
 
 struct Principal {
   StoreRole role = StoreRole::kTrainee;
@@ -38,14 +40,19 @@ std::string Sha256HexOf(std::string_view bytes);
 std::string TokenIdOf(const std::string& token_sha256_hex);
 
 // Resolves `authorization` metadata ("Bearer <token>") to a principal. Hashes
-// are cached: tokens are never changed once stored.
+// are cached: tokens are never changed once stored. A browser signed in with
+// an account (server/accounts.h) carries a session secret instead, which is
+// resolved against the account on every call, never cached.
 class Authenticator {
  public:
-  explicit Authenticator(patient_db::Store* store) : store_(store) {}
+  explicit Authenticator(patient_db::Store* store);
+  ~Authenticator();
   AuthStatus Authenticate(std::string_view authorization, Principal* principal);
+  Accounts& accounts() { return *accounts_; }
 
  private:
   patient_db::Store* store_;
+  std::unique_ptr<Accounts> accounts_;
   std::mutex mutex_;
   std::unordered_map<std::string, Principal> cache_;  // by token hash
 };

@@ -76,8 +76,9 @@ struct ForgetDeadline {
   }
 };
 
-HttpRequest ToRequest(const http::request<http::string_body>& r) {
+HttpRequest ToRequest(const http::request<http::string_body>& r, const std::string& peer) {
   HttpRequest out;
+  out.peer = peer;
   out.method = std::string(r.method_string());
   out.target = std::string(r.target());
   out.authorization = std::string(r[http::field::authorization]);
@@ -206,7 +207,7 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
     if (beast::websocket::is_upgrade(req)) {
       std::string uuid;
       std::shared_ptr<LiveViewer> viewer;
-      const HttpReply refusal = api->LiveWatch(ToRequest(req), &uuid, &viewer);
+      const HttpReply refusal = api->LiveWatch(ToRequest(req, peer), &uuid, &viewer);
       if (options.log_calls)
         spdlog::info("http websocket {} {} peer={}",
                      patient_db::PrintableExcerpt(
@@ -222,7 +223,7 @@ void ServeStream(Stream& stream, int fd, HttpServer::Impl* impl, WebApi* api,
     }
     SetDeadline(impl, fd, std::chrono::seconds(0));  // a replay may take a while
     const auto start = Clock::now();
-    const HttpReply reply = api->Handle(ToRequest(req));
+    const HttpReply reply = api->Handle(ToRequest(req, peer));
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
     if (options.log_calls)
       spdlog::info("http {} {} {} {:.2f} ms peer={}", std::string(req.method_string()),
@@ -243,6 +244,7 @@ HttpServer::HttpServer(HttpOptions options, ServiceDeps deps)
     : options_(std::move(options)), impl_(std::make_unique<Impl>()) {
   WebOptions web;
   web.secure_cookies = !options_.tls_cert_file.empty();
+  web.oidc = options_.oidc;
   api_ = std::make_unique<WebApi>(deps, web);
 }
 
@@ -254,6 +256,9 @@ void HttpServer::Start() {
     throw std::invalid_argument("refusing plain HTTP on '" + options_.listen +
                                 "': without --tls-cert/--tls-key, --http needs a loopback "
                                 "address such as 127.0.0.1:8080");
+  }
+  if (std::string why = CheckOidcConfig(options_.oidc); !why.empty()) {
+    throw std::invalid_argument(why);
   }
   if (tls) {
     if (options_.tls_cert_file.empty() || options_.tls_key_file.empty()) {

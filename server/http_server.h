@@ -22,6 +22,7 @@ struct HttpOptions {
   int max_connections = 128;
   int io_timeout_s = 30;  // a connection idle this long (or a slow request) is closed
   bool log_calls = true;  // one spdlog line per request
+  OidcConfig oidc = {};   // sign-in through the identity provider (docs/web.md)
 };
 
 class HttpServer {

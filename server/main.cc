@@ -44,6 +44,15 @@ int main(int argc, char** argv) {
       "memory one judged lesson session's input log may take, MiB")(
       "judge-cpu-s", po::value(&options.judge_budget.cpu_base_s)->default_value(60.0),
       "CPU seconds a judged replay may use, plus half a second per second of the lesson")(
+      "oidc-issuer", po::value(&options.oidc.issuer),
+      "sign-in through this OpenID Connect provider (its issuer URL; docs/web.md)")(
+      "oidc-client-id", po::value(&options.oidc.client_id), "this server's client id there")(
+      "oidc-client-secret-file", po::value<std::string>(),
+      "file holding the client secret (one line; kept off the command line)")(
+      "oidc-redirect-uri", po::value(&options.oidc.redirect_uri),
+      "https://HOST:PORT/api/v1/oidc/callback, as registered with the provider")(
+      "oidc-ca", po::value(&options.oidc.ca_file),
+      "CA of the provider's certificate (PEM; default: the system's CAs)")(
       "quiet", "do not log every call");
   po::variables_map vm;
   try {
@@ -75,6 +84,22 @@ int main(int argc, char** argv) {
   if (!(options.judge_budget.cpu_base_s >= 1.0 && options.judge_budget.cpu_base_s <= 86400.0)) {
     std::cerr << "ves-server: --judge-cpu-s " << options.judge_budget.cpu_base_s
               << ": must be in 1..86400\n";
+    return 2;
+  }
+  if (vm.count("oidc-client-secret-file")) {
+    const std::string path = vm["oidc-client-secret-file"].as<std::string>();
+    std::ifstream in(path);
+    if (!in || !std::getline(in, options.oidc.client_secret)) {
+      std::cerr << "ves-server: --oidc-client-secret-file '" << path << "': cannot read a line\n";
+      return 2;
+    }
+  }
+  if (!options.oidc.issuer.empty() && options.http_listen.empty()) {
+    std::cerr << "ves-server: --oidc-issuer needs --http (the sign-in is on the web pages)\n";
+    return 2;
+  }
+  if (std::string why = ves::server::CheckOidcConfig(options.oidc); !why.empty()) {
+    std::cerr << "ves-server: " << why << "\n";
     return 2;
   }
   options.judge_budget.memory_bytes = static_cast<uint64_t>(judge_memory_mb) << 20;

@@ -11,6 +11,7 @@
 #include "server/pipeline.h"
 #include "server/services.h"
 #include "server/session_check.h"
+#include "server/session_series.h"
 
 namespace ves::server {
 
@@ -316,6 +317,8 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.score = rec.score();
   row.operator_kind = rec.operator_kind();
   row.max_tip_arc_m = rec.metrics().max_tip_arc_m();
+  row.loop_s = rec.metrics().loop_s();
+  row.xray_s = rec.metrics().xray_s();
   row.body = DeterministicBytes(rec);
   row.body_sha256_hex = Sha256HexOf(row.body);
   row.stored_unix_ms = NowUnixMs();
@@ -324,12 +327,12 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   row.station = StationReportOf(rec, institution.value, row.stored_unix_ms);
   const std::string body_sha = row.body_sha256_hex;
   LessonJudge* judge = rec.lesson_id().empty() ? nullptr : deps_.judge;
+  SessionSeries* series = deps_.series;
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), MakeAudit(who, "session.upload", rec.uuid(), Status::OK),
-      [reactor, response, body_sha, judge, institution = institution.value](
-          const patient_db::StoreStatus& status,
-                                           const patient_db::SessionPutResult& result) {
+      [reactor, response, body_sha, judge, series, institution = institution.value](
+          const patient_db::StoreStatus& status, const patient_db::SessionPutResult& result) {
         if (!status.ok()) {
           reactor->Finish(ToGrpcStatus(status));
           return;
@@ -352,6 +355,9 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
         }
         if (judge && result.outcome == patient_db::SessionPut::kStored) {
           judge->Enqueue(result.first.uuid);  // durable now; judged off the gRPC threads
+        }
+        if (series && result.outcome == patient_db::SessionPut::kStored) {
+          series->Enqueue(result.first.uuid);  // the session page's plots, computed once
         }
         response->set_uuid(result.first.uuid);
         response->set_body_sha256_hex(result.first.body_sha256_hex);

@@ -198,6 +198,7 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
   judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
+  series_ = std::make_unique<SessionSeries>(store_.get());
   live_ = std::make_unique<LiveHub>();
   if (!options_.live_relay_url.empty()) {
     LivePgRelayOptions relay;
@@ -205,7 +206,8 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
     relay_ = std::make_unique<LivePgRelay>(relay, live_.get());
     live_->SetRelay(relay_.get());
   }
-  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(), judge_.get(), live_.get()};
+  const ServiceDeps deps{store_.get(), writer_.get(), auth_.get(),
+                         judge_.get(), live_.get(),   series_.get()};
   cases_ = std::make_unique<CasesService>(deps);
   sessions_ = std::make_unique<SessionsService>(deps);
   trainees_ = std::make_unique<TraineesService>(deps);
@@ -252,8 +254,10 @@ void VesServer::Start() {
     http.tls_cert_file = options_.tls_cert_file;
     http.tls_key_file = options_.tls_key_file;
     http.log_calls = options_.log_calls;
-    http_ = std::make_unique<HttpServer>(
-        http, ServiceDeps{store_.get(), writer_.get(), auth_.get(), judge_.get(), live_.get()});
+    http.oidc = options_.oidc;
+    http_ =
+        std::make_unique<HttpServer>(http, ServiceDeps{store_.get(), writer_.get(), auth_.get(),
+                                                       judge_.get(), live_.get(), series_.get()});
     try {
       http_->Start();
     } catch (...) {
@@ -263,6 +267,7 @@ void VesServer::Start() {
     }
   }
   judge_->Start();
+  series_->Start();
   if (relay_) relay_->Start();
 }
 
@@ -275,6 +280,7 @@ void VesServer::Shutdown(std::chrono::milliseconds grace) {
     server_->Wait();
   }
   judge_->Stop();  // sessions it did not reach are judged on the next start
+  series_->Stop();  // the rest get their series on first view
   // The ends of the streams just closed reach the other replicas (or they
   // expire there by silence).
   if (relay_) relay_->Stop(std::chrono::seconds(1));

@@ -12,7 +12,9 @@
 #include "server/live_hub.h"
 #include "server/live_pg_relay.h"
 #include "server/live_service.h"
+#include "server/oidc.h"
 #include "server/services.h"
+#include "server/session_series.h"
 #include "server/session_writer.h"
 
 // The ves-server process in a class: services, group-commit writer, TLS,
@@ -36,6 +38,9 @@ struct ServerOptions {
   // other replicas on it (LivePgRelay, docs/web.md). Empty: this replica's
   // only (SQLite: one process).
   std::string live_relay_url;
+  // The hospital's identity provider for the web pages (docs/web.md); none
+  // when its issuer is empty.
+  OidcConfig oidc = {};
 };
 
 // Checks the TLS/plaintext choice and reads the PEM files. Throws
@@ -55,11 +60,13 @@ class VesServer {
   int port() const { return port_; }
   int http_port() const { return http_ ? http_->port() : 0; }
   patient_db::Store& store() { return *store_; }
+  Authenticator& auth() { return *auth_; }
   // Stops accepting calls, lets in-flight calls finish for up to `grace`
   // (then cancels them), commits what the writer holds. Idempotent.
   void Shutdown(std::chrono::milliseconds grace);
   uint64_t commit_batches() const { return writer_->batches(); }
   LessonJudge& judge() { return *judge_; }
+  SessionSeries& series() { return *series_; }
 
  private:
   ServerOptions options_;
@@ -73,6 +80,7 @@ class VesServer {
   std::unique_ptr<TraineesService> trainees_;
   std::unique_ptr<AdminService> admin_;
   std::unique_ptr<LessonJudge> judge_;
+  std::unique_ptr<SessionSeries> series_;
   std::unique_ptr<LessonsService> lessons_;
   std::unique_ptr<LiveService> live_service_;
   std::unique_ptr<grpc::Server> server_;

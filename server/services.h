@@ -25,6 +25,7 @@
 namespace ves::server {
 
 class LiveHub;
+class SessionSeries;
 
 inline constexpr size_t kCaseChunkBytes = 1 << 20;          // 1 MiB per download chunk
 inline constexpr uint64_t kMaxCaseUploadBytes = 256ull << 20;  // a bundle's limit
@@ -40,6 +41,7 @@ struct ServiceDeps {
   Authenticator* auth = nullptr;
   LessonJudge* judge = nullptr;  // lesson sessions are queued here once stored (may be null)
   LiveHub* live = nullptr;       // live proctoring (may be null: no Live service)
+  SessionSeries* series = nullptr;  // session pages' series, computed on upload (may be null)
 };
 
 // Recently served case bundles by hash (content-addressed, so never stale).

@@ -27,7 +27,7 @@ std::vector<std::pair<int, int>> Polyline(const Points& points, size_t first, in
 }  // namespace
 
 SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, double shape_hz,
-                            int max_points) {
+                            int max_points, const std::atomic<bool>* cancel) {
   SessionReplay out;
   const double dt_s = record.input_log().dt_s();
   const int64_t n_steps = static_cast<int64_t>(record.input_log().sample_count());
@@ -38,6 +38,9 @@ SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz, d
   const training::StepCallback on_step = [&](const training::InputSample&,
                                              const training::SessionRunner& runner) {
     ++step;
+    if (cancel != nullptr && (step & 0xff) == 0 && cancel->load(std::memory_order_relaxed)) {
+      throw ReplayCancelled("replay cancelled");
+    }
     const auto& th = runner.session().accumulator().thresholds();
     const auto& obs = runner.observation();
     out.pain_stretch_m = th.pain_stretch_m;

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -34,9 +36,14 @@ struct SessionReplay {
 };
 
 // Throws std::runtime_error (training::ReplayError, InputLogError, ...) when
-// the record cannot be replayed. `series_hz` in 1..100; shapes at most
-// `shape_hz`, at most `max_points` per polyline.
+// the record cannot be replayed, or ReplayCancelled once `cancel` is true.
+// `series_hz` in 0.01..100; shapes at most `shape_hz`, at most `max_points`
+// per polyline.
+struct ReplayCancelled : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz = 10.0,
-                            double shape_hz = 5.0, int max_points = 80);
+                            double shape_hz = 5.0, int max_points = 80,
+                            const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace ves::server

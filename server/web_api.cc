@@ -15,7 +15,10 @@
 #include "server/live_hub.h"
 #include "server/pipeline.h"
 #include "server/session_check.h"
+#include "server/session_series.h"
 #include "server/web_assets.h"
+#include "server/web_cohort.h"
+#include "server/web_reply.h"
 #include "ves/v1/lesson.pb.h"
 
 namespace ves::server {
@@ -60,6 +63,8 @@ std::string Dump(const json& j) {
   return WebApi::HtmlSafeJson(j.dump(-1, ' ', false, json::error_handler_t::replace));
 }
 
+}  // namespace
+
 HttpReply JsonReply(int status, const json& body) {
   HttpReply r;
   r.status = status;
@@ -74,6 +79,8 @@ HttpReply Error(int status, const std::string& code, const std::string& message)
 HttpReply ErrorOf(const Status& s) {
   return Error(HttpStatusOf(s.error_code()), StatusCodeName(s.error_code()), s.error_message());
 }
+
+namespace {
 
 // A proto message as JSON: field names as in the .proto, defaults printed.
 json ProtoJson(const google::protobuf::Message& m) {
@@ -140,7 +147,8 @@ std::string CookieValue(const std::string& header, const std::string& name) {
   return {};
 }
 
-// Unsigned query number in [0, max]; an error reply names the parameter.
+}  // namespace
+
 bool QueryNumber(const std::map<std::string, std::string>& q, const std::string& name, uint64_t max,
                  uint64_t* value, HttpReply* error) {
   auto it = q.find(name);
@@ -158,6 +166,24 @@ bool QueryNumber(const std::map<std::string, std::string>& q, const std::string&
   *value = v;
   return true;
 }
+
+bool QueryTimeRange(const std::map<std::string, std::string>& q, int64_t* from_unix_ms,
+                    int64_t* to_unix_ms, HttpReply* error) {
+  uint64_t from = 0, to = 0;
+  if (!QueryNumber(q, "from_unix_ms", INT64_MAX, &from, error)) return false;
+  if (!QueryNumber(q, "to_unix_ms", INT64_MAX, &to, error)) return false;
+  if (to != 0 && to <= from) {
+    *error = Error(400, "INVALID_ARGUMENT",
+                   "query to_unix_ms = " + std::to_string(to) +
+                       ": must be after from_unix_ms = " + std::to_string(from));
+    return false;
+  }
+  *from_unix_ms = static_cast<int64_t>(from);
+  *to_unix_ms = static_cast<int64_t>(to);
+  return true;
+}
+
+namespace {
 
 std::string QueryText(const std::map<std::string, std::string>& q, const std::string& name) {
   auto it = q.find(name);
@@ -217,8 +243,8 @@ std::string OutcomeText(int outcome) {
   return name;
 }
 
-// A file name for Content-Disposition: the id's letters, digits, '.', '-'
-// and '_' kept, anything else '_'.
+}  // namespace
+
 std::string FileNamePart(const std::string& id) {
   std::string out;
   for (char c : id) {
@@ -228,8 +254,6 @@ std::string FileNamePart(const std::string& id) {
   }
   return out.substr(0, 64);
 }
-
-}  // namespace
 
 std::string WebApi::HtmlSafeJson(std::string in) {
   std::string out;
@@ -252,7 +276,9 @@ std::string WebApi::HtmlSafeJson(std::string in) {
   return out;
 }
 
-WebApi::WebApi(ServiceDeps deps, WebOptions options) : deps_(deps), options_(options) {}
+WebApi::WebApi(ServiceDeps deps, WebOptions options) : deps_(deps), options_(options) {
+  if (options_.oidc.enabled()) oidc_ = std::make_unique<OidcClient>(options_.oidc);
+}
 
 std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
                                     std::string* session_id) {
@@ -277,6 +303,19 @@ std::string WebApi::AuthorizationOf(const HttpRequest& request, bool* csrf_ok,
 
 HttpReply WebApi::SignIn(const HttpRequest& request) {
   json body = json::parse(request.body, nullptr, false);
+  if (body.is_object() && body.contains("username")) {
+    // A person's account (server/accounts.h): the session holds a secret of
+    // its own, resolved against the account on every request.
+    if (!body["username"].is_string() || !body.contains("password") ||
+        !body["password"].is_string()) {
+      return Error(400, "INVALID_ARGUMENT",
+                   "body: must be {\"username\": \"...\", \"password\": \"...\"}");
+    }
+    const SignInOutcome out = deps_.auth->accounts().PasswordSignIn(
+        body["username"].get<std::string>(), body["password"].get<std::string>(), request.peer,
+        options_.session_ttl);
+    return StartWebSession(out, request.peer);
+  }
   if (!body.is_object() || !body.contains("token") || !body["token"].is_string()) {
     return Error(400, "INVALID_ARGUMENT", "body: must be {\"token\": \"<token>\"}");
   }
@@ -290,6 +329,31 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
     return Error(a.code == AuthCode::kUnauthenticated ? 401 : 500,
                  a.code == AuthCode::kUnauthenticated ? "UNAUTHENTICATED" : "INTERNAL", a.message);
   }
+  return NewWebSession(token, who, "");
+}
+
+HttpReply WebApi::StartWebSession(const SignInOutcome& out, const std::string& peer) {
+  // The source address is the audit row's target: who tried from where.
+  const std::string where = "from " + SourceAddress(peer);
+  if (!out.ok()) {
+    if (out.audit) {
+      deps_.writer->SubmitAudit(MakeAudit(out.principal, "web.sign_in", where,
+                                          Status(out.http_status == 429
+                                                     ? StatusCode::RESOURCE_EXHAUSTED
+                                                     : StatusCode::UNAUTHENTICATED,
+                                                 out.message)));
+    }
+    HttpReply r = Error(out.http_status, out.code, out.message);
+    if (out.retry_after_s > 0) r.headers.emplace_back("Retry-After", std::to_string(out.retry_after_s));
+    return r;
+  }
+  HttpReply r = NewWebSession(out.secret, out.principal, where);
+  if (r.status != 200) deps_.auth->accounts().EndSession(out.secret);
+  return r;
+}
+
+HttpReply WebApi::NewWebSession(const std::string& token, const Principal& who,
+                                const std::string& audit_target) {
   WebSession session{
       token, RandomHex(),
       NowUnixMs() +
@@ -306,7 +370,7 @@ HttpReply WebApi::SignIn(const HttpRequest& request) {
     }
     sessions_[sid] = session;
   }
-  deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_in", "", Status::OK));
+  deps_.writer->SubmitAudit(MakeAudit(who, "web.sign_in", audit_target, Status::OK));
   HttpReply r = JsonReply(200, {{"csrf_token", session.csrf_token},
                                 {"role", patient_db::RoleName(who.role)},
                                 {"institution", who.institution},
@@ -331,7 +395,11 @@ HttpReply WebApi::SignOut(const HttpRequest& request) {
   }
   {
     std::lock_guard lock(mutex_);
-    sessions_.erase(sid);
+    auto it = sessions_.find(sid);
+    if (it != sessions_.end()) {
+      deps_.auth->accounts().EndSession(it->second.token);
+      sessions_.erase(it);
+    }
   }
   HttpReply r = JsonReply(200, {{"signed_out", true}});
   r.headers.emplace_back("Set-Cookie", std::string(kCookieName) +
@@ -407,8 +475,18 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     return Error(415, "INVALID_ARGUMENT", "Content-Type: must be application/json");
   }
   if (path.size() == 1 && path[0] == "sign-in") {
-    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-in: POST only");
+    // GET: which ways of signing in this server offers (the sign-in page).
+    if (get) return JsonReply(200, {{"token", true}, {"password", true}, {"oidc", oidc_ != nullptr}});
+    if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-in: GET or POST");
     return SignIn(request);
+  }
+  if (path.size() == 2 && path[0] == "oidc") {
+    if (!oidc_) {
+      return Error(404, "NOT_FOUND", "no identity provider is configured (ves-server --oidc-issuer)");
+    }
+    if (!get) return Error(405, "METHOD_NOT_ALLOWED", "oidc: GET only");
+    if (path[1] == "start") return OidcStart();
+    if (path[1] == "callback") return OidcCallback(request, query, CookieValue(request.cookie, kOidcCookieName));
   }
   if (path.size() == 1 && path[0] == "sign-out") {
     if (!post) return Error(405, "METHOD_NOT_ALLOWED", "sign-out: POST only");
@@ -486,6 +564,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     for (const auto& t : resp.trainees()) ids.push_back(t.trainee_id());
     auto activity = deps_.store->GetTraineeActivity(ids);
     if (!activity.ok()) return ErrorOf(ToGrpcStatus(activity.status));
+    CurriculumCache curricula(deps_.store);
     for (int i = 0; i < resp.trainees_size(); ++i) {
       const auto& t = resp.trainees(i);
       json row = ProtoJson(t);
@@ -494,6 +573,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       if (group.ok() && !group.value.empty()) groups[group.value].push_back(t.trainee_id());
       row["sessions"] = activity.value[i].sessions;
       row["last_activity_unix_ms"] = activity.value[i].last_end_unix_ms;
+      row["curricula"] = CurriculaProgressJson(*deps_.store, curricula, t.trainee_id());
       trainees.push_back(std::move(row));
     }
     json group_list = json::array();
@@ -504,25 +584,20 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                            {"next_page_token", resp.next_page_token()}});
   }
   if (!get) return Error(405, "METHOD_NOT_ALLOWED", "this route answers GET only");
+  // groups/{group}/cohort, groups/{group}/sessions.csv, trainees/{id}/report
+  if (auto reply = CohortRoute(deps_, path, query, admit, who)) return *std::move(reply);
 
   // trainees/{id}/sessions.csv: the export (docs/web.md, "Export")
   if (path.size() == 3 && path[0] == "trainees" && path[2] == "sessions.csv") {
     v1::ListSessionsRequest req;  // the trainee id's bounds
     req.set_trainee_id(path[1]);
-    uint64_t from = 0, to = 0;
-    if (!QueryNumber(query, "from_unix_ms", INT64_MAX, &from, &bad)) return bad;
-    if (!QueryNumber(query, "to_unix_ms", INT64_MAX, &to, &bad)) return bad;
-    if (to != 0 && to <= from) {
-      return Error(400, "INVALID_ARGUMENT",
-                   "query to_unix_ms = " + std::to_string(to) +
-                       ": must be after from_unix_ms = " + std::to_string(from));
-    }
+    int64_t from = 0, to = 0;
+    if (!QueryTimeRange(query, &from, &to, &bad)) return bad;
     Status s = admit(req);
     if (!s.ok()) return ErrorOf(s);
     std::vector<patient_db::SessionRow> sessions;
     std::vector<patient_db::LessonVerdictRow> verdicts;
-    s = ExportSessionsCall(deps_, who, path[1], static_cast<int64_t>(from),
-                           static_cast<int64_t>(to), &sessions, &verdicts);
+    s = ExportSessionsCall(deps_, who, path[1], from, to, &sessions, &verdicts);
     if (!s.ok()) return ErrorOf(s);
     HttpReply r;
     r.content_type = "text/csv; charset=utf-8";
@@ -571,8 +646,10 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       for (const auto& r : rows.value) {
         Point p{r.uuid,   r.case_id, r.lesson_id, r.start_unix_ms, r.score, r.time_to_cecum_s,
                 r.pain_s, 0,         r.completed};
-        if (with_loop) {
-          // Loop time is in the record only.
+        if (with_loop && r.loop_s >= 0) {
+          p.loop_s = r.loop_s;
+        } else if (with_loop) {
+          // Stored before the row kept it: loop time is in the record only.
           auto full = deps_.store->GetSession(r.uuid);
           v1::SessionRecord rec;
           if (full.ok() && rec.ParseFromString(full.value.body)) p.loop_s = rec.metrics().loop_s();
@@ -589,6 +666,7 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     auto group = deps_.store->GetTraineeGroup(path[1]);
     auto trainee_row = deps_.store->GetTrainee(path[1]);
     std::string group_name = group.ok() ? group.value : "";
+    const std::string institution_of_trainee = trainee_row.ok() ? trainee_row.value.institution : "";
     if (!group_name.empty() && trainee_row.ok()) {
       auto members = deps_.store->ListGroupTrainees(trainee_row.value.institution, group_name);
       for (const std::string& m : members.ok() ? members.value : std::vector<std::string>{}) {
@@ -629,12 +707,15 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
       for (auto& [attempt, scores] : group_scores[case_id]) {
         median.push_back({{"attempt", attempt}, {"score", Median(scores)}});
       }
-      cases.push_back(
-          {{"case_id", case_id}, {"points", curve_json(pts)}, {"group_median", median}});
+      cases.push_back({{"case_id", case_id},
+                       {"points", curve_json(pts)},
+                       {"group_median", median},
+                       {"expert_band", ExpertBandJson(*deps_.store, institution_of_trainee, case_id)}});
     }
     json lessons = json::array();
     for (auto& [lesson_id, pts] : by_lesson) {
       json pass = json::object();
+      json band = nullptr;  // the scripted expert's runs of the lesson's case
       auto curriculum_id = deps_.store->FindLessonCurriculum(lesson_id);
       auto curriculum = curriculum_id.ok() ? deps_.store->GetCurriculum(curriculum_id.value)
                                            : patient_db::StoreResult<patient_db::CurriculumRow>{};
@@ -648,15 +729,30 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
           if (l.pass().has_max_pain_s()) pass["pain_s"] = l.pass().max_pain_s();
           if (l.pass().has_max_loop_s()) pass["loop_s"] = l.pass().max_loop_s();
           pass["title"] = l.title();
+          band = ExpertBandJson(*deps_.store, institution_of_trainee, l.case_ref().case_id());
         }
       }
-      lessons.push_back(
-          {{"lesson_id", lesson_id}, {"points", curve_json(pts)}, {"pass_line", pass}});
+      lessons.push_back({{"lesson_id", lesson_id},
+                         {"points", curve_json(pts)},
+                         {"pass_line", pass},
+                         {"expert_band", band}});
     }
     return JsonReply(200, {{"trainee_id", resp.trainee_id()},
                            {"group", group_name},
                            {"cases", cases},
                            {"lessons", lessons}});
+  }
+
+  // sessions/{uuid}/series: the page's plots and replay track, computed once
+  if (path.size() == 3 && path[0] == "sessions" && path[2] == "series") {
+    v1::GetSessionRequest req;
+    req.set_uuid(path[1]);
+    Status s = admit(req);
+    if (!s.ok()) return ErrorOf(s);
+    HttpReply r;
+    s = SessionSeriesCall(deps_, who, req, &r.body);
+    if (!s.ok()) return ErrorOf(s);
+    return r;
   }
 
   // sessions/{uuid} and sessions/{uuid}/replay
@@ -683,7 +779,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                  has_health ? StationHealthJson(resp.record().station_health()) : json(nullptr)},
                 {"station_health_flags", has_health
                                              ? json(StationHealthFlags(resp.record().station_health()))
-                                             : json::array()}});
+                                             : json::array()},
+                {"lesson_verdict", LessonVerdictJson(*deps_.store, resp.record())}});
     }
     static const CallSpec spec{"session.replay",
                                {StoreRole::kAdmin, StoreRole::kSupervisor, StoreRole::kTrainee},
@@ -924,7 +1021,7 @@ const std::vector<std::string>& SessionsCsvColumns() {
       "session_uuid",   "trainee_id",    "case_id",    "case_version", "lesson_id",
       "lesson_verdict", "lesson_checks", "station_id", "operator",     "start_utc",
       "end_utc",        "duration_s",    "outcome",    "completed",    "time_to_cecum_s",
-      "pain_s",         "max_tip_arc_m", "score"};
+      "pain_s",         "max_tip_arc_m", "score",      "loop_s",       "xray_s"};
   return columns;
 }
 
@@ -961,7 +1058,8 @@ std::string SessionsCsv(const std::vector<patient_db::SessionRow>& sessions,
           IsoUtc(s.end_unix_ms), CsvNumber((s.end_unix_ms - s.start_unix_ms) / 1000.0, 3),
           OutcomeText(s.outcome), s.completed ? "true" : "false",
           s.completed ? CsvNumber(s.time_to_cecum_s, 3) : "", CsvNumber(s.pain_s, 3),
-          CsvNumber(s.max_tip_arc_m, 4), CsvNumber(s.score, 2)});
+          CsvNumber(s.max_tip_arc_m, 4), CsvNumber(s.score, 2),
+          s.loop_s >= 0 ? CsvNumber(s.loop_s, 3) : "", s.xray_s >= 0 ? CsvNumber(s.xray_s, 3) : ""});
   }
   return out;
 }

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "server/accounts.h"
+#include "server/oidc.h"
 #include "server/services.h"
 #include "server/session_replay.h"
 
@@ -40,6 +42,7 @@ struct HttpRequest {
   std::string body;
   std::string origin;  // the Origin header (WebSocket upgrades)
   std::string host;    // the Host header
+  std::string peer;    // the client's "ADDRESS:PORT" (sign-in throttling)
 };
 
 struct HttpReply {
@@ -52,7 +55,11 @@ struct HttpReply {
 struct WebOptions {
   bool secure_cookies = false;                 // Secure flag: on over HTTPS
   std::chrono::seconds session_ttl{8 * 3600};  // a browser session's life
+  OidcConfig oidc = {};                        // the identity provider (none: issuer empty)
 };
+
+// The cookie of a sign-in through the identity provider, while under way.
+inline constexpr char kOidcCookieName[] = "ves_oidc";
 
 // What the stations page flags in a station's latest health (docs/web.md,
 // "Stations"): "loop_p99" (a measured loop's p99 over its budget),
@@ -97,6 +104,17 @@ class WebApi {
     int64_t expires_unix_ms = 0;
   };
   HttpReply SignIn(const HttpRequest& request);
+  // An account sign-in's outcome as the reply (audited either way).
+  HttpReply StartWebSession(const SignInOutcome& outcome, const std::string& peer);
+  // A browser session for `token` (a bearer token or an account's secret).
+  HttpReply NewWebSession(const std::string& token, const Principal& who,
+                          const std::string& audit_target);
+  // The identity provider's sign-in (web_oidc.cc): to the provider and back.
+  HttpReply OidcStart();
+  HttpReply OidcCallback(const HttpRequest& request,
+                         const std::map<std::string, std::string>& query,
+                         const std::string& login_id);
+  std::string OidcCookie(const std::string& login_id, int64_t max_age_s) const;
   HttpReply SignOut(const HttpRequest& request);
   // The authorization value for this request: the Bearer header, or the
   // browser session's token. `csrf_ok` tells whether a state-changing
@@ -110,6 +128,7 @@ class WebApi {
 
   ServiceDeps deps_;
   WebOptions options_;
+  std::unique_ptr<OidcClient> oidc_;  // null: no identity provider configured
   std::mutex mutex_;
   std::map<std::string, WebSession> sessions_;  // by session id; guarded by mutex_
   // A few recent replays by uuid (a replay re-runs the model: seconds).

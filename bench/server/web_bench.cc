@@ -8,7 +8,13 @@
 // are a trainee's CSV export (100 sessions) and the audit page (an admin's
 // newest 50 of 100,000 rows, and a filter that matches none of them).
 // Each request on a new connection, one at a time; p50/p99 over --requests.
-// Usage: web_bench [--sessions N] [--requests R]
+// A session page's first load (docs/web.md, "Session series"): a scripted
+// session of --session-seconds (600: ten minutes) stored as an upload is,
+// its series computed by the server's background worker (timed), then
+// --page-loads loads of everything session.html asks for, one after another
+// on new connections: the page, app.js, style.css, chart.js, the session and
+// its series.
+// Usage: web_bench [--sessions N] [--requests R] [--session-seconds S] [--page-loads P]
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -18,11 +24,16 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "bench/server/web_latency.h"
+#include "patient_db/case_format.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/server.h"
+#include "server/session_series.h"
+#include "station/training/case_run.h"
 #include "station/training/input_log.h"
 #include "tests/server/web_client.h"
 
@@ -30,24 +41,28 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-struct Stats {
-  double p50_ms, p99_ms, max_ms;
-};
+using Stats = ves::bench::LatencyStats;
+constexpr auto Measure = ves::bench::MeasureGets;
 
-Stats Measure(const std::vector<std::string>& targets, int port, const std::string& token,
-              int requests) {
+// One load of a session page: what session.html asks for, one after another
+// (a browser asks some of them at once: this is the slower case).
+Stats MeasurePage(const std::vector<std::string>& targets, int port, const std::string& token,
+                  int loads, size_t* bytes) {
   std::vector<double> ms;
-  for (int i = 0; i < requests; ++i) {
-    const std::string& target = targets[i % targets.size()];
+  for (int i = 0; i < loads; ++i) {
     const auto start = Clock::now();
-    const auto r =
-        ves::server::testing::HttpCall(port, "GET", target, {{"Authorization", "Bearer " + token}});
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-    if (r.status != 200) {
-      std::fprintf(stderr, "web_bench: %s answered %d: %s\n", target.c_str(), r.status,
-                   r.body.c_str());
-      std::exit(1);
+    *bytes = 0;
+    for (const std::string& target : targets) {
+      const auto r = ves::server::testing::HttpCall(port, "GET", target,
+                                                    {{"Authorization", "Bearer " + token}});
+      if (r.status != 200) {
+        std::fprintf(stderr, "web_bench: %s answered %d: %.300s\n", target.c_str(), r.status,
+                     r.body.c_str());
+        std::exit(1);
+      }
+      *bytes += r.body.size();
     }
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
   }
   std::sort(ms.begin(), ms.end());
   return {ms[ms.size() / 2], ms[std::min(ms.size() - 1, ms.size() * 99 / 100)], ms.back()};
@@ -64,12 +79,20 @@ double CpuSeconds() {
 int main(int argc, char** argv) {
   int total_sessions = 10000;
   int requests = 500;
+  double session_seconds = 600;
+  int page_loads = 100;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--sessions")) total_sessions = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--requests")) requests = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--session-seconds")) session_seconds = std::atof(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--page-loads")) page_loads = std::atoi(argv[i + 1]);
   }
-  if (total_sessions < 100 || requests < 10) {
-    std::fprintf(stderr, "web_bench: --sessions must be >= 100 and --requests >= 10\n");
+  if (total_sessions < 100 || total_sessions > 1'000'000 || requests < 10 || requests > 100'000 ||
+      !(session_seconds >= 1 && session_seconds <= 3600) || page_loads < 10 ||
+      page_loads > 10'000) {
+    std::fprintf(stderr,
+                 "web_bench: --sessions must be 100..1000000, --requests 10..100000, "
+                 "--session-seconds 1..3600 and --page-loads 10..10000\n");
     return 2;
   }
   const int trainees = 100;
@@ -157,8 +180,58 @@ int main(int argc, char** argv) {
   store.AddToken({ves::server::Sha256HexOf(admin), ves::patient_db::StoreRole::kAdmin, "north", "",
                   "bench admin", 1});
   const double seed_s = std::chrono::duration<double>(Clock::now() - t_seed).count();
+
+  // A long session as a station records it (the novice: it seldom reaches
+  // the cecum, so the session runs to its time limit).
+  const auto t_run = Clock::now();
+  ves::v1::SessionRecord long_session;
+  const auto colon_case = ves::patient_db::LoadCaseFile(
+      std::filesystem::path(VES_SOURCE_DIR) / "patient_db/cases/standard-adult.textproto");
+  ves::training::RunScriptedCase(colon_case, ves::v1::EndoscopeSpec(), {}, "novice",
+                                 session_seconds, 1'700'000'000'000, &long_session);
+  long_session.set_trainee_id("trainee-0");
+  long_session.set_station_id("station-1");
+  const double run_s = std::chrono::duration<double>(Clock::now() - t_run).count();
+  {
+    ves::patient_db::SessionRow row;
+    row.uuid = long_session.uuid();
+    row.trainee_id = "trainee-0";
+    row.institution = "north";
+    row.case_id = colon_case.id();
+    row.case_version = colon_case.version();
+    row.station_id = "station-1";
+    row.start_unix_ms = long_session.start_unix_ms();
+    row.end_unix_ms = long_session.end_unix_ms();
+    row.body = long_session.SerializeAsString();
+    row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+    row.stored_unix_ms = 1;
+    ves::patient_db::WriteBatch batch;
+    batch.sessions.push_back(std::move(row));
+    if (!store.CommitBatch(batch).ok()) {
+      std::fprintf(stderr, "web_bench: cannot store the long session\n");
+      return 1;
+    }
+  }
   server->Start();
   const int port = server->http_port();
+  // What an upload does once the session is durable: the worker computes it.
+  const auto t_series = Clock::now();
+  server->series().Enqueue(long_session.uuid());
+  while (!store.GetSessionSeries(long_session.uuid()).ok()) {
+    if (Clock::now() - t_series > std::chrono::minutes(10)) {
+      std::fprintf(stderr, "web_bench: no series within 10 minutes\n");
+      return 1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const double series_s = std::chrono::duration<double>(Clock::now() - t_series).count();
+  const double duration_s =
+      long_session.input_log().sample_count() * long_session.input_log().dt_s();
+  std::printf(
+      "web_bench: a %.0f s session (%.0f KB stored; recorded in %.1f s), its series computed in "
+      "the background in %.1f s (%.0f KB)\n",
+      duration_s, long_session.ByteSizeLong() / 1e3, run_s, series_s,
+      store.GetSessionSeries(long_session.uuid()).value.json.size() / 1e3);
 
   std::vector<std::string> page, curve, sessions, list = {"/api/v1/trainees?page_size=500"}, csv;
   const std::vector<std::string> audit_newest = {"/api/v1/audit?page_size=50"},
@@ -184,6 +257,14 @@ int main(int argc, char** argv) {
   const Stats x = Measure(csv, port, token, requests);
   const Stats an = Measure(audit_newest, port, admin, std::max(10, requests / 10));
   const Stats ar = Measure(audit_rare, port, admin, std::max(10, requests / 10));
+  const std::string uuid = long_session.uuid();
+  size_t page_bytes = 0;
+  const Stats sp = MeasurePage({"/session.html?uuid=" + uuid, "/app.js", "/style.css", "/chart.js",
+                                "/api/v1/sessions/" + uuid, "/api/v1/sessions/" + uuid + "/series"},
+                               port, token, page_loads, &page_bytes);
+  size_t series_bytes = 0;
+  const Stats ss =
+      MeasurePage({"/api/v1/sessions/" + uuid + "/series"}, port, token, page_loads, &series_bytes);
   const double cpu = CpuSeconds() - cpu0;
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
   std::printf(
@@ -205,6 +286,14 @@ int main(int argc, char** argv) {
       "  GET audit (actor+action, none of 100k match)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
       "  (%d requests)\n",
       ar.p50_ms, ar.p99_ms, ar.max_ms, std::max(10, requests / 10));
+  std::printf(
+      "  session page, first load (6 requests, %.0f KB)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
+      "  (%d loads)\n",
+      page_bytes / 1e3, sp.p50_ms, sp.p99_ms, sp.max_ms, page_loads);
+  std::printf(
+      "  GET sessions/{uuid}/series (%.0f KB)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
+      "  (%d requests)\n",
+      series_bytes / 1e3, ss.p50_ms, ss.p99_ms, ss.max_ms, page_loads);
   std::printf("  process CPU (server and client) %.1f s over %.1f s wall\n", cpu, wall);
   server->Shutdown(std::chrono::milliseconds(0));
   server.reset();

@@ -160,6 +160,34 @@ CREATE TABLE stations (
   PRIMARY KEY (institution, station_id)
 );
 )sql"},
+      {6, "session series: the web pages' plots and replay track, computed once", R"sql(
+CREATE TABLE session_series (
+  session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
+  format_version INTEGER NOT NULL,
+  computed_unix_ms BIGINT NOT NULL,
+  series BLOB NOT NULL
+);
+)sql"},
+      // -1: not known (stored before version 7; the record's body has it).
+      {7, "sessions: loop and X-ray time for cohort listings; scripted runs by case", R"sql(
+ALTER TABLE sessions ADD COLUMN loop_s DOUBLE PRECISION NOT NULL DEFAULT -1;
+ALTER TABLE sessions ADD COLUMN xray_s DOUBLE PRECISION NOT NULL DEFAULT -1;
+CREATE INDEX sessions_by_case_operator ON sessions(institution, case_id, operator_kind, start_unix_ms);
+)sql"},
+      {8, "accounts: people who sign in to the web pages (password or identity provider)", R"sql(
+CREATE TABLE accounts (
+  username TEXT PRIMARY KEY,
+  role TEXT NOT NULL,
+  institution TEXT NOT NULL REFERENCES institutions(name),
+  password_hash TEXT NOT NULL,
+  idp_identity TEXT NOT NULL,
+  created_unix_ms BIGINT NOT NULL,
+  expires_unix_ms BIGINT NOT NULL,
+  revoked_unix_ms BIGINT NOT NULL
+);
+CREATE UNIQUE INDEX accounts_by_idp_identity ON accounts(idp_identity) WHERE idp_identity <> '';
+CREATE INDEX accounts_by_institution ON accounts(institution, username);
+)sql"},
   };
   return kMigrations;
 }

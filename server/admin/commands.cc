@@ -8,6 +8,7 @@ const std::vector<Command>& AllCommands() {
       {"case", "colon case files: validate, convert, info", RunCaseCommand},
       {"init", "create the database, print the first admin token", RunInitCommand},
       {"token", "create a bearer token (admin)", RunTokenCommand},
+      {"account", "people's sign-in accounts: create, revoke, password, list", RunAccountCommand},
       {"trainee", "add or list trainees", RunTraineeCommand},
       {"scores", "a trainee's sessions and scores", RunScoresCommand},
       {"session", "show one session whole", RunSessionCommand},

@@ -23,6 +23,8 @@ int RunCaseCommand(const CommandArgs& args);
 
 // Server work: init_command.cc, remote_commands.cc, case_remote.cc (docs/server.md).
 int RunInitCommand(const CommandArgs& args);
+// Accounts of people (docs/web.md, "Accounts"): account_command.cc.
+int RunAccountCommand(const CommandArgs& args);
 int RunTokenCommand(const CommandArgs& args);
 int RunTraineeCommand(const CommandArgs& args);
 int RunScoresCommand(const CommandArgs& args);

@@ -54,7 +54,10 @@ async function api(path, options) {
   if (!res.ok) {
     const message = body && body.error ? body.error.code + ': ' + body.error.message
                                        : 'HTTP ' + res.status;
-    throw new Error(message);
+    const error = new Error(message);
+    error.status = res.status;
+    error.detail = body && body.error ? body.error.message : '';
+    throw error;
   }
   return body;
 }
@@ -80,18 +83,48 @@ async function signedIn() {
 
 // ---- pages --------------------------------------------------------------
 
+// Why a sign-in through the identity provider came back refused
+// (/index.html?error=CODE, set by the server's callback).
+const kSignInErrors = {
+  idp: 'The hospital sign-in did not complete. Try again.',
+  no_account: 'Your hospital account is not linked to a VES account. Ask a VES administrator.',
+  account: 'Your VES account is revoked or has expired. Ask a VES administrator.',
+  unavailable: 'The hospital sign-in is not reachable now. Try again later.',
+  busy: 'Too many people are signed in. Try again later.',
+};
+
 async function signInPage() {
+  const error = param('error');
+  if (error) showError(kSignInErrors[error] || 'Sign-in refused.');
+  const finish = (reply) => {
+    sessionStorage.setItem('ves_csrf', reply.csrf_token);
+    location.href = '/trainees.html';
+  };
+  $('password-form').addEventListener('submit', async (event) => {
+    event.preventDefault();
+    try {
+      finish(await api('sign-in', {method: 'POST', body: JSON.stringify(
+          {username: $('username').value.trim().toLowerCase(), password: $('password').value})}));
+    } catch (e) {
+      $('password').value = '';
+      showError(e.message);
+    }
+  });
   $('sign-in-form').addEventListener('submit', async (event) => {
     event.preventDefault();
     try {
-      const reply = await api('sign-in', {method: 'POST',
-                                          body: JSON.stringify({token: $('token').value})});
-      sessionStorage.setItem('ves_csrf', reply.csrf_token);
-      location.href = '/trainees.html';
+      finish(await api('sign-in', {method: 'POST',
+                                   body: JSON.stringify({token: $('token').value})}));
     } catch (e) {
       showError(e.message);
     }
   });
+  try {
+    const methods = await api('sign-in');
+    $('oidc').hidden = !methods.oidc;
+  } catch (e) {
+    // The sign-in page works without knowing: the forms stay.
+  }
 }
 
 async function traineesPage() {
@@ -107,15 +140,17 @@ async function traineesPage() {
       body.appendChild(row([
         link(t.trainee_id, '/trainee.html?id=' + encodeURIComponent(t.trainee_id)),
         t.display_name,
-        t.group ? link(t.group, '/progress.html?group=' + encodeURIComponent(t.group)) : '—',
-        t.sessions, when(t.last_activity_unix_ms)]));
+        t.group ? link(t.group, '/group.html?group=' + encodeURIComponent(t.group)) : '—',
+        t.sessions, when(t.last_activity_unix_ms), curriculaCell(t.curricula)]));
       if (t.group) groups.add(t.group);
     }
     token = page.next_page_token;
   } while (token);
   for (const g of [...groups].sort()) {
     const li = el('li');
-    li.appendChild(link(g, '/progress.html?group=' + encodeURIComponent(g)));
+    li.appendChild(link(g, '/group.html?group=' + encodeURIComponent(g)));
+    li.appendChild(document.createTextNode(' · '));
+    li.appendChild(link('lesson progress', '/progress.html?group=' + encodeURIComponent(g)));
     $('groups').appendChild(li);
   }
 }
@@ -126,7 +161,10 @@ function lineChart(canvas, title, yLabel, datasets) {
     data: {datasets: datasets},
     options: {
       animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
-      plugins: {title: {display: true, text: title}, legend: {display: datasets.length > 1}},
+      plugins: {title: {display: true, text: title},
+                // The expert band's lower edge is drawn, not named.
+                legend: {display: datasets.length > 1,
+                         labels: {filter: (item) => item.text !== 'expert low'}}},
       scales: {x: {type: 'linear', title: {display: true, text: 'attempt'}, ticks: {precision: 0}},
                y: {title: {display: true, text: yLabel}, beginAtZero: true}}
     }
@@ -138,7 +176,8 @@ function outcomeText(outcome) {
   return String(outcome || '').replace(/^OUTCOME_/, '').toLowerCase().replace(/_/g, ' ');
 }
 
-function curveBlock(container, kind, name, points, median, pass) {
+// `band`: the scripted expert's runs of the case (docs/web.md, "Proficiency").
+function curveBlock(container, kind, name, points, median, pass, band) {
   const block = el('section', null, {class: 'curve', id: 'curve-' + kind + '-' + name});
   block.appendChild(el('h3', (kind === 'case' ? 'Case ' : 'Lesson ') + name));
   const metrics = [['score', 'Score', '/100'], ['time_to_cecum_s', 'Time to cecum', 's'],
@@ -160,6 +199,15 @@ function curveBlock(container, kind, name, points, median, pass) {
       sets.push({label: 'pass line', data: [{x: 1, y: pass[key]}, {x: Math.max(last, 2), y: pass[key]}],
                  borderColor: '#2a2', pointRadius: 0, backgroundColor: '#2a2'});
     }
+    if (band && band[key] && points.length) {
+      const last = Math.max(points[points.length - 1].attempt, 2);
+      const [lo, hi] = band[key];
+      sets.push({label: 'expert low', data: [{x: 1, y: lo}, {x: last, y: lo}],
+                 borderColor: 'rgba(220,120,0,0.7)', pointRadius: 0, borderWidth: 1});
+      sets.push({label: 'expert band (' + band.runs + ' runs)', data: [{x: 1, y: hi}, {x: last, y: hi}],
+                 borderColor: 'rgba(220,120,0,0.7)', pointRadius: 0, borderWidth: 1,
+                 fill: '-1', backgroundColor: 'rgba(220,120,0,0.18)'});
+    }
     container.appendChild(block);
     charts.push(lineChart(canvas, title, unit, sets));
   }
@@ -175,6 +223,7 @@ function curveBlock(container, kind, name, points, median, pass) {
                            link('open', '/session.html?uuid=' + encodeURIComponent(p.uuid))]));
   }
   block.appendChild(table);
+  if (band) block.appendChild(el('p', expertBandText(band), {class: 'expert-band'}));
   ves.charts[kind + ':' + name] = charts;
 }
 
@@ -184,8 +233,13 @@ async function traineePage() {
   $('trainee-id').textContent = id;
   const curve = await api('trainees/' + encodeURIComponent(id) + '/curve');
   $('trainee-group').textContent = curve.group || '—';
-  for (const c of curve.cases) curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null);
-  for (const l of curve.lessons) curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line);
+  $('report-link').href = '/report.html?id=' + encodeURIComponent(id);
+  for (const c of curve.cases) {
+    curveBlock($('curves'), 'case', c.case_id, c.points, c.group_median, null, c.expert_band);
+  }
+  for (const l of curve.lessons) {
+    curveBlock($('curves'), 'lesson', l.lesson_id, l.points, null, l.pass_line, l.expert_band);
+  }
   // The CSV export of the sessions between the chosen days (docs/web.md, "Export").
   const exportLink = () => {
     let range = '';
@@ -232,7 +286,25 @@ const bandsPlugin = {
   }
 };
 
-function timeChart(canvas, title, frames, series) {
+// The replay's time on every plot (chart.$vesCursorT, seconds): a dashed line.
+const cursorPlugin = {
+  id: 'vesCursor',
+  afterDatasetsDraw(chart) {
+    const t = chart.$vesCursorT;
+    if (typeof t !== 'number') return;
+    const {ctx, chartArea, scales} = chart;
+    const x = scales.x.getPixelForValue(t);
+    if (x < chartArea.left - 1 || x > chartArea.right + 1) return;
+    ctx.save();
+    ctx.strokeStyle = '#222';
+    ctx.lineWidth = 2;
+    ctx.setLineDash([5, 3]);
+    ctx.beginPath(); ctx.moveTo(x, chartArea.top); ctx.lineTo(x, chartArea.bottom); ctx.stroke();
+    ctx.restore();
+  }
+};
+
+function timeChart(canvas, title, frames, series, onPick) {
   return new Chart(canvas, {
     type: 'line',
     data: {datasets: series.map(([label, key, scale, color]) => ({
@@ -241,9 +313,10 @@ function timeChart(canvas, title, frames, series) {
     options: {
       animation: false, responsive: true, maintainAspectRatio: false, parsing: false,
       plugins: {title: {display: true, text: title}, vesBands: {frames: frames}},
-      scales: {x: {type: 'linear', title: {display: true, text: 's'}}}
+      scales: {x: {type: 'linear', title: {display: true, text: 's'}}},
+      onClick: onPick ? (event, elements, chart) => onPick(chart.scales.x.getValueForPixel(event.x)) : undefined
     },
-    plugins: [bandsPlugin]
+    plugins: onPick ? [bandsPlugin, cursorPlugin] : [bandsPlugin]
   });
 }
 
@@ -290,7 +363,12 @@ async function sessionPage() {
   await signedIn();
   const uuid = param('uuid');
   $('session-uuid').textContent = uuid;
+  ves.timing = {};
+  // Both at once: the series is the larger answer.
+  const seriesPromise = loadSeries(uuid);
+  seriesPromise.catch(() => {});  // reported where it is awaited
   const s = await api('sessions/' + encodeURIComponent(uuid));
+  ves.timing.summary_ms = performance.now();
   const r = s.record, m = r.metrics || {};
   const summary = [['Trainee', r.trainee_id], ['Case', r.case_id + ' v' + r.case_version],
                    ['Lesson', r.lesson_id || '—'], ['Station', r.station_id],
@@ -322,32 +400,137 @@ async function sessionPage() {
     healthDds[1 + index].classList.add('flagged');
     healthDds[1 + index].setAttribute('title', title);
   }
-  const replay = await api('sessions/' + encodeURIComponent(uuid) + '/replay');
+  showVerdict(s.lesson_verdict);
+  const series = await seriesPromise;
   const b = {x0: Infinity, x1: -Infinity, y0: Infinity, y1: -Infinity};
-  for (const f of replay.frames) {
+  for (const f of series.frames) {
     for (const p of (f.colon_mm || []).concat(f.scope_mm || [])) {
       b.x0 = Math.min(b.x0, p[0]); b.x1 = Math.max(b.x1, p[0]);
       b.y0 = Math.min(b.y0, p[1]); b.y1 = Math.max(b.y1, p[1]);
     }
   }
   if (!(b.x1 > b.x0)) { b.x0 = -200; b.x1 = 200; b.y0 = -200; b.y1 = 200; }
-  replay.bounds = b;
-  ves.replay = replay;
-  $('replay-status').textContent = replay.summary;
+  series.bounds = b;
+  ves.replay = series;
+  $('replay-status').textContent = series.summary;
+  $('replay-status').classList.remove('busy');
   $('replay').hidden = false;
-  const frames = replay.frames;
+  const frames = series.frames;
+  const seek = (t) => showReplayAt(timeIndex(frames, t), t);
   ves.charts.force = timeChart($('plot-force'), 'Hand force (N)', frames,
-                               [['hand force N', 'hand_force_N', 1, '#a33']]);
+                               [['hand force N', 'hand_force_N', 1, '#a33']], seek);
   ves.charts.stretch = timeChart($('plot-stretch'), 'Colon stretch (mm)', frames,
-                                 [['stretch mm', 'stretch_m', 1000, '#a60']]);
+                                 [['stretch mm', 'stretch_m', 1000, '#a60']], seek);
   ves.charts.depth = timeChart($('plot-depth'), 'Tip depth and inserted length (mm)', frames,
                                [['tip depth mm', 'tip_arc_m', 1000, '#15a'],
-                                ['inserted mm', 'inserted_m', 1000, '#5a5']]);
+                                ['inserted mm', 'inserted_m', 1000, '#5a5']], seek);
+  ves.timing.plots_ms = performance.now();
+  setupPlayer(series);
+}
+
+// The series of the session (docs/web.md, "Session series"); while the
+// server is busy computing series (429) it says so and asks again by itself.
+async function loadSeries(uuid) {
+  for (let attempt = 1; ; attempt++) {
+    ves.seriesAttempts = attempt;
+    try {
+      return await api('sessions/' + encodeURIComponent(uuid) + '/series');
+    } catch (e) {
+      if (e.status !== 429 || attempt >= 60) throw e;
+      ves.seriesBusy = (ves.seriesBusy || 0) + 1;
+      const wait = Math.min(5, attempt + 1);
+      const status = $('replay-status');
+      status.classList.add('busy');
+      status.textContent = 'The server is busy (' + e.detail + '). Trying again in ' + wait +
+                           ' s (attempt ' + attempt + ')…';
+      await new Promise((resolve) => setTimeout(resolve, wait * 1000));
+      status.textContent = 'Asking again for the session\'s plots…';
+    }
+  }
+}
+
+const verdictText = {passed: 'PASSED', failed: 'FAILED', rejected: 'REJECTED',
+                     pending: 'Not judged yet', unknown: 'Verdict unavailable'};
+
+// The server's verdict on a lesson session and each criterion's outcome.
+function showVerdict(v) {
+  if (!v) return;  // a free run
+  $('verdict').hidden = false;
+  const status = $('verdict-status');
+  status.textContent = verdictText[v.status] || v.status;
+  status.className = 'verdict ' + v.status;
+  let note = 'lesson ' + v.lesson_id;
+  if (v.judged_unix_ms) note += ', judged by the server ' + when(v.judged_unix_ms);
+  if (v.status === 'pending') note += ': the server has not replayed it yet';
+  $('verdict-note').textContent = note;
+  for (const c of v.checks || []) {
+    const outcome = c.passed === true ? 'passed' : c.passed === false ? 'failed' : 'note';
+    const li = el('li', null, {class: outcome});
+    li.appendChild(el('span', c.passed === true ? '✓ passed' : c.passed === false ? '✗ failed' : '•',
+                      {class: 'mark'}));
+    li.appendChild(document.createTextNode(' ' + c.text));
+    $('verdict-checks').appendChild(li);
+  }
+}
+
+// The last frame at or before t (frames ordered by t_s).
+function timeIndex(frames, t) {
+  let lo = 0, hi = frames.length - 1;
+  while (lo < hi) {
+    const mid = (lo + hi + 1) >> 1;
+    if (frames[mid].t_s <= t) lo = mid; else hi = mid - 1;
+  }
+  return lo;
+}
+
+// The replay at frame `index`: view, figures, scrubber and the plots' cursor.
+function showReplayAt(index, t) {
+  const frames = ves.replay.frames;
+  const player = ves.player;
+  player.index = index;
+  player.t = Math.max(frames[0].t_s, Math.min(t, frames[frames.length - 1].t_s));
+  $('scrub').value = String(index);
+  drawFrame(ves.replay, index);
+  for (const chart of [ves.charts.force, ves.charts.stretch, ves.charts.depth]) {
+    chart.$vesCursorT = player.t;
+    chart.draw();
+  }
+}
+
+function setupPlayer(series) {
+  const frames = series.frames;
+  const end = frames[frames.length - 1].t_s;
+  const player = ves.player = {t: frames[0].t_s, index: 0, playing: false, speed: 1, timer: null};
+  const button = $('play');
+  const pause = () => {
+    player.playing = false;
+    clearInterval(player.timer);
+    player.timer = null;
+    button.textContent = 'Play';
+  };
+  const play = () => {
+    if (player.t >= end) showReplayAt(0, frames[0].t_s);  // from the start again
+    player.playing = true;
+    button.textContent = 'Pause';
+    let last = performance.now();
+    player.timer = setInterval(() => {
+      const now = performance.now();
+      const t = player.t + (now - last) / 1000 * player.speed;
+      last = now;
+      showReplayAt(timeIndex(frames, t), Math.min(t, end));
+      if (t >= end) pause();
+    }, 50);
+  };
+  button.addEventListener('click', () => (player.playing ? pause() : play()));
+  $('speed').addEventListener('change', () => { player.speed = Number($('speed').value); });
+  player.speed = Number($('speed').value);
   const scrub = $('scrub');
   scrub.max = String(frames.length - 1);
-  scrub.value = '0';
-  scrub.addEventListener('input', () => drawFrame(replay, Number(scrub.value)));
-  drawFrame(replay, 0);
+  scrub.addEventListener('input', () => {
+    const i = Number(scrub.value);
+    showReplayAt(i, frames[i].t_s);
+  });
+  showReplayAt(0, frames[0].t_s);
 }
 
 async function progressPage() {

@@ -20,10 +20,10 @@ std::filesystem::path MakeTempDir(const std::string& tag) {
   return dir;
 }
 
-TestServer::TestServer(ServerOptions options) : dir_(MakeTempDir("server")) {
+TestServer::TestServer(ServerOptions options, bool log_calls) : dir_(MakeTempDir("server")) {
   options.listen = "127.0.0.1:0";
   if (options.tls_cert_file.empty()) options.insecure_loopback = true;
-  options.log_calls = false;
+  options.log_calls = log_calls;
   server_ = std::make_unique<VesServer>(
       options, patient_db::OpenStore("sqlite:" + (dir_ / "ves.db").string()));
   server_->Start();

@@ -21,8 +21,9 @@ std::filesystem::path MakeTempDir(const std::string& tag);
 class TestServer {
  public:
   // Plaintext on loopback unless `options` asks for TLS; listen is forced to
-  // 127.0.0.1:0.
-  explicit TestServer(ServerOptions options = {});
+  // 127.0.0.1:0. The per-call log is off unless `log_calls` (tests that read
+  // the log).
+  explicit TestServer(ServerOptions options = {}, bool log_calls = false);
   ~TestServer();
 
   std::string address() const { return "127.0.0.1:" + std::to_string(server_->port()); }

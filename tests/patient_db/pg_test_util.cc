@@ -61,6 +61,12 @@ class SkippedStore final : public Store {
   StoreResult<bool> HasInstitution(const std::string&) override { return false; }
   StoreStatus AddToken(const TokenRow&) override { return {}; }
   StoreResult<TokenRow> FindToken(const std::string&) override { return Skipped(); }
+  StoreStatus AddAccount(const AccountRow&) override { return {}; }
+  StoreResult<AccountRow> GetAccount(const std::string&) override { return Skipped(); }
+  StoreResult<AccountRow> FindAccountByIdentity(const std::string&) override { return Skipped(); }
+  StoreResult<std::vector<AccountRow>> ListAccounts(const std::string&) override { return {}; }
+  StoreStatus RevokeAccount(const std::string&, int64_t) override { return {}; }
+  StoreStatus SetAccountPassword(const std::string&, const std::string&) override { return {}; }
   StoreStatus AddTrainee(const TraineeRow&) override { return {}; }
   StoreResult<TraineeRow> GetTrainee(const std::string&) override { return Skipped(); }
   StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string&,
@@ -82,6 +88,10 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
+  StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string&, const std::string&,
+                                                            const std::string&, int) override {
+    return Skipped();
+  }
   StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>&) override {
     return Skipped();
@@ -120,6 +130,8 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
+  StoreStatus PutSessionSeries(const SessionSeriesRow&) override { return Skipped(); }
+  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string&) override { return Skipped(); }
 
  private:
   static StoreStatus Skipped() {

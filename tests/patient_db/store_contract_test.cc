@@ -105,6 +105,49 @@ TEST_P(StoreContract, TokenForUnknownInstitutionIsRefused) {
   EXPECT_EQ(store_->AddToken(t).code, StoreCode::kInvalidArgument);
 }
 
+TEST_P(StoreContract, AccountsAreFoundByNameAndIdentityAndRevokedOnce) {
+  AccountRow a{"alice", StoreRole::kSupervisor, "north", "$scrypt$hash", "sub-1", 5, 900, 0};
+  AccountRow b{"bob", StoreRole::kAdmin, "south", "", "", 6, 0, 0};
+  AccountRow c{"carol", StoreRole::kSupervisor, "north", "h", "", 7, 0, 0};
+  ASSERT_TRUE(store_->AddAccount(a).ok());
+  ASSERT_TRUE(store_->AddAccount(b).ok());
+  ASSERT_TRUE(store_->AddAccount(c).ok());  // a second empty identity is no clash
+  auto got = store_->GetAccount("alice");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, a);
+  auto by_identity = store_->FindAccountByIdentity("sub-1");
+  ASSERT_TRUE(by_identity.ok());
+  EXPECT_EQ(by_identity.value.username, "alice");
+  EXPECT_EQ(store_->FindAccountByIdentity("").status.code, StoreCode::kNotFound);
+  EXPECT_EQ(store_->GetAccount("nobody").status.code, StoreCode::kNotFound);
+
+  EXPECT_EQ(store_->AddAccount({"alice", StoreRole::kAdmin, "north", "", "", 8, 0, 0}).code,
+            StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->AddAccount({"dave", StoreRole::kAdmin, "north", "", "sub-1", 8, 0, 0}).code,
+            StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->AddAccount({"erin", StoreRole::kAdmin, "nowhere", "", "", 8, 0, 0}).code,
+            StoreCode::kInvalidArgument);
+
+  auto north = store_->ListAccounts("north");
+  ASSERT_TRUE(north.ok());
+  ASSERT_EQ(north.value.size(), 2u);
+  EXPECT_EQ(north.value[0].username, "alice");
+  EXPECT_EQ(north.value[1].username, "carol");
+  auto all = store_->ListAccounts("");
+  ASSERT_TRUE(all.ok());
+  EXPECT_EQ(all.value.size(), 3u);
+
+  ASSERT_TRUE(store_->RevokeAccount("alice", 1000).ok());
+  ASSERT_TRUE(store_->RevokeAccount("alice", 2000).ok());  // the first time is kept
+  EXPECT_EQ(store_->GetAccount("alice").value.revoked_unix_ms, 1000);
+  EXPECT_EQ(store_->RevokeAccount("nobody", 1000).code, StoreCode::kNotFound);
+  ASSERT_TRUE(store_->SetAccountPassword("bob", "$scrypt$new").ok());
+  EXPECT_EQ(store_->GetAccount("bob").value.password_hash, "$scrypt$new");
+  EXPECT_EQ(store_->SetAccountPassword("nobody", "x").code, StoreCode::kNotFound);
+  Reopen();
+  EXPECT_EQ(store_->GetAccount("alice").value.revoked_unix_ms, 1000);
+}
+
 TEST_P(StoreContract, TraineesAreListedPerInstitution) {
   ASSERT_TRUE(store_->AddTrainee({"t2", "south", "Two", 11}).ok());
   ASSERT_TRUE(store_->AddTrainee({"t0", "north", "Zero", 12}).ok());
@@ -306,6 +349,55 @@ TEST_P(StoreContract, SessionsReadBackTheLessonTheyName) {
   EXPECT_EQ(one.value.lesson_id, "navigate-sigmoid");
   EXPECT_EQ(one.value.body, "body-a");
   EXPECT_EQ(store_->GetSession("u2").value.lesson_id, "");
+}
+
+TEST_P(StoreContract, SessionsKeepLoopAndXrayTimeAndListAnOperatorsRunsOfACase) {
+  ASSERT_TRUE(store_->AddTrainee({"s1", "south", "South One", 10}).ok());
+  WriteBatch b;
+  SessionRow expert_old = Session("u1", "a", 100);
+  expert_old.operator_kind = "expert";
+  expert_old.loop_s = 2.5;
+  expert_old.xray_s = 7.25;
+  SessionRow expert_new = Session("u2", "b", 300);
+  expert_new.operator_kind = "expert";
+  SessionRow other_case = Session("u3", "c", 200);
+  other_case.operator_kind = "expert";
+  other_case.case_id = "redundant-sigmoid";
+  SessionRow novice = Session("u4", "d", 400);  // operator "novice"
+  SessionRow unknown = Session("u5", "e", 500);
+  unknown.operator_kind = "expert";
+  unknown.loop_s = -1;  // a row that never had them: read back as not known
+  unknown.xray_s = -1;
+  SessionRow south = Session("u6", "f", 600);
+  south.trainee_id = "s1";
+  south.institution = "south";
+  south.operator_kind = "expert";
+  b.sessions = {expert_old, expert_new, other_case, novice, unknown, south};
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  Reopen();
+  auto one = store_->GetSession("u1");
+  ASSERT_TRUE(one.ok()) << one.status.message;
+  EXPECT_EQ(one.value.loop_s, 2.5);
+  EXPECT_EQ(one.value.xray_s, 7.25);
+  auto listed = store_->ListSessions("t1", "");
+  ASSERT_TRUE(listed.ok()) << listed.status.message;
+  ASSERT_EQ(listed.value.size(), 5u);
+  EXPECT_EQ(listed.value[0].loop_s, 2.5);
+  EXPECT_EQ(listed.value[0].xray_s, 7.25);
+  EXPECT_EQ(listed.value[4].loop_s, -1);
+  // The north expert's runs of standard-adult, newest first, bounded.
+  auto runs = store_->ListOperatorSessions("north", "standard-adult", "expert", 10);
+  ASSERT_TRUE(runs.ok()) << runs.status.message;
+  std::vector<std::string> uuids;
+  for (const auto& r : runs.value) uuids.push_back(r.uuid);
+  EXPECT_EQ(uuids, (std::vector<std::string>{"u5", "u2", "u1"}));
+  EXPECT_EQ(runs.value[2].loop_s, 2.5);
+  EXPECT_EQ(runs.value[2].body, "");
+  auto two = store_->ListOperatorSessions("north", "standard-adult", "expert", 2);
+  ASSERT_TRUE(two.ok());
+  EXPECT_EQ(two.value.size(), 2u);
+  EXPECT_TRUE(store_->ListOperatorSessions("south", "redundant-sigmoid", "expert", 10)
+                  .value.empty());
 }
 
 TEST_P(StoreContract, TraineeActivityCountsSessionsAndTheLatestEnd) {
@@ -582,6 +674,41 @@ TEST_P(StoreContract, ListingsPageByTheirSortKey) {
   }
 }
 
+// The web pages' series of a session (docs/web.md): stored once, read back
+// byte for byte (binary-safe, large), replaced by a newer computation, kept
+// across a reopen, refused for a session that is not stored and over the bound.
+TEST_P(StoreContract, SessionSeriesAreStoredReadBackAndBounded) {
+  WriteBatch b;
+  b.sessions.push_back(Session("s-series", "body", 100));
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  EXPECT_EQ(store_->GetSessionSeries("s-series").status.code, StoreCode::kNotFound);
+
+  std::string json = "{\"frames\": [";
+  while (json.size() < 900'000) json += "{\"t_s\": 0.1, \"x\": \"\\u0000\"},";
+  json += std::string("\0\xff", 2) + "]}";
+  SessionSeriesRow row{"s-series", 1, 1234, json};
+  ASSERT_TRUE(store_->PutSessionSeries(row).ok());
+  auto got = store_->GetSessionSeries("s-series");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, row);
+
+  SessionSeriesRow newer{"s-series", 2, 5678, "{\"v\": 2}"};
+  ASSERT_TRUE(store_->PutSessionSeries(newer).ok());
+  Reopen();
+  got = store_->GetSessionSeries("s-series");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, newer);
+
+  EXPECT_EQ(store_->PutSessionSeries({"no-such-session", 1, 1, "{}"}).code, StoreCode::kNotFound);
+  EXPECT_EQ(store_->GetSessionSeries("no-such-session").status.code, StoreCode::kNotFound);
+  const StoreStatus big =
+      store_->PutSessionSeries({"s-series", 3, 1, std::string(kMaxSessionSeriesBytes + 1, 'x')});
+  EXPECT_EQ(big.code, StoreCode::kInvalidArgument);
+  EXPECT_NE(big.message.find("bytes"), std::string::npos) << big.message;
+  EXPECT_EQ(store_->PutSessionSeries({"s-series", 3, 1, ""}).code, StoreCode::kInvalidArgument);
+  EXPECT_EQ(store_->GetSessionSeries("s-series").value, newer);  // the refusals changed nothing
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Backends, StoreContract,
     ::testing::Values(Backend{"sqlite",
@@ -645,7 +772,7 @@ TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
     ASSERT_TRUE(db.Exec("SELECT * FROM stations", &error) == false);  // not there yet
   }
   SqliteStore store(path.string());
-  EXPECT_EQ(store.schema_version(), 5);
+  EXPECT_EQ(store.schema_version(), SqlMigrations().back().version);  // 5 and every later one
   ASSERT_TRUE(store.HasInstitution("north").value);
   ASSERT_TRUE(store.AddTrainee({"t1", "north", "T", 1}).ok());
   SessionRow row;
@@ -668,6 +795,72 @@ TEST(SqliteStore, MigrationFiveAddsStationsToAnOlderDatabase) {
   ASSERT_TRUE(store.CommitBatch(b).ok());
   ASSERT_EQ(store.ListStations("north").value.size(), 1u);
   EXPECT_EQ(store.ListStations("north").value[0], report);
+  std::filesystem::remove(path);
+}
+
+// A database of schema 6 with a session stored: migration 7 reads that
+// session's loop and X-ray time back as not known (-1), not as 0 s, and
+// keeps the figures of sessions stored after it.
+TEST(SqliteStore, MigrationSevenLeavesOlderSessionsLoopAndXrayTimeUnknown) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("ves_migrate7_" + std::to_string(::getpid()) + ".db");
+  std::filesystem::remove(path);
+  {
+    SqliteDb db(path.string());
+    std::string error;
+    ASSERT_TRUE(
+        db.Exec("CREATE TABLE schema_migrations (version INTEGER PRIMARY KEY, "
+                "description TEXT NOT NULL, applied_unix_ms BIGINT NOT NULL)",
+                &error))
+        << error;
+    for (const Migration& m : SqlMigrations()) {
+      if (m.version > 6) break;
+      ASSERT_TRUE(db.Exec(m.sql, &error)) << error;
+      ASSERT_TRUE(db.Exec(
+          "INSERT INTO schema_migrations VALUES (" + std::to_string(m.version) + ", 'old', 1)",
+          &error))
+          << error;
+    }
+    for (const char* sql :
+         {"INSERT INTO institutions (name, created_unix_ms) VALUES ('north', 1)",
+          "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
+          "VALUES ('t1', 'north', 'T', 1)",
+          "INSERT INTO sessions (uuid, trainee_id, institution, case_id, case_version, "
+          "station_id, start_unix_ms, end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, "
+          "score, body_sha256_hex, stored_unix_ms, body, operator_kind, max_tip_arc_m) VALUES "
+          "('old', 't1', 'north', 'c', 1, 'st', 10, 20, 1, 1, 5, 1, 50, 'h', 30, x'00', "
+          "'expert', 0.5)"}) {
+      ASSERT_TRUE(db.Exec(sql, &error)) << error;
+    }
+  }
+  SqliteStore store(path.string());
+  auto old = store.GetSession("old");
+  ASSERT_TRUE(old.ok()) << old.status.message;
+  EXPECT_EQ(old.value.loop_s, -1);
+  EXPECT_EQ(old.value.xray_s, -1);
+  EXPECT_EQ(old.value.score, 50);
+  SessionRow row;
+  row.uuid = "new";
+  row.trainee_id = "t1";
+  row.institution = "north";
+  row.case_id = "c";
+  row.case_version = 1;
+  row.operator_kind = "expert";
+  row.start_unix_ms = 40;
+  row.loop_s = 3.5;
+  row.xray_s = 0;
+  row.body_sha256_hex = "h2";
+  row.body = "b";
+  WriteBatch b;
+  b.sessions = {row};
+  ASSERT_TRUE(store.CommitBatch(b).ok());
+  auto runs = store.ListOperatorSessions("north", "c", "expert", 10);
+  ASSERT_TRUE(runs.ok()) << runs.status.message;
+  ASSERT_EQ(runs.value.size(), 2u);
+  EXPECT_EQ(runs.value[0].uuid, "new");
+  EXPECT_EQ(runs.value[0].loop_s, 3.5);
+  EXPECT_EQ(runs.value[0].xray_s, 0);
+  EXPECT_EQ(runs.value[1].loop_s, -1);
   std::filesystem::remove(path);
 }
 

@@ -92,6 +92,7 @@ const std::vector<std::string>& ApiGetRoutes() {
       "/api/v1/trainees/t1/curve",
       "/api/v1/sessions/00000000-0000-4000-8000-000000000000",
       "/api/v1/sessions/00000000-0000-4000-8000-000000000000/replay",
+      "/api/v1/sessions/00000000-0000-4000-8000-000000000000/series",
       "/api/v1/groups/g1/progress",
       "/api/v1/audit",
       "/api/v1/live",
@@ -779,7 +780,7 @@ TEST(SessionsCsv, QuotesCellsAndDefusesFormulas) {
             "u1,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,failed,"
             "pain_s 31 <= 30: FAILED; damage_events 0 <= 0: ok,\"ward 3, bed \"\"A\"\"\",,"
             "1970-01-01T00:00:01.000Z,1970-01-01T00:01:01.500Z,60.500,timed_out,false,,0.000,"
-            "0.0000,0.00");
+            "0.0000,0.00,,");  // loop and X-ray time not known: empty
   EXPECT_NE(csv.find("\r\nu2,\"'=HYPERLINK(\"\"x\"\",1)\",'-case,0,l1,pending,,"),
             std::string::npos)
       << csv;

@@ -1,7 +1,8 @@
 // Test fixture for tests/server/web_browser_test.py (not installed):
 //   web_seed setup DB_URL
 //     tokens, institution "north", trainees t1, t2 and one named like
-//     markup, group g1, the sample case; prints {"admin": ..., ...} as JSON.
+//     markup, group g1, the sample case, supervisor account "dr.north"
+//     (password in "account_password"); prints {"admin": ..., ...} as JSON.
 //   web_seed upload GRPC_ADDRESS STATION_TOKEN TRAINEE OPERATOR SECONDS
 //     a scripted operator's session on the sample case, uploaded as a station
 //     does; prints {"uuid": ..., "final_tip_arc_m": ...} (the recording run's
@@ -9,17 +10,25 @@
 //   web_seed upload ... SECONDS STATION_ID faulty
 //     the same from STATION_ID with a fixture StationHealth whose every
 //     figure is out of range (the stations page's flags).
+//   web_seed store DB_URL TRAINEE OPERATOR SECONDS
+//     the same session written straight into the store (run before the
+//     server starts), as a server before session series stored it: no
+//     series; prints {"uuid": ..., "final_tip_arc_m": ...}.
 //   web_seed lesson GRPC_ADDRESS SUPERVISOR_TOKEN STATION_TOKEN TRAINEE
 //     creates curriculum "web-lessons" with one 3 s lesson on the sample case
 //     ("web-first-seconds": no damage, under 30 s of pain), uploads the
 //     scripted expert's session of it and waits (up to 60 s) for the
 //     server's verdict; prints {"uuid", "lesson_id", "passed", "score"}.
+//   web_seed assign GRPC_ADDRESS SUPERVISOR_TOKEN CURRICULUM GROUP
+//     assigns the curriculum to the group (Lessons.AssignCurriculum).
 #include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "patient_db/case_bundle.h"
+#include "server/accounts.h"
+#include "server/auth.h"
 #include "server/client.h"
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
@@ -147,6 +156,15 @@ int main(int argc, char** argv) {
       nlohmann::json out = {{"admin", Token(*store, StoreRole::kAdmin)},
                             {"supervisor", Token(*store, StoreRole::kSupervisor)},
                             {"station", Token(*store, StoreRole::kStation)}};
+      const std::string password = "web test password " + ves::server::NewToken().substr(0, 8);
+      if (!store
+               ->AddAccount({"dr.north", StoreRole::kSupervisor, "north",
+                             ves::server::HashPassword(password), "", 1, 0, 0})
+               .ok()) {
+        throw std::runtime_error("cannot add an account");
+      }
+      out["account"] = "dr.north";
+      out["account_password"] = password;
       std::cout << out.dump() << "\n";
       return 0;
     }
@@ -195,10 +213,69 @@ int main(int argc, char** argv) {
                 << "\n";
       return 0;
     }
+    if (mode == "store" && argc == 6) {
+      const auto colon_case = ts::SampleCase();
+      ves::v1::SessionRecord record;
+      double final_tip_arc_m = 0;
+      ves::training::RunScriptedCase(
+          colon_case, ves::v1::EndoscopeSpec(), {}, argv[4], std::stod(argv[5]),
+          ves::server::NowUnixMs() - 120'000, &record,
+          [&](const ves::training::InputSample&, const ves::training::SessionRunner& runner) {
+            final_tip_arc_m = runner.observation().tip_arc_m;
+          });
+      record.set_trainee_id(argv[3]);
+      record.set_station_id("web-test-station");
+      record.set_case_id(colon_case.id());
+      record.set_case_version(colon_case.version());
+      record.set_case_sha256_hex(ves::patient_db::CasePayloadSha256Hex(colon_case));
+      ves::patient_db::SessionRow row;
+      row.uuid = record.uuid();
+      row.trainee_id = record.trainee_id();
+      row.institution = "north";
+      row.case_id = record.case_id();
+      row.case_version = record.case_version();
+      row.station_id = record.station_id();
+      row.start_unix_ms = record.start_unix_ms();
+      row.end_unix_ms = record.end_unix_ms();
+      row.completed = record.metrics().completed();
+      row.score = record.score();
+      row.body = record.SerializeAsString();
+      row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+      row.stored_unix_ms = ves::server::NowUnixMs();
+      ves::patient_db::WriteBatch batch;
+      batch.sessions.push_back(std::move(row));
+      if (!ves::patient_db::OpenStore(argv[2])->CommitBatch(batch).ok()) {
+        std::cerr << "web_seed: cannot store the session\n";
+        return 1;
+      }
+      std::cout
+          << nlohmann::json{{"uuid", record.uuid()}, {"final_tip_arc_m", final_tip_arc_m}}.dump()
+          << "\n";
+      return 0;
+    }
     if (mode == "lesson" && argc == 6) return SeedPassedLesson(argv[2], argv[3], argv[4], argv[5]);
+    if (mode == "assign" && argc == 6) {
+      ves::server::ClientOptions supervisor{};
+      supervisor.address = argv[2];
+      supervisor.token = argv[3];
+      ves::v1::AssignCurriculumRequest req;
+      req.set_curriculum_id(argv[4]);
+      req.set_group(argv[5]);
+      ves::v1::AssignCurriculumResponse resp;
+      grpc::ClientContext ctx;
+      ves::server::PrepareContext(&ctx, supervisor);
+      const grpc::Status s = ves::v1::Lessons::NewStub(ves::server::MakeClientChannel(supervisor))
+                                 ->AssignCurriculum(&ctx, req, &resp);
+      if (!s.ok()) {
+        std::cerr << "web_seed: assignment refused: " << s.error_message() << "\n";
+        return 1;
+      }
+      return 0;
+    }
     std::cerr << "usage: web_seed setup DB_URL | web_seed upload ADDRESS TOKEN TRAINEE "
-                 "OPERATOR SECONDS [STATION_ID faulty] | web_seed lesson ADDRESS SUPERVISOR_TOKEN "
-                 "STATION_TOKEN TRAINEE\n";
+                 "OPERATOR SECONDS [STATION_ID faulty] | web_seed store DB_URL TRAINEE OPERATOR "
+                 "SECONDS | web_seed lesson ADDRESS SUPERVISOR_TOKEN STATION_TOKEN TRAINEE | "
+                 "web_seed assign ADDRESS SUPERVISOR_TOKEN CURRICULUM GROUP\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "web_seed: " << e.what() << "\n";

@@ -1,0 +1,119 @@
+// PgStore: accounts of people who sign in to the web pages
+// (docs/web.md, "Accounts"). Schema: migration 8, the same SQL as SQLite.
+#include <pqxx/pqxx>
+
+#include "patient_db/pg_store.h"
+
+namespace ves::patient_db {
+namespace {
+
+constexpr const char* kAccountColumns =
+    "username, role, institution, password_hash, idp_identity, created_unix_ms, "
+    "expires_unix_ms, revoked_unix_ms";
+
+AccountRow ReadAccountRow(const pqxx::row& r) {
+  AccountRow a;
+  a.username = r[0].as<std::string>();
+  ParseRoleName(r[1].as<std::string>(), &a.role);
+  a.institution = r[2].as<std::string>();
+  a.password_hash = r[3].as<std::string>();
+  a.idp_identity = r[4].as<std::string>();
+  a.created_unix_ms = r[5].as<int64_t>();
+  a.expires_unix_ms = r[6].as<int64_t>();
+  a.revoked_unix_ms = r[7].as<int64_t>();
+  return a;
+}
+
+StoreStatus ReadOne(pqxx::transaction_base& tx, const char* column, const std::string& value,
+                    AccountRow* out) {
+  pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
+                                      " FROM accounts WHERE " + column + " = $1",
+                                  value);
+  if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
+  *out = ReadAccountRow(r[0]);
+  return StoreStatus::Ok();
+}
+
+}  // namespace
+
+StoreStatus PgStore::AddAccount(const AccountRow& a) {
+  return Transact("add account", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    // Both unique keys are checked in the statement: a clash answers
+    // kAlreadyExists naming the key rather than a constraint error.
+    pqxx::result taken = tx.exec_params(
+        "SELECT username, idp_identity FROM accounts WHERE username = $1 OR "
+        "($2 <> '' AND idp_identity = $2)",
+        a.username, a.idp_identity);
+    if (!taken.empty()) {
+      const bool by_name = taken[0][0].as<std::string>() == a.username;
+      return StoreStatus::Error(StoreCode::kAlreadyExists,
+                                std::string("an account with ") +
+                                    (by_name ? "username '" + a.username
+                                             : "idp_identity '" + a.idp_identity) +
+                                    "' already exists");
+    }
+    tx.exec_params(std::string("INSERT INTO accounts (") + kAccountColumns +
+                       ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8)",
+                   a.username, std::string(RoleName(a.role)), a.institution, a.password_hash,
+                   a.idp_identity, a.created_unix_ms, a.expires_unix_ms, a.revoked_unix_ms);
+    return StoreStatus::Ok();
+  });
+}
+
+StoreResult<AccountRow> PgStore::GetAccount(const std::string& username) {
+  AccountRow a;
+  StoreStatus st = Transact("get account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    return ReadOne(tx, "username", username, &a);
+  });
+  if (!st.ok()) return st;
+  return a;
+}
+
+StoreResult<AccountRow> PgStore::FindAccountByIdentity(const std::string& identity) {
+  if (identity.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
+  AccountRow a;
+  StoreStatus st = Transact("find account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    return ReadOne(tx, "idp_identity", identity, &a);
+  });
+  if (!st.ok()) return st;
+  return a;
+}
+
+StoreResult<std::vector<AccountRow>> PgStore::ListAccounts(const std::string& institution) {
+  std::vector<AccountRow> out;
+  StoreStatus st = Transact("list accounts", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    out.clear();
+    pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
+                                        " FROM accounts WHERE $1 = '' OR institution = $1 "
+                                        "ORDER BY username",
+                                    institution);
+    for (const auto& row : r) out.push_back(ReadAccountRow(row));
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+StoreStatus PgStore::RevokeAccount(const std::string& username, int64_t now_unix_ms) {
+  return Transact("revoke account", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "UPDATE accounts SET revoked_unix_ms = CASE WHEN revoked_unix_ms = 0 THEN $1 "
+        "ELSE revoked_unix_ms END WHERE username = $2 RETURNING 1",
+        now_unix_ms, username);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no account '" + username + "'");
+    return StoreStatus::Ok();
+  });
+}
+
+StoreStatus PgStore::SetAccountPassword(const std::string& username,
+                                        const std::string& password_hash) {
+  return Transact("set account password", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "UPDATE accounts SET password_hash = $1 WHERE username = $2 RETURNING 1", password_hash,
+        username);
+    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no account '" + username + "'");
+    return StoreStatus::Ok();
+  });
+}
+
+}  // namespace ves::patient_db

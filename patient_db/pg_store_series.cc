@@ -1,0 +1,49 @@
+// PgStore: the web pages' session series (docs/web.md, "Session series").
+// Schema: migration 6, the same SQL as SQLite.
+#include <pqxx/pqxx>
+
+#include "patient_db/pg_store.h"
+
+namespace ves::patient_db {
+
+StoreStatus PgStore::PutSessionSeries(const SessionSeriesRow& row) {
+  StoreStatus bad = CheckSessionSeries(row);
+  if (!bad.ok()) return bad;
+  StoreStatus st = Transact("put session series", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    tx.exec_params(
+        "INSERT INTO session_series (session_uuid, format_version, computed_unix_ms, series) "
+        "VALUES ($1, $2, $3, $4) ON CONFLICT (session_uuid) DO UPDATE SET "
+        "format_version = excluded.format_version, computed_unix_ms = excluded.computed_unix_ms, "
+        "series = excluded.series",
+        row.session_uuid, int64_t{row.format_version}, row.computed_unix_ms,
+        pqxx::binarystring(row.json));
+    return StoreStatus::Ok();
+  });
+  // A foreign key violation: the session is not stored.
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
+  }
+  return st;
+}
+
+StoreResult<SessionSeriesRow> PgStore::GetSessionSeries(const std::string& session_uuid) {
+  SessionSeriesRow out;
+  StoreStatus st = Transact("get session series", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    pqxx::result r = tx.exec_params(
+        "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
+        "WHERE session_uuid = $1",
+        session_uuid);
+    if (r.empty()) {
+      return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
+    }
+    out.session_uuid = r[0][0].as<std::string>();
+    out.format_version = r[0][1].as<int>();
+    out.computed_unix_ms = r[0][2].as<int64_t>();
+    out.json = pqxx::binarystring(r[0][3]).str();
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return out;
+}
+
+}  // namespace ves::patient_db
