@@ -204,7 +204,7 @@ void ExpertOperator::CallForHelp(const Perception& p) {
   const PatientPosition turn_to =
       sigmoid ? PatientPosition::kRightLateral : PatientPosition::kLeftLateral;
   const bool turned_here = position_ == turn_to;
-  const bool pressed_here = press_ == where || pressed_before_ == where;
+  const bool pressed_here = pressed_before_ == where;  // set with every press
   if (sigmoid ? !pressed_here : turned_here) {
     press_ = where;
     pressed_before_ = where;
