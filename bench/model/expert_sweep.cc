@@ -18,6 +18,7 @@
 // steps (show_damage=1 prints these). ring_hold is the peak 10 ms mean of
 // the ring contacts' push along the shaft toward the anus (N), ring_hold_s
 // the time they hold more than half of a push of 4 N or more.
+// show_every=S prints the operator's state every S seconds.
 // show_reduce=1 prints each turn of the hand between pushing and pulling;
 // op_press_from/op_press_s/op_turns/op_turn_from give when and how long the
 // operator had the assistant press and how often it turned the patient.
@@ -199,6 +200,8 @@ int main(int argc, char** argv) {
   double help_press_from_s = -1.0, help_press_s = 0.0, first_turn_s = -1.0;
   int position_changes = 0;
   const bool show_reduce = get("show_reduce", 0.0) != 0.0;
+  const double show_every_s = get("show_every", 0.0);
+  double last_shown_s = -1e9;
   double last_hand_N = 0.0;
   ves::training::LoopIndex loop_watch;
   auto last_position = ves::training::PatientPosition::kSupine;
@@ -214,6 +217,16 @@ int main(int argc, char** argv) {
                   static_cast<int>(sample.patient_position));
     }
     last_hand_N = sample.push_force_N;
+    if (show_every_s > 0.0 && state.time_s - last_shown_s >= show_every_s) {
+      last_shown_s = state.time_s;
+      std::printf("  t=%.1f inserted %.3f tip %.3f loop %.3f stretch %.3f at %.3f hand %.1f base %.1f "
+                  "wall %.1f press %d pos %d\n",
+                  state.time_s, state.inserted_m, state.tip_arc_m,
+                  loop_watch.Update(state.inserted_m, state.tip_arc_m), out.peak_stretch_m,
+                  out.peak_stretch_arc_m, sample.push_force_N, out.base_force_N,
+                  out.peak_wall_force_N, static_cast<int>(sample.abdominal_press),
+                  static_cast<int>(sample.patient_position));
+    }
     // The operator's own calls for help: the assistant's hand and the patient's position.
     if (sample.abdominal_press != ves::training::AbdominalPress::kNone) {
       if (help_press_from_s < 0.0) help_press_from_s = state.time_s;

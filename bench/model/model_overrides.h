@@ -117,6 +117,7 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   params->abdominal_pressure_stiffness_N_per_m2 =
       get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
   params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
+  params->abdominal_pressure_ramp_s = get("press_ramp_s", params->abdominal_pressure_ramp_s);
 }
 
 // A case file as the model's parameters with every override applied: the

@@ -53,7 +53,7 @@ int LastActivePoint(const StepInput& input, const ModelState& s, int N) {
   // A turned patient's weight and the assistant's hand move colon the scope
   // has not reached: all of it is solved.
   bool loaded = input.patient_position != PatientPosition::kSupine;
-  for (double pressure : input.abdominal_pressure) loaded = loaded || pressure > 0.0;
+  for (double pressure : s.abdominal_pressure_level) loaded = loaded || pressure > 0.0;
   if (loaded) return N - 1;
   int last = 0;
   const int samples = static_cast<int>(s.samples.size());
@@ -157,7 +157,7 @@ void AddOwnExtraTerms(const ModelParams& params, const StepInput& input, const M
   }
   // The assistant's hand: a pressed mobile point is held within the slack
   // of its root (isotropic; the same implicit form as the tether).
-  const double pressure = input.abdominal_pressure[static_cast<int>(p.region)];
+  const double pressure = s.abdominal_pressure_level[static_cast<int>(p.region)];
   if (pressure > 0.0 && p.tissue.mobile) {
     const double d = r.norm();
     const double slack = params.abdominal_pressure_slack_m;

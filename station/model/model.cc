@@ -60,6 +60,13 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, 2]");
   Require(InRange(p.colon_linear_mass_kg_per_m, 0.0, 10.0), "colon_linear_mass_kg_per_m",
           p.colon_linear_mass_kg_per_m, "must be in [0, 10] kg/m");
+  Require(InRange(p.abdominal_pressure_stiffness_N_per_m2, 0.0, 1e6),
+          "abdominal_pressure_stiffness_N_per_m2", p.abdominal_pressure_stiffness_N_per_m2,
+          "must be in [0, 1e6] N/m^2");
+  Require(InRange(p.abdominal_pressure_slack_m, 0.0, 0.2), "abdominal_pressure_slack_m",
+          p.abdominal_pressure_slack_m, "must be in [0, 0.2] m");
+  Require(InRange(p.abdominal_pressure_ramp_s, 0.0, 60.0), "abdominal_pressure_ramp_s",
+          p.abdominal_pressure_ramp_s, "must be in [0, 60] s");
   Require(InRange(p.colon_straighten_stiffness_N, 0.0, p.colon_tension_stiffness_N),
           "colon_straighten_stiffness_N", p.colon_straighten_stiffness_N,
           "must be in [0, colon_tension_stiffness_N]");

@@ -92,15 +92,19 @@ struct ModelParams {
   // "A lumen that gathers onto the scope".
   double lumen_gather_pleat{0.0};
   double lumen_gather_clearance_m{1e-3};
-  // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
-  // full pressure a pressed region's points are held within the slack of
-  // their mesentery root with this stiffness per metre of colon.
   // The mobile colon's weight per metre (wall and contents, estimate): on
   // turning the patient (StepInput::patient_position) the change of gravity
   // from supine acts on it, so the mobile colon sags toward the lower side.
   double colon_linear_mass_kg_per_m{0.3};
-  double abdominal_pressure_stiffness_N_per_m2{2000.0};
-  double abdominal_pressure_slack_m{0.03};
+  // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
+  // full pressure a pressed region's points are held within the slack of
+  // their mesentery root with this stiffness per metre of colon; the hand
+  // presses in and lets go over abdominal_pressure_ramp_s (a hand pressed in
+  // at once snapped the sigmoid inward: a 109 N spike at the base;
+  // docs/model.md, "Position and pressure").
+  double abdominal_pressure_stiffness_N_per_m2{10000.0};
+  double abdominal_pressure_slack_m{0.01};
+  double abdominal_pressure_ramp_s{5.0};
   // Experiment (docs/model-shortening-notes.md): a mobile point's tether reach shrinks with the
   // local gathering of the colon (reach times the pleat ratio of its two
   // gaps, never below the mesentery length), so gathered colon lies on its
@@ -218,6 +222,9 @@ struct ModelState {
   // How far each colon point's ring contact has come on (0..1;
   // ModelParams::ring_onset_s); 0 where the point is not held as a ring.
   std::vector<double> ring_onset;
+  // The assistant's hand over each region as pressed in now (0..1): follows
+  // StepInput::abdominal_pressure at ModelParams::abdominal_pressure_ramp_s.
+  std::array<double, 9> abdominal_pressure_level{};
 
   // Tip position along the colon's material (rest arc of the tracked point
   // of the wall): where in the colon the tip is, however the colon pleats.

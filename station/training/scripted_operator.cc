@@ -84,6 +84,15 @@ InputSample ExpertOperator::Act(const Perception& p) {
     // the rectosigmoid (redundant-sigmoid, docs/scoring.md).
     const bool stall_reduce = stalled && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
     if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
+    // Stalled in the sigmoid while the patient complains: the push stretches
+    // a sigmoid loop that holds the tip back; it asks for help. (A pull-back
+    // there took the scope so short that the colon gathered onto it held the
+    // tip, and for a transverse loop the turn cost generated seed 10 its cecum.)
+    if (p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m >= kComplaintStretch_m &&
+        p.tip_arc_m < kSigmoidTip_m) {
+      stall_since_s_ = p.t_s;
+      CallForHelp(p);
+    }
     // More scope in than a straight route needs: a loop the loop index has
     // not seen (it counts from the shortest insertion for this depth, and a
     // reduction that slipped resets that).

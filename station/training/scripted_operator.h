@@ -82,7 +82,8 @@ class NoviceOperator final : public ScriptedOperator {
 // and tries again deeper, and if the loop was large it asks for help: the
 // assistant presses the abdomen over the sigmoid or the patient is turned
 // for the transverse colon, then the other if that loop resists again
-// (CallForHelp). It stops pulling once the tip
+// (CallForHelp); so does a tip stalled in the sigmoid while the patient
+// complains. It stops pulling once the tip
 // starts to come back with the scope (the loop is out), and advances again.
 // When more scope is in than a straight route needs (kLoopedLength_m), when
 // little scope is left, or when the tip has stalled, it takes the loops out

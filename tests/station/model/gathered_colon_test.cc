@@ -187,6 +187,58 @@ TEST(PatientPosition, TurningThePatientMovesTheMobileColonTowardTheLowerSide) {
   EXPECT_LT(fixed_right, 0.002);
 }
 
+// The assistant's hand presses in over abdominal_pressure_ramp_s: a sagging
+// sigmoid is drawn back to its root slowly, where a hand pressed in at once
+// snaps it (and the scope in it) inward.
+TEST(AbdominalPress, TheAssistantsHandPressesInOverSeconds) {
+  const ModelParams base = LoadStandardAdult(-1.0);
+  auto press_after_sag = [&](double ramp_s, double* peak_speed_m_per_s, double* sag_m,
+                             double* pressed_m) {
+    ModelParams params = base;
+    params.abdominal_pressure_ramp_s = ramp_s;
+    Sim sim(params);
+    StepInput in;
+    in.patient_position = PatientPosition::kLeftLateral;
+    // How far the sigmoid lies from its mesentery root, on average.
+    auto mean_sigmoid_reach = [&] {
+      double sum = 0.0;
+      int count = 0;
+      for (size_t i = 0; i < params.colon.points.size(); ++i) {
+        if (params.colon.points[i].region != Region::kSigmoid) continue;
+        sum += sim.state.colon_tether_distance_m[i];
+        ++count;
+      }
+      return sum / count;
+    };
+    EXPECT_TRUE(sim.RunUntil(15.0, [&](const Sim&) { return in; }));
+    *sag_m = mean_sigmoid_reach();
+    in.abdominal_pressure[static_cast<int>(Region::kSigmoid)] = 1.0;
+    *peak_speed_m_per_s = 0.0;
+    EXPECT_TRUE(sim.RunUntil(15.0 + 2.0 * ramp_s + 5.0, [&](const Sim& s) {
+      for (size_t i = 0; i < params.colon.points.size(); ++i) {
+        if (params.colon.points[i].region != Region::kSigmoid) continue;
+        *peak_speed_m_per_s = std::max(*peak_speed_m_per_s, s.state.colon_velocity_m_per_s[i].norm());
+      }
+      return in;
+    }));
+    *pressed_m = mean_sigmoid_reach();
+  };
+  double sudden_speed = 0.0, sudden_sag = 0.0, sudden_pressed = 0.0;
+  double ramped_speed = 0.0, ramped_sag = 0.0, ramped_pressed = 0.0;
+  press_after_sag(0.0, &sudden_speed, &sudden_sag, &sudden_pressed);
+  press_after_sag(base.abdominal_pressure_ramp_s, &ramped_speed, &ramped_sag, &ramped_pressed);
+  std::printf("sigmoid's mean distance from its root, turned: %.4f m; pressed at once %.4f m, "
+              "peak speed %.3f m/s; pressed over %.1f s %.4f m, peak speed %.3f m/s\n",
+              sudden_sag, sudden_pressed, sudden_speed, base.abdominal_pressure_ramp_s,
+              ramped_pressed, ramped_speed);
+  ASSERT_GT(base.abdominal_pressure_ramp_s, 1.0);
+  // Both presses flatten the sagging sigmoid onto its root ...
+  EXPECT_LT(sudden_pressed, 0.5 * sudden_sag);
+  EXPECT_LT(ramped_pressed, 0.5 * ramped_sag);
+  // ... but the hand that presses in gradually moves it far more slowly.
+  EXPECT_LT(ramped_speed, 0.5 * sudden_speed);
+}
+
 TEST(GatheredColon, AReserveOutsideItsBoundsIsRefusedNamingIt) {
   TissueParams tissue;
   tissue.gathered_reserve = 0.7;

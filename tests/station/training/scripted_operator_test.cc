@@ -122,6 +122,42 @@ TEST(ExpertOperator, AsksForThePressWhereALoopResistsAPullBack) {
   EXPECT_NE(sigmoid.last_position, PatientPosition::kSupine);
 }
 
+// A tip stalled while the patient complains: in the sigmoid (short of
+// kSigmoidTip_m) a loop holds it back, and after kStall_s the expert asks the
+// assistant to press the left lower quadrant; stalled in pain beyond, it
+// neither pulls back nor calls for help.
+TEST(ExpertOperator, AsksForThePressWhenTheTipStallsInTheSigmoidWhileThePatientComplains) {
+  auto stall_in_pain = [](double tip_m, AbdominalPress* press, PatientPosition* position,
+                          double* least_push_N) {
+    ExpertOperator expert(kDt_s);
+    Perception p;
+    p.working_length_m = 1.68;
+    p.inserted_m = tip_m + 0.12;
+    p.tip_arc_m = tip_m;
+    p.peak_stretch_m = 0.04;
+    *press = AbdominalPress::kNone;
+    *position = PatientPosition::kSupine;
+    *least_push_N = 1e9;
+    for (int step = 0; step < static_cast<int>((ExpertOperator::kStall_s + 5.0) / kDt_s); ++step) {
+      p.t_s = step * kDt_s;
+      const InputSample in = expert.Act(p);
+      if (in.abdominal_press != AbdominalPress::kNone) *press = in.abdominal_press;
+      if (in.patient_position != PatientPosition::kSupine) *position = in.patient_position;
+      if (p.t_s > 2.0) *least_push_N = std::min(*least_push_N, in.push_force_N);
+    }
+  };
+  AbdominalPress press;
+  PatientPosition position;
+  double least_push_N = 0.0;
+  stall_in_pain(0.45, &press, &position, &least_push_N);
+  EXPECT_EQ(press, AbdominalPress::kLeftLowerQuadrant);
+  EXPECT_GT(least_push_N, 0.0) << "it pulled back";
+  stall_in_pain(1.00, &press, &position, &least_push_N);
+  EXPECT_EQ(press, AbdominalPress::kNone);
+  EXPECT_EQ(position, PatientPosition::kSupine);
+  EXPECT_GT(least_push_N, 0.0) << "it pulled back";
+}
+
 // A scope that does not move however hard it is pushed (for less than the
 // stall that calls for a pull-back): the hand's force
 // rises toward the speed it wants until its limit, 10 N by default (the level
