@@ -7,8 +7,7 @@
 namespace ves::patient_db {
 namespace {
 
-constexpr const char* kSignOffColumns =
-    "session_uuid, signed_by, signed_by_label, signed_unix_ms";
+constexpr const char* kSignOffColumns = "session_uuid, signed_by, signed_by_label, signed_unix_ms";
 
 SessionSignOffRow ReadSignOff(const pqxx::row& r) {
   return {r[0].as<std::string>(), r[1].as<std::string>(), r[2].as<std::string>(),
@@ -28,10 +27,10 @@ StoreStatus PgStore::AddSessionNote(const SessionNoteRow& row) {
         "INSERT INTO session_notes (note_id, session_uuid, author, author_label, "
         "written_unix_ms, text) VALUES ($1, $2, $3, $4, $5, $6) "
         "ON CONFLICT (note_id) DO NOTHING RETURNING 1",
-        row.note_id, row.session_uuid, row.author, row.author_label, row.written_unix_ms,
-        row.text);
+        row.note_id, row.session_uuid, row.author, row.author_label, row.written_unix_ms, row.text);
     if (r.empty()) {
-      return StoreStatus::Error(StoreCode::kAlreadyExists, "note id '" + row.note_id + "' is taken");
+      return StoreStatus::Error(StoreCode::kAlreadyExists,
+                                "note id '" + row.note_id + "' is taken");
     }
     return StoreStatus::Ok();
   });

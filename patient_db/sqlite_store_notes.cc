@@ -15,8 +15,7 @@ bool IsConstraint(int rc) { return (rc & 0xff) == SQLITE_CONSTRAINT; }
 
 constexpr const char* kNoteColumns =
     "note_id, session_uuid, author, author_label, written_unix_ms, text";
-constexpr const char* kSignOffColumns =
-    "session_uuid, signed_by, signed_by_label, signed_unix_ms";
+constexpr const char* kSignOffColumns = "session_uuid, signed_by, signed_by_label, signed_unix_ms";
 
 SessionSignOffRow ReadSignOff(const SqliteStatement& s) {
   return {s.Text(0), s.Text(1), s.Text(2), s.Int(3)};
@@ -37,7 +36,8 @@ StoreStatus SqliteStore::AddSessionNote(const SessionNoteRow& row) {
   const bool found = exists->Step(&rc);
   exists->Reset();
   if (rc != SQLITE_OK) return Internal(*writer_, "add session note");
-  if (!found) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
+  if (!found)
+    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
   SqliteStatement* s = writer_->Prepare(
       std::string("INSERT INTO session_notes (") + kNoteColumns + ") VALUES (?, ?, ?, ?, ?, ?)",
       nullptr);
@@ -74,10 +74,10 @@ StoreResult<std::vector<SessionNoteRow>> SqliteStore::ListSessionNotes(
 
 StoreResult<bool> SqliteStore::SignOffSession(const SessionSignOffRow& row) {
   std::lock_guard lock(write_mutex_);
-  SqliteStatement* s = writer_->Prepare(
-      std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
-          ") VALUES (?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
-      nullptr);
+  SqliteStatement* s =
+      writer_->Prepare(std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
+                           ") VALUES (?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
+                       nullptr);
   if (!s) return Internal(*writer_, "sign off session");
   s->Bind(1, row.session_uuid).Bind(2, row.signed_by).Bind(3, row.signed_by_label);
   s->Bind(4, row.signed_unix_ms);
@@ -104,7 +104,8 @@ StoreResult<SessionSignOffRow> SqliteStore::GetSessionSignOff(const std::string&
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get sign-off");
   if (!row) {
-    return StoreStatus::Error(StoreCode::kNotFound, "session '" + session_uuid + "' not signed off");
+    return StoreStatus::Error(StoreCode::kNotFound,
+                              "session '" + session_uuid + "' not signed off");
   }
   return std::move(*row);
 }

@@ -142,7 +142,7 @@ std::optional<HttpReply> WorkflowRoute(
     return JsonReply(200, {{"curriculum_id", req.curriculum_id()},
                            {assignee_field, body[assignee_field]},
                            {"trainee_ids", std::vector<std::string>(resp.trainee_ids().begin(),
-                                                            resp.trainee_ids().end())}});
+                                                                    resp.trainee_ids().end())}});
   }
 
   // POST trainees/{id}/group: the trainee's one group (Lessons.SetTraineeGroup).
@@ -285,7 +285,8 @@ std::optional<HttpReply> WorkflowRoute(
     if (!put.value) {
       auto first = deps.store->GetSessionSignOff(uuid);
       const std::string by = first.ok() ? " by " + first.value.signed_by_label : "";
-      return Status(StatusCode::ALREADY_EXISTS, "session '" + uuid + "' is already signed off" + by);
+      return Status(StatusCode::ALREADY_EXISTS,
+                    "session '" + uuid + "' is already signed off" + by);
     }
     return Status::OK;
   });

@@ -158,6 +158,12 @@ def main():
         assert done_text() == 'Put t1 in group g-web.', done_text()
         members = sorted(r['Trainee'] for r in table_rows('cohort'))
         assert members == ['t1', 'w.new'], members
+        # The group's assignment form: t1 gets the curriculum through the group.
+        Select(driver.find_element(By.ID, 'group-assign-curriculum')).select_by_value('web-lessons')
+        submit_and_reload('group-assign')
+        assert done_text() == 'Assigned web-lessons to group g-web (2 trainee(s)).', done_text()
+        lessons = {r['Trainee']: r['Lessons passed'] for r in table_rows('cohort')}
+        assert lessons == {'t1': '0/1', 'w.new': '0/1'}, lessons
         shot('w02-group-after-add')
 
         # The session page: a note, a refused over-long note, the sign-off.
@@ -259,15 +265,15 @@ def main():
         groups = filtered('trainee.group')
         assert [(r[6], r[7]) for r in groups[:2]] == [('t1', 'OK'), ('w.new', 'OK')], groups
         assigns = filtered('curriculum.assign')
-        assert (assigns[0][6], assigns[0][7]) == ('web-lessons group g-web', 'OK'), assigns
+        assert [(r[6], r[7]) for r in assigns[:2]] == [('web-lessons group g-web', 'OK')] * 2, assigns
         notes = filtered('session.note')
         assert [(r[6], r[7]) for r in notes] == [(session_uuid, 'OK')] * 2, notes
         signs = filtered('session.sign_off')
         assert [(r[6], r[7], r[2]) for r in signs] == [
             (session_uuid, 'OK', 'supervisor (web test)')], signs
         # The actions in the order they were taken (ids grow with time).
-        taken = [int(adds[1][0]), int(groups[1][0]), int(assigns[0][0]), int(groups[0][0]),
-                 int(notes[1][0]), int(notes[0][0]), int(signs[0][0])]
+        taken = [int(adds[1][0]), int(groups[1][0]), int(assigns[1][0]), int(groups[0][0]),
+                 int(assigns[0][0]), int(notes[1][0]), int(notes[0][0]), int(signs[0][0])]
         assert taken == sorted(taken), taken
         # The day filter (the form's GET, as an address): today's, and none tomorrow.
         today = time.strftime('%Y-%m-%d', time.gmtime())

@@ -256,9 +256,9 @@ TEST_F(WebWorkflowTest, ReadOnlyRolesGet403AndWriteNothing) {
     EXPECT_EQ(Post(session + "/notes", token, {{"text", "mine"}}).status, 403);
     EXPECT_EQ(Post(session + "/sign-off", token, json::object()).status, 403);
     EXPECT_EQ(Post("/api/v1/trainees/t1/group", token, {{"group", "g9"}}).status, 403);
-    EXPECT_EQ(Post("/api/v1/assignments", token, {{"curriculum_id", "c1"}, {"trainee_id", "t1"}})
-                  .status,
-              403);
+    EXPECT_EQ(
+        Post("/api/v1/assignments", token, {{"curriculum_id", "c1"}, {"trainee_id", "t1"}}).status,
+        403);
     EXPECT_EQ(Post("/api/v1/trainees", token, {{"trainee_id", "v1"}}).status, 403);
   }
   EXPECT_TRUE(server_.store().ListSessionNotes(kSession, 10).value.empty());
@@ -336,17 +336,17 @@ TEST_F(WebWorkflowTest, BrowserWritesWithoutTheCsrfTokenAreRefused) {
   EXPECT_TRUE(server_.store().ListAssignments("t1").value.empty());
   EXPECT_FALSE(server_.store().GetTrainee("forged").ok());
   // With the token the same note goes through.
-  const HttpResult ok = HttpCall(
-      port(), "POST", session + "/notes",
-      {{"Cookie", cookie}, {"Content-Type", "application/json"}, {"X-CSRF-Token", csrf}},
-      R"({"text": "with the token"})");
+  const HttpResult ok =
+      HttpCall(port(), "POST", session + "/notes",
+               {{"Cookie", cookie}, {"Content-Type", "application/json"}, {"X-CSRF-Token", csrf}},
+               R"({"text": "with the token"})");
   EXPECT_EQ(ok.status, 200) << ok.body;
 }
 
 TEST_F(WebWorkflowTest, EveryRouteAnswers401WithoutAToken) {
   const std::string session = std::string("/api/v1/sessions/") + kSession;
-  for (const std::string& target :
-       std::vector<std::string>{session + "/notes", "/api/v1/curricula", "/api/v1/trainees/t1/sign-offs"}) {
+  for (const std::string& target : std::vector<std::string>{session + "/notes", "/api/v1/curricula",
+                                                            "/api/v1/trainees/t1/sign-offs"}) {
     EXPECT_EQ(HttpCall(port(), "GET", target).status, 401) << target;
   }
   for (const auto& [target, body] : std::vector<std::pair<std::string, std::string>>{
