@@ -98,6 +98,13 @@ class PgStore final : public Store {
   StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
   StoreStatus PutSessionSeries(const SessionSeriesRow& row) override;
   StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) override;
+  StoreStatus AddSessionNote(const SessionNoteRow& row) override;
+  StoreResult<std::vector<SessionNoteRow>> ListSessionNotes(const std::string& session_uuid,
+                                                            int limit) override;
+  StoreResult<bool> SignOffSession(const SessionSignOffRow& row) override;
+  StoreResult<SessionSignOffRow> GetSessionSignOff(const std::string& session_uuid) override;
+  StoreResult<std::vector<SessionSignOffRow>> ListTraineeSignOffs(
+      const std::string& trainee_id) override;
 
   int schema_version() const { return schema_version_; }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "patient_db/limits.h"
 #include "patient_db/sqlite_store.h"
 
 namespace ves::patient_db {
@@ -96,6 +97,22 @@ StoreStatus CheckSessionSeries(const SessionSeriesRow& row) {
                               "session series of '" + row.session_uuid +
                                   "': " + std::to_string(row.json.size()) + " bytes, not 1.." +
                                   std::to_string(kMaxSessionSeriesBytes));
+  }
+  return StoreStatus::Ok();
+}
+
+StoreStatus CheckSessionNote(const SessionNoteRow& row) {
+  if (row.note_id.empty() || row.session_uuid.empty()) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument, "session note: no note id or session");
+  }
+  if (row.text.empty() || row.text.size() > kMaxSessionNoteBytes) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument,
+                              "note text: " + std::to_string(row.text.size()) + " bytes, not 1.." +
+                                  std::to_string(kMaxSessionNoteBytes));
+  }
+  if (!IsPrintableText(row.text, /*allow_newlines=*/true)) {
+    return StoreStatus::Error(StoreCode::kInvalidArgument,
+                              "note text: must be printable UTF-8 (newlines allowed)");
   }
   return StoreStatus::Ok();
 }

@@ -285,6 +285,33 @@ inline constexpr size_t kMaxSessionSeriesBytes = 2u << 20;
 // Ok, or kInvalidArgument naming what is wrong (no uuid, empty, over the bound).
 StoreStatus CheckSessionSeries(const SessionSeriesRow& row);
 
+// A supervisor's note on a session (docs/web.md, "Notes and sign-off"):
+// free text, kept as written, never edited.
+struct SessionNoteRow {
+  std::string note_id;  // chosen by the server (random hex); unique
+  std::string session_uuid;
+  std::string author;  // token id
+  std::string author_label;
+  int64_t written_unix_ms = 0;
+  std::string text;  // printable UTF-8, newlines allowed, 1..kMaxSessionNoteBytes
+  bool operator==(const SessionNoteRow&) const = default;
+};
+inline constexpr size_t kMaxSessionNoteBytes = 2000;
+// Notes a session may carry: a page shows them all, so they stay few.
+inline constexpr int kMaxSessionNotes = 100;
+// Ok, or kInvalidArgument naming what is wrong (no id or session, empty text,
+// over the bound, not printable text).
+StoreStatus CheckSessionNote(const SessionNoteRow& row);
+
+// A supervisor's sign-off of a session: once per session, never changed.
+struct SessionSignOffRow {
+  std::string session_uuid;
+  std::string signed_by;  // token id
+  std::string signed_by_label;
+  int64_t signed_unix_ms = 0;
+  bool operator==(const SessionSignOffRow&) const = default;
+};
+
 // What one group commit writes, in one durable transaction.
 struct WriteBatch {
   std::vector<SessionRow> sessions;
@@ -422,6 +449,22 @@ class Store {
   virtual StoreStatus PutSessionSeries(const SessionSeriesRow& row) = 0;
   // kNotFound when none was stored.
   virtual StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) = 0;
+
+  // ---- Session notes and sign-offs (docs/web.md, "Notes and sign-off") ----
+  // kNotFound when no such session; kInvalidArgument as CheckSessionNote;
+  // kAlreadyExists when the note id is taken.
+  virtual StoreStatus AddSessionNote(const SessionNoteRow& row) = 0;
+  // The session's notes, oldest first (at most `limit`).
+  virtual StoreResult<std::vector<SessionNoteRow>> ListSessionNotes(
+      const std::string& session_uuid, int limit) = 0;
+  // false when the session was already signed off (the first is kept);
+  // kNotFound when no such session.
+  virtual StoreResult<bool> SignOffSession(const SessionSignOffRow& row) = 0;
+  // kNotFound when the session is not signed off.
+  virtual StoreResult<SessionSignOffRow> GetSessionSignOff(const std::string& session_uuid) = 0;
+  // The sign-offs of the trainee's sessions, in no particular order.
+  virtual StoreResult<std::vector<SessionSignOffRow>> ListTraineeSignOffs(
+      const std::string& trainee_id) = 0;
 };
 
 // Opens the store named by `url`: "sqlite:PATH" (created and migrated when

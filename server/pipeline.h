@@ -63,6 +63,13 @@ grpc::Status ListStationsCall(const ServiceDeps&, const Principal&, const v1::Li
                               v1::ListStationsResponse*);
 grpc::Status GetProgressCall(const ServiceDeps&, const Principal&, const v1::GetProgressRequest&,
                              v1::GetProgressResponse*);
+grpc::Status ListCurriculaCall(const ServiceDeps&, const Principal&,
+                               const v1::ListCurriculaRequest&, v1::ListCurriculaResponse*);
+grpc::Status AssignCurriculumCall(const ServiceDeps&, const Principal&,
+                                  const v1::AssignCurriculumRequest&,
+                                  v1::AssignCurriculumResponse*);
+grpc::Status SetTraineeGroupCall(const ServiceDeps&, const Principal&,
+                                 const v1::SetTraineeGroupRequest&, v1::SetTraineeGroupResponse*);
 
 // What a CSV export of a trainee's sessions holds (docs/web.md): the sessions
 // started in [from_unix_ms, to_unix_ms) (to 0: no bound), oldest first, and

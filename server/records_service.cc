@@ -393,7 +393,8 @@ Status AddTraineeCall(const ServiceDeps& deps, const Principal& who,
                       const ves::v1::AddTraineeRequest& request,
                       ves::v1::AddTraineeResponse* response) {
   const ves::v1::Trainee& t = request.trainee();
-  static const CallSpec spec{"trainee.add", {StoreRole::kAdmin}, "add trainees"};
+  static const CallSpec spec{
+      "trainee.add", {StoreRole::kAdmin, StoreRole::kSupervisor}, "add trainees"};
   return RunCall(deps, who, spec, t.trainee_id(), [&]() -> Status {
     if (!IsName(t.trainee_id())) {
       return Status(StatusCode::INVALID_ARGUMENT,
@@ -407,6 +408,9 @@ Status AddTraineeCall(const ServiceDeps& deps, const Principal& who,
       return Status(StatusCode::INVALID_ARGUMENT,
                     "trainee.institution = '" + row.institution + "': not a valid name");
     }
+    // Admins may create an institution here; a supervisor adds to their own.
+    AuthStatus a = RequireInstitution(who, row.institution, "add trainees to the institution");
+    if (!a.ok()) return ToGrpcStatus(a);
     auto st = deps.store->AddInstitution(row.institution, row.created_unix_ms);
     if (st.ok()) st = deps.store->AddTrainee(row);
     if (!st.ok()) return ToGrpcStatus(st);

@@ -19,6 +19,7 @@
 #include "server/web_assets.h"
 #include "server/web_cohort.h"
 #include "server/web_reply.h"
+#include "server/web_workflow.h"
 #include "ves/v1/lesson.pb.h"
 
 namespace ves::server {
@@ -583,6 +584,8 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
                            {"groups", group_list},
                            {"next_page_token", resp.next_page_token()}});
   }
+  // curricula, assignments, groups, session notes and sign-offs (web_workflow.cc)
+  if (auto reply = WorkflowRoute(deps_, request, path, admit, who)) return *std::move(reply);
   if (!get) return Error(405, "METHOD_NOT_ALLOWED", "this route answers GET only");
   // groups/{group}/cohort, groups/{group}/sessions.csv, trainees/{id}/report
   if (auto reply = CohortRoute(deps_, path, query, admit, who)) return *std::move(reply);

@@ -188,6 +188,23 @@ CREATE TABLE accounts (
 CREATE UNIQUE INDEX accounts_by_idp_identity ON accounts(idp_identity) WHERE idp_identity <> '';
 CREATE INDEX accounts_by_institution ON accounts(institution, username);
 )sql"},
+      {9, "session notes and sign-offs: supervisors' workflow on the web pages", R"sql(
+CREATE TABLE session_notes (
+  note_id TEXT PRIMARY KEY,
+  session_uuid TEXT NOT NULL REFERENCES sessions(uuid),
+  author TEXT NOT NULL,
+  author_label TEXT NOT NULL,
+  written_unix_ms BIGINT NOT NULL,
+  text TEXT NOT NULL
+);
+CREATE INDEX session_notes_by_session ON session_notes(session_uuid, written_unix_ms, note_id);
+CREATE TABLE session_sign_offs (
+  session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
+  signed_by TEXT NOT NULL,
+  signed_by_label TEXT NOT NULL,
+  signed_unix_ms BIGINT NOT NULL
+);
+)sql"},
   };
   return kMigrations;
 }

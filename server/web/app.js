@@ -66,6 +66,7 @@ function param(name) { return new URLSearchParams(location.search).get(name) || 
 
 async function signedIn() {
   const me = await api('me');
+  ves.me = me;  // the workflow's forms show by role (workflow.js)
   if (me.csrf_token) sessionStorage.setItem('ves_csrf', me.csrf_token);
   $('nav').hidden = false;
   $('who').textContent = me.label + ' (' + me.role + ', ' + me.institution + ')';
@@ -252,11 +253,15 @@ async function traineePage() {
   for (const input of ['export-from', 'export-to']) $(input).addEventListener('change', exportLink);
   exportLink();
   const sessions = await api('trainees/' + encodeURIComponent(id) + '/sessions?page_size=500');
+  const signOffs = await api('trainees/' + encodeURIComponent(id) + '/sign-offs');
+  const signedOff = new Map(signOffs.sign_offs.map((o) => [o.session_uuid, o]));
   const body = $('sessions').querySelector('tbody');
   for (const s of sessions.sessions.slice().reverse()) {
+    const so = signedOff.get(s.uuid);
     body.appendChild(row([link(when(s.start_unix_ms), '/session.html?uuid=' + encodeURIComponent(s.uuid)),
                           s.case_id, outcomeText(s.outcome), Number(s.score).toFixed(1),
-                          s.completed ? Number(s.time_to_cecum_s).toFixed(1) + ' s' : '—']));
+                          s.completed ? Number(s.time_to_cecum_s).toFixed(1) + ' s' : '—',
+                          so ? (so.signed_by_label || so.signed_by) + ', ' + when(so.signed_unix_ms) : '—']));
   }
 }
 

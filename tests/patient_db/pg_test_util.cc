@@ -132,6 +132,17 @@ class SkippedStore final : public Store {
   StoreResult<int> AddJudgeStarts(const std::string&, int) override { return {}; }
   StoreStatus PutSessionSeries(const SessionSeriesRow&) override { return Skipped(); }
   StoreResult<SessionSeriesRow> GetSessionSeries(const std::string&) override { return Skipped(); }
+  StoreStatus AddSessionNote(const SessionNoteRow&) override { return Skipped(); }
+  StoreResult<std::vector<SessionNoteRow>> ListSessionNotes(const std::string&, int) override {
+    return {};
+  }
+  StoreResult<bool> SignOffSession(const SessionSignOffRow&) override { return Skipped(); }
+  StoreResult<SessionSignOffRow> GetSessionSignOff(const std::string&) override {
+    return Skipped();
+  }
+  StoreResult<std::vector<SessionSignOffRow>> ListTraineeSignOffs(const std::string&) override {
+    return {};
+  }
 
  private:
   static StoreStatus Skipped() {

@@ -709,6 +709,80 @@ TEST_P(StoreContract, SessionSeriesAreStoredReadBackAndBounded) {
   EXPECT_EQ(store_->GetSessionSeries("s-series").value, newer);  // the refusals changed nothing
 }
 
+TEST_P(StoreContract, SessionNotesAreKeptInOrderAndBounded) {
+  WriteBatch b;
+  b.sessions.push_back(Session("s-notes", "body", 100));
+  b.sessions.push_back(Session("s-other", "body2", 200));
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  auto none = store_->ListSessionNotes("s-notes", 10);
+  ASSERT_TRUE(none.ok()) << none.status.message;
+  EXPECT_TRUE(none.value.empty());
+
+  const SessionNoteRow later{"n-b", "s-notes", "tok-1", "Dr. Ng", 2000,
+                             "Loop at the splenic flexure.\nRetry with torque."};
+  const SessionNoteRow earlier{"n-a", "s-notes", "tok-2", "Dr. \xc3\x98ster", 1000, "Good start"};
+  ASSERT_TRUE(store_->AddSessionNote(later).ok());
+  ASSERT_TRUE(store_->AddSessionNote(earlier).ok());
+  ASSERT_TRUE(store_->AddSessionNote({"n-c", "s-other", "tok-1", "Dr. Ng", 1500, "other"}).ok());
+  Reopen();
+  auto notes = store_->ListSessionNotes("s-notes", 10);
+  ASSERT_TRUE(notes.ok()) << notes.status.message;
+  EXPECT_EQ(notes.value, (std::vector<SessionNoteRow>{earlier, later}));  // oldest first
+  EXPECT_EQ(store_->ListSessionNotes("s-notes", 1).value, std::vector<SessionNoteRow>{earlier});
+
+  EXPECT_EQ(store_->AddSessionNote({"n-a", "s-notes", "t", "l", 3000, "again"}).code,
+            StoreCode::kAlreadyExists);
+  EXPECT_EQ(store_->AddSessionNote({"n-x", "no-such-session", "t", "l", 1, "x"}).code,
+            StoreCode::kNotFound);
+  const StoreStatus big = store_->AddSessionNote(
+      {"n-big", "s-notes", "t", "l", 1, std::string(kMaxSessionNoteBytes + 1, 'x')});
+  EXPECT_EQ(big.code, StoreCode::kInvalidArgument);
+  EXPECT_NE(big.message.find("note text"), std::string::npos) << big.message;
+  EXPECT_EQ(store_->AddSessionNote({"n-e", "s-notes", "t", "l", 1, ""}).code,
+            StoreCode::kInvalidArgument);
+  EXPECT_EQ(store_->AddSessionNote({"n-z", "s-notes", "t", "l", 1, std::string("a\0b", 3)}).code,
+            StoreCode::kInvalidArgument);
+  EXPECT_TRUE(store_->AddSessionNote(
+                        {"n-max", "s-notes", "t", "l", 9000, std::string(kMaxSessionNoteBytes, 'y')})
+                  .ok());
+  EXPECT_EQ(store_->ListSessionNotes("s-notes", 10).value.size(), 3u);  // refusals wrote nothing
+}
+
+TEST_P(StoreContract, ASessionIsSignedOffOnceAndListedForItsTrainee) {
+  ASSERT_TRUE(store_->AddTrainee({"t2", "north", "Trainee Two", 10}).ok());
+  WriteBatch b;
+  b.sessions.push_back(Session("s-sign", "body", 100));
+  b.sessions.push_back(Session("s-open", "body2", 200));
+  SessionRow theirs = Session("s-t2", "body3", 300);
+  theirs.trainee_id = "t2";
+  b.sessions.push_back(theirs);
+  ASSERT_TRUE(store_->CommitBatch(b).ok());
+  EXPECT_EQ(store_->GetSessionSignOff("s-sign").status.code, StoreCode::kNotFound);
+
+  const SessionSignOffRow first{"s-sign", "tok-1", "Dr. Ng", 5000};
+  auto put = store_->SignOffSession(first);
+  ASSERT_TRUE(put.ok()) << put.status.message;
+  EXPECT_TRUE(put.value);
+  put = store_->SignOffSession({"s-sign", "tok-2", "Dr. Other", 6000});
+  ASSERT_TRUE(put.ok()) << put.status.message;
+  EXPECT_FALSE(put.value);  // the first sign-off is kept
+  ASSERT_TRUE(store_->SignOffSession({"s-t2", "tok-1", "Dr. Ng", 7000}).ok());
+  EXPECT_EQ(store_->SignOffSession({"no-such-session", "t", "l", 1}).status.code,
+            StoreCode::kNotFound);
+  Reopen();
+  auto got = store_->GetSessionSignOff("s-sign");
+  ASSERT_TRUE(got.ok()) << got.status.message;
+  EXPECT_EQ(got.value, first);
+  EXPECT_EQ(store_->GetSessionSignOff("s-open").status.code, StoreCode::kNotFound);
+  auto listed = store_->ListTraineeSignOffs("t1");
+  ASSERT_TRUE(listed.ok()) << listed.status.message;
+  EXPECT_EQ(listed.value, std::vector<SessionSignOffRow>{first});
+  listed = store_->ListTraineeSignOffs("t2");
+  ASSERT_EQ(listed.value.size(), 1u);
+  EXPECT_EQ(listed.value[0].session_uuid, "s-t2");
+  EXPECT_TRUE(store_->ListTraineeSignOffs("nobody").value.empty());
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Backends, StoreContract,
     ::testing::Values(Backend{"sqlite",

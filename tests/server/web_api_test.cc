@@ -271,13 +271,20 @@ TEST_F(WebApiTest, StateChangingRequestsNeedTheCsrfToken) {
                      R"({"trainee_id":"t10"})")
                 .status,
             200);
-  // The role rule is the gRPC one: a supervisor may not add trainees.
-  EXPECT_EQ(
-      HttpCall(port(), "POST", "/api/v1/trainees",
-               {{"Authorization", "Bearer " + supervisor_}, {"Content-Type", "application/json"}},
-               R"({"trainee_id":"t11"})")
-          .status,
-      403);
+  // The role rule is the gRPC one: a supervisor adds trainees to their own
+  // institution only, a station none.
+  const auto add = [&](const std::string& token, const std::string& body) {
+    return HttpCall(port(), "POST", "/api/v1/trainees",
+                    {{"Authorization", "Bearer " + token}, {"Content-Type", "application/json"}},
+                    body)
+        .status;
+  };
+  EXPECT_EQ(add(supervisor_, R"({"trainee_id":"t11"})"), 200);
+  EXPECT_EQ(server_.store().GetTrainee("t11").value.institution, "north");
+  EXPECT_EQ(add(supervisor_, R"({"trainee_id":"t12","institution":"south"})"), 403);
+  EXPECT_EQ(add(station_, R"({"trainee_id":"t13"})"), 403);
+  EXPECT_FALSE(server_.store().GetTrainee("t12").ok());
+  EXPECT_FALSE(server_.store().GetTrainee("t13").ok());
 }
 
 TEST_F(WebApiTest, MarkupInNamesComesBackJsonEscaped) {
