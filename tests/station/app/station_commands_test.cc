@@ -112,6 +112,20 @@ TEST(SimAndReplay, TheDebriefsPartsSumToTheReplayedScore) {
   double sum = 0.0;
   int parts = 0;
   std::istringstream lines(replay.out.substr(sim.out.size()));
+  // 20 s of the novice is far short of the cecum: the first line says so,
+  // how far the tip got and where (the summary line's deepest tip and region).
+  std::string headline;
+  std::getline(lines, headline);
+  const double deepest_m = NumberAfter(sim.out, "deepest_tip_arc_m");
+  const size_t region_at = sim.out.find("deepest_region=") + 15;
+  const std::string region = sim.out.substr(region_at, sim.out.find(' ', region_at) - region_at);
+  char expected[96];
+  std::snprintf(expected, sizeof(expected), "  Cecum not reached: the tip got %.2f m of the ",
+                deepest_m);
+  EXPECT_EQ(headline.rfind(expected, 0), 0u) << replay.out;
+  EXPECT_NE(headline.find(", as far as the " + region + "; every part below is scaled by that "),
+            std::string::npos)
+      << headline;
   for (std::string line; std::getline(lines, line);) {
     ASSERT_EQ(line.rfind("  ", 0), 0u) << line;
     const std::string name = line.substr(2, line.find(' ', 2) - 2);

@@ -332,9 +332,15 @@ DebriefLines ParseDebrief(const std::string& replay_out) {
     const std::string line = replay_out.substr(start + 1, end - start - 1);
     start = end;
     if (line.rfind("  ", 0) != 0 || line.rfind("  (", 0) == 0) continue;
-    lines.parts.push_back(line.substr(2));
+    // A part's name is followed by its points; the headline of a session
+    // that did not reach the cecum is not a part.
     const size_t space = line.find(' ', 2);
-    if (space != std::string::npos) lines.sum += std::stod(line.substr(space + 1));
+    if (space == std::string::npos || space + 1 >= line.size() ||
+        line.find_first_of("-0123456789", space + 1) != space + 1) {
+      continue;
+    }
+    lines.parts.push_back(line.substr(2));
+    lines.sum += std::stod(line.substr(space + 1));
   }
   return lines;
 }
