@@ -45,8 +45,8 @@ constexpr char kUsage[] =
     "                            [--c-arm-deg A [--tilt-deg T]] [--zoom Z]\n"
     "                            [--width W --height H] [--segments N] [--data-dir DIR]\n"
     "                            --out DIR\n"
-    "   or: ves-station snapshot --session FILE.session [--c-arm-deg A [--tilt-deg T]] [--zoom Z]\n"
-    "                            [--width W --height H] --out DIR\n\n"
+    "   or: ves-station snapshot --session FILE.session [--advance-mm D] [--c-arm-deg A\n"
+    "                            [--tilt-deg T]] [--zoom Z] [--width W --height H] --out DIR\n\n"
     "--case: a case file (.textproto, .vescase, .csv, .mrk.json) or the id of a case in the\n"
     "station's offline cache (the shipped cases are there from the first start), as for run.\n"
     "Inserts the scope L mm with the model (position-driven), turns the knobs, and writes\n"
@@ -57,7 +57,9 @@ constexpr char kUsage[] =
     "patient's side at its edges (R/L, A/P) and a scale bar.\n"
     "--session: instead of inserting, replays a recorded session (from `run`, `sim --session-out`)\n"
     "to its last step and shows the scope where it ended, e.g. at the cecum's pole; its case\n"
-    "and colon segments are the record's, drawn with the default mucosa texture.";
+    "and colon segments are the record's, drawn with the default mucosa texture. --advance-mm\n"
+    "then pushes the scope D mm further by position (a session ends where the cecum counts as\n"
+    "reached, a few cm before its pole).";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -66,6 +68,7 @@ struct UsageError : std::runtime_error {
 struct SnapshotOptions {
   std::string case_path;
   std::string session_path;  // a recorded session instead of case + insertion
+  double advance_m{0.0};     // with session_path: pushed in this much further after its end
   std::string data_dir;  // the offline cache, for --case ID
   double insert_m{0.0};
   double insert_speed_m_per_s{0.1};
@@ -94,17 +97,18 @@ SnapshotOptions ParseOptions(const po::variables_map& vm) {
   if (!vm.count("out")) throw UsageError("--out DIR is required");
   if (vm.count("session")) {
     // The record fixes the case, the segments and every input.
-    for (const char* fixed : {"case", "insert-mm", "insert-speed-mm-s", "knob-ud", "knob-lr",
-                              "segments", "data-dir"}) {
+    for (const char* fixed : {"case", "insert-mm", "knob-ud", "knob-lr", "segments", "data-dir"}) {
       if (vm.count(fixed) && !vm[fixed].defaulted()) {
         throw UsageError(std::string("--") + fixed +
                          " cannot be used with --session: the recorded session sets it");
       }
     }
     o.session_path = vm["session"].as<std::string>();
+    o.advance_m = Checked(vm, "advance-mm", 0.0, 300.0) * 1e-3;
   } else {
     if (!vm.count("case")) throw UsageError("--case FILE|ID (or --session FILE) is required");
     if (!vm.count("insert-mm")) throw UsageError("--insert-mm L is required");
+    if (!vm["advance-mm"].defaulted()) throw UsageError("--advance-mm needs --session");
     o.case_path = vm["case"].as<std::string>();
     o.insert_m = Checked(vm, "insert-mm", 0.0, 2000.0) * 1e-3;
   }
@@ -161,6 +165,7 @@ struct ReplayedEnd {
   model::ModelParams params;
   model::ModelState state;
   model::StepOutput output;
+  model::StepInput last_input;  // the hands, knobs, press and position as they ended
   std::string outcome;
 };
 ReplayedEnd ReplayToEnd(const std::string& path) {
@@ -172,14 +177,15 @@ ReplayedEnd ReplayToEnd(const std::string& path) {
   const training::CaseRun run = training::PrepareReplay(record);
   const std::size_t samples = training::DecodeInputLog(record.input_log()).size();
   if (samples == 0) throw training::ReplayError("the session has no step");
-  ReplayedEnd end{run.params, {}, {}, {}};
+  ReplayedEnd end{run.params, {}, {}, {}, {}};
   // Only the last step's state is kept (copying every step's would cost more
   // than the replay).
   std::size_t seen = 0;
   const training::RunResult result = training::Replay(
       run.params, run.config, record.input_log(),
-      [&](const training::InputSample&, const training::SessionRunner& runner) {
+      [&](const training::InputSample& sample, const training::SessionRunner& runner) {
         if (++seen == samples) {
+          end.last_input = training::ToStepInput(sample);
           end.state = runner.state();
           end.output = runner.output();
         }
@@ -187,6 +193,26 @@ ReplayedEnd ReplayToEnd(const std::string& path) {
   end.outcome = training::SummaryLine(result);
   end.outcome = end.outcome.substr(0, end.outcome.find(' '));
   return end;
+}
+
+// From a replayed end: the scope pushed `advance_m` further by position at
+// the snapshot's insertion speed, everything else as the session left it,
+// then settled. Returns false if the model diverged.
+bool Advance(const SnapshotOptions& o, ReplayedEnd* end) {
+  if (o.advance_m <= 0.0) return true;
+  const model::ModelParams& params = end->params;
+  model::Scratch scratch = model::MakeScratch(params);
+  model::StepInput input = end->last_input;
+  input.thrust_mode = model::ThrustMode::kPosition;
+  const double from_m = end->state.inserted_m;
+  const double push_s = o.advance_m / o.insert_speed_m_per_s;
+  const auto steps = static_cast<long>(std::ceil((push_s + kSettle_s) / params.dt_s));
+  for (long i = 1; i <= steps; ++i) {
+    input.insertion_m = from_m + std::min(o.advance_m, o.insert_speed_m_per_s * i * params.dt_s);
+    model::Step(params, input, &end->state, &scratch, &end->output);
+    if (!end->output.finite) return false;
+  }
+  return true;
 }
 
 void Write(const std::filesystem::path& path, const cv::Mat& image) {
@@ -235,6 +261,11 @@ int RunSnapshot(const SnapshotOptions& o) {
   } else {
     try {
       ReplayedEnd end = ReplayToEnd(o.session_path);
+      if (!Advance(o, &end)) {
+        std::cerr << kName << ": the model diverged pushing on at t = " << end.state.time_s
+                  << " s\n";
+        return 1;
+      }
       params = std::move(end.params);
       state = std::move(end.state);
       output = std::move(end.output);
@@ -296,6 +327,9 @@ int RunSnapshotCommand(const CommandArgs& args) {
                                                  "colon case file (.textproto, .vescase, .csv, .mrk.json) or cached case id")(
       "session", po::value<std::string>(),
       "a recorded session (.session): the scope where it ended, instead of --case/--insert-mm")(
+      "advance-mm", po::value<double>()->default_value(0.0),
+      "with --session: then push the scope this much further (by position, at "
+      "--insert-speed-mm-s), e.g. from where the cecum counts as reached to its pole")(
       "insert-mm", po::value<double>(), "inserted length past the anus, mm")(
       "insert-speed-mm-s", po::value<double>()->default_value(100.0), "insertion speed, mm/s")(
       "knob-ud", po::value<double>()->default_value(0.0), "up/down knob, degrees (+ up)")(

@@ -208,6 +208,23 @@ TEST(Snapshot, ASessionsLastStepPutsTheTipWhereItEnded) {
     EXPECT_EQ(png.cols, 160) << image;
     EXPECT_EQ(png.rows, 120) << image;
   }
+  // --advance-mm: then pushed on by position (from where a session stopped
+  // at the cecum's entrance to its pole): the tip goes deeper.
+  const ProcessResult advanced =
+      RunProgram({kStationBin, "snapshot", "--session", session.string(), "--advance-mm", "30",
+                  "--width", "160", "--height", "120", "--out", (dir / "advanced").string()},
+                 dir / "advanced");
+  ASSERT_EQ(advanced.exit_code, 0) << advanced.out << advanced.err;
+  EXPECT_GT(NumberAfter(advanced.out, "inserted_m"), NumberAfter(snapshot.out, "inserted_m") + 0.025)
+      << advanced.out;
+  EXPECT_GT(NumberAfter(advanced.out, "tip_arc_m"), last_tip_m + 0.005) << advanced.out;
+  const ProcessResult no_session = RunProgram(
+      {kStationBin, "snapshot", "--case", "standard-adult", "--insert-mm", "100", "--advance-mm",
+       "30", "--out", (dir / "no-session").string()},
+      dir / "no-session");
+  EXPECT_EQ(no_session.exit_code, 2);
+  EXPECT_NE(no_session.err.find("--advance-mm needs --session"), std::string::npos)
+      << no_session.err;
   // The record sets the case and the insertion: asking for them too is refused.
   const ProcessResult both =
       RunProgram({kStationBin, "snapshot", "--session", session.string(), "--insert-mm", "100",
