@@ -60,8 +60,8 @@ void DrawDebrief(cv::Mat& canvas, const cv::Rect& box, const training::Debrief& 
   const int name_width = box.width * 30 / 100;
   int y = box.y;
   if (headline) {
-    DrawTextFitted(canvas, debrief.headline, {box.x, y, box.width, line}, 0.7 * scale, kAmber,
-                   false, 2);
+    // Thin strokes: the line is long and drawn small; bold blurs it.
+    DrawTextFitted(canvas, debrief.headline, {box.x, y, box.width, line}, 0.7 * scale, kAmber);
     y += line;
   }
   for (const training::DebriefPart& part : debrief.parts) {
