@@ -1,11 +1,14 @@
 // ves-station snapshot: inserts the scope into a case with the model
-// (position-driven) and writes the views of paper §4 as PNG files: the
-// endoscope image in its three modes and AP / lateral fluoroscopy.
+// (position-driven), or replays a recorded session to its last step, and
+// writes the views of paper §4 as PNG files: the endoscope image in its
+// three modes and AP / lateral fluoroscopy.
 #include <algorithm>
 #include <boost/program_options.hpp>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -24,6 +27,9 @@
 #include "station/render/mucosa_texture.h"
 #include "station/sync/station_paths.h"
 #include "station/training/case_model.h"
+#include "station/training/case_run.h"
+#include "station/training/input_log.h"
+#include "station/training/session_file.h"
 
 namespace ves::station {
 namespace {
@@ -38,7 +44,9 @@ constexpr char kUsage[] =
     "usage: ves-station snapshot --case FILE|ID --insert-mm L [--knob-ud DEG --knob-lr DEG]\n"
     "                            [--c-arm-deg A [--tilt-deg T]] [--zoom Z]\n"
     "                            [--width W --height H] [--segments N] [--data-dir DIR]\n"
-    "                            --out DIR\n\n"
+    "                            --out DIR\n"
+    "   or: ves-station snapshot --session FILE.session [--advance-mm D] [--c-arm-deg A\n"
+    "                            [--tilt-deg T]] [--zoom Z] [--width W --height H] --out DIR\n\n"
     "--case: a case file (.textproto, .vescase, .csv, .mrk.json) or the id of a case in the\n"
     "station's offline cache (the shipped cases are there from the first start), as for run.\n"
     "Inserts the scope L mm with the model (position-driven), turns the knobs, and writes\n"
@@ -46,7 +54,12 @@ constexpr char kUsage[] =
     "fluoroscopy_ap.png and fluoroscopy_lateral.png into DIR; with --c-arm-deg also\n"
     "fluoroscopy_c-arm.png from that C-arm angle (0 AP, 90 lateral). --zoom enlarges every\n"
     "fluoroscopy image around the scope's tip. Each carries its view (AP/LAT/OBL), the\n"
-    "patient's side at its edges (R/L, A/P) and a scale bar.";
+    "patient's side at its edges (R/L, A/P) and a scale bar.\n"
+    "--session: instead of inserting, replays a recorded session (from `run`, `sim --session-out`)\n"
+    "to its last step and shows the scope where it ended, e.g. at the cecum's pole; its case\n"
+    "and colon segments are the record's, drawn with the default mucosa texture. --advance-mm\n"
+    "then pushes the scope D mm further by position (a session ends where the cecum counts as\n"
+    "reached, a few cm before its pole).";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -54,6 +67,8 @@ struct UsageError : std::runtime_error {
 
 struct SnapshotOptions {
   std::string case_path;
+  std::string session_path;  // a recorded session instead of case + insertion
+  double advance_m{0.0};     // with session_path: pushed in this much further after its end
   std::string data_dir;  // the offline cache, for --case ID
   double insert_m{0.0};
   double insert_speed_m_per_s{0.1};
@@ -79,12 +94,25 @@ double Checked(const po::variables_map& vm, const char* name, double low, double
 
 SnapshotOptions ParseOptions(const po::variables_map& vm) {
   SnapshotOptions o;
-  if (!vm.count("case")) throw UsageError("--case FILE|ID is required");
-  if (!vm.count("insert-mm")) throw UsageError("--insert-mm L is required");
   if (!vm.count("out")) throw UsageError("--out DIR is required");
-  o.case_path = vm["case"].as<std::string>();
+  if (vm.count("session")) {
+    // The record fixes the case, the segments and every input.
+    for (const char* fixed : {"case", "insert-mm", "knob-ud", "knob-lr", "segments", "data-dir"}) {
+      if (vm.count(fixed) && !vm[fixed].defaulted()) {
+        throw UsageError(std::string("--") + fixed +
+                         " cannot be used with --session: the recorded session sets it");
+      }
+    }
+    o.session_path = vm["session"].as<std::string>();
+    o.advance_m = Checked(vm, "advance-mm", 0.0, 300.0) * 1e-3;
+  } else {
+    if (!vm.count("case")) throw UsageError("--case FILE|ID (or --session FILE) is required");
+    if (!vm.count("insert-mm")) throw UsageError("--insert-mm L is required");
+    if (!vm["advance-mm"].defaulted()) throw UsageError("--advance-mm needs --session");
+    o.case_path = vm["case"].as<std::string>();
+    o.insert_m = Checked(vm, "insert-mm", 0.0, 2000.0) * 1e-3;
+  }
   o.data_dir = vm["data-dir"].as<std::string>();
-  o.insert_m = Checked(vm, "insert-mm", 0.0, 2000.0) * 1e-3;
   o.insert_speed_m_per_s = Checked(vm, "insert-speed-mm-s", 1.0, 1000.0) * 1e-3;
   o.knob_up_rad = Checked(vm, "knob-ud", -180.0, 180.0) * kDegToRad;
   o.knob_right_rad = Checked(vm, "knob-lr", -180.0, 180.0) * kDegToRad;
@@ -130,35 +158,123 @@ bool Insert(const SnapshotOptions& o, const model::ModelParams& params, model::M
 }
 
 
+// The model as a recorded session left it: its run rebuilt from the record
+// and replayed to the log's last step. Throws SessionFileError,
+// InputLogError or ReplayError for a file that is no usable record.
+struct ReplayedEnd {
+  model::ModelParams params;
+  model::ModelState state;
+  model::StepOutput output;
+  model::StepInput last_input;  // the hands, knobs, press and position as they ended
+  std::string outcome;
+};
+ReplayedEnd ReplayToEnd(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read '" + path + "'");
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  const v1::SessionRecord record = training::DecodeSessionFile(bytes.str());
+  const training::CaseRun run = training::PrepareReplay(record);
+  const std::size_t samples = training::DecodeInputLog(record.input_log()).size();
+  if (samples == 0) throw training::ReplayError("the session has no step");
+  ReplayedEnd end{run.params, {}, {}, {}, {}};
+  // Only the last step's state is kept (copying every step's would cost more
+  // than the replay).
+  std::size_t seen = 0;
+  const training::RunResult result = training::Replay(
+      run.params, run.config, record.input_log(),
+      [&](const training::InputSample& sample, const training::SessionRunner& runner) {
+        if (++seen == samples) {
+          end.last_input = training::ToStepInput(sample);
+          end.state = runner.state();
+          end.output = runner.output();
+        }
+      });
+  end.outcome = training::SummaryLine(result);
+  end.outcome = end.outcome.substr(0, end.outcome.find(' '));
+  return end;
+}
+
+// From a replayed end: the scope pushed `advance_m` further by position at
+// the snapshot's insertion speed, everything else as the session left it,
+// then settled. Returns false if the model diverged.
+bool Advance(const SnapshotOptions& o, ReplayedEnd* end) {
+  if (o.advance_m <= 0.0) return true;
+  const model::ModelParams& params = end->params;
+  model::Scratch scratch = model::MakeScratch(params);
+  model::StepInput input = end->last_input;
+  input.thrust_mode = model::ThrustMode::kPosition;
+  const double from_m = end->state.inserted_m;
+  const double push_s = o.advance_m / o.insert_speed_m_per_s;
+  const auto steps = static_cast<long>(std::ceil((push_s + kSettle_s) / params.dt_s));
+  for (long i = 1; i <= steps; ++i) {
+    input.insertion_m = from_m + std::min(o.advance_m, o.insert_speed_m_per_s * i * params.dt_s);
+    model::Step(params, input, &end->state, &scratch, &end->output);
+    if (!end->output.finite) return false;
+  }
+  return true;
+}
+
 void Write(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) {
     throw std::runtime_error("cannot write '" + path.string() + "'");
   }
 }
 
-int RunSnapshot(const SnapshotOptions& o) {
-  ves::v1::ColonCase colon_case;
-  model::ModelParams params;
-  cv::Mat case_texture;
+// The case's model with the scope inserted as --insert-mm and the knobs
+// say. Returns 0, or the exit status after saying what went wrong.
+int InsertIntoCase(const SnapshotOptions& o, model::ModelParams* params, model::ModelState* state,
+                   model::StepOutput* output, cv::Mat* case_texture) {
   try {
-    colon_case =
+    const ves::v1::ColonCase colon_case =
         LoadCaseArgument(o.case_path, sync::ResolveStationPaths(o.data_dir), std::cerr);
     training::CaseModelOptions case_options;
     case_options.segments = o.segments;
-    params = training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(), case_options);
+    *params = training::MakeModelParams(colon_case, training::DefaultEndoscopeSpec(), case_options);
     if (!colon_case.mucosa_texture().image().empty()) {
-      case_texture = render::DecodeMucosaTexture(colon_case.mucosa_texture().image());
+      *case_texture = render::DecodeMucosaTexture(colon_case.mucosa_texture().image());
     }
     std::filesystem::create_directories(o.out_dir);
   } catch (const std::exception& e) {  // CaseError, UnknownCaseError, invalid_argument, filesystem_error
     std::cerr << kName << ": " << e.what() << "\n";
     return 2;
   }
-  model::ModelState state = model::MakeInitialState(params);
-  model::StepOutput output = model::MakeStepOutput(params);
-  if (!Insert(o, params, &state, &output)) {
-    std::cerr << kName << ": the model diverged at t = " << state.time_s << " s\n";
+  *state = model::MakeInitialState(*params);
+  *output = model::MakeStepOutput(*params);
+  if (!Insert(o, *params, state, output)) {
+    std::cerr << kName << ": the model diverged at t = " << state->time_s << " s\n";
     return 1;
+  }
+  return 0;
+}
+
+int RunSnapshot(const SnapshotOptions& o) {
+  model::ModelParams params;
+  model::ModelState state;
+  model::StepOutput output;
+  cv::Mat case_texture;
+  std::string ended;  // with --session: how it ended, for the output line
+  if (o.session_path.empty()) {
+    if (const int status = InsertIntoCase(o, &params, &state, &output, &case_texture)) {
+      return status;
+    }
+  } else {
+    try {
+      ReplayedEnd end = ReplayToEnd(o.session_path);
+      if (!Advance(o, &end)) {
+        std::cerr << kName << ": the model diverged pushing on at t = " << end.state.time_s
+                  << " s\n";
+        return 1;
+      }
+      params = std::move(end.params);
+      state = std::move(end.state);
+      output = std::move(end.output);
+      ended = " " + end.outcome;
+      std::filesystem::create_directories(o.out_dir);
+    } catch (const std::exception& e) {  // a file that is no usable record, an unwritable DIR
+      std::cerr << kName << ": " << o.session_path << ": " << e.what() << "\n";
+      return 2;
+    }
   }
   try {
     const render::SceneGeometry scene = render::SceneFromModel(params, state, &output);
@@ -194,7 +310,7 @@ int RunSnapshot(const SnapshotOptions& o) {
     x_ray("fluoroscopy_ap.png", 0.0, 0.0);
     x_ray("fluoroscopy_lateral.png", 90.0 * kDegToRad, 0.0);
     if (o.c_arm_rad) x_ray("fluoroscopy_c-arm.png", *o.c_arm_rad, o.tilt_rad);
-    std::cout << "inserted_m=" << state.inserted_m << " tip_arc_m=" << state.tip_arc_m
+    std::cout << "inserted_m=" << state.inserted_m << " tip_arc_m=" << state.tip_arc_m << ended
               << " renderer=\"" << context.renderer() << "\" out=" << o.out_dir.string() << "\n";
   } catch (const std::exception& e) {  // RenderError (no EGL/GLES), write failures
     std::cerr << kName << ": " << e.what() << "\n";
@@ -209,6 +325,11 @@ int RunSnapshotCommand(const CommandArgs& args) {
   po::options_description desc("options");
   desc.add_options()("help,h", "show this help")("case", po::value<std::string>(),
                                                  "colon case file (.textproto, .vescase, .csv, .mrk.json) or cached case id")(
+      "session", po::value<std::string>(),
+      "a recorded session (.session): the scope where it ended, instead of --case/--insert-mm")(
+      "advance-mm", po::value<double>()->default_value(0.0),
+      "with --session: then push the scope this much further (by position, at "
+      "--insert-speed-mm-s), e.g. from where the cecum counts as reached to its pole")(
       "insert-mm", po::value<double>(), "inserted length past the anus, mm")(
       "insert-speed-mm-s", po::value<double>()->default_value(100.0), "insertion speed, mm/s")(
       "knob-ud", po::value<double>()->default_value(0.0), "up/down knob, degrees (+ up)")(

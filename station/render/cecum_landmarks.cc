@@ -10,6 +10,12 @@ constexpr double kPi = 3.14159265358979323846;
 
 double Gauss(double x, double sigma) { return std::exp(-0.5 * (x / sigma) * (x / sigma)); }
 
+// 1 on |x| well inside `half`, e^-1 at |x| = half, falling steeply beyond.
+double Plateau(double x, double half) {
+  const double s = (x / half) * (x / half);
+  return std::exp(-s * s);
+}
+
 // The angle's distance to the nearest taenia (cos(3 angle) = -1: pi/3, pi, 5pi/3).
 double FromTaenia(double angle_rad) {
   const double third = 2.0 * kPi / 3.0;
@@ -28,11 +34,19 @@ constexpr double kFoldHalfWidth_rad = 0.13; // the ridges' Gaussian sigma around
 }  // namespace
 
 double IleocaecalValveFactor(double from_pole_m, double angle_from_medial_rad) {
-  const double around = Gauss(std::remainder(angle_from_medial_rad, 2.0 * kPi), kValveHalfWidth_rad);
+  const double a = std::remainder(angle_from_medial_rad, 2.0 * kPi);
   const double d = from_pole_m - kValveFromPole_m;
-  const double lips = Gauss(d - 0.5 * kValveLipGap_m, kValveLipSpread_m) +
-                      Gauss(d + 0.5 * kValveLipGap_m, kValveLipSpread_m);
-  return 1.0 - kValveDepth * around * std::min(1.0, lips);
+  // Flat-topped along the colon, so it reads as a thick cushion rather than
+  // a fold; Gaussian around the wall, whose sectors are too coarse (11.25
+  // degrees) for steeper flanks without a sawtooth edge.
+  const double cushion = Gauss(a, kValveHalfWidth_rad) * Plateau(d, kValveHalfLength_m);
+  const double slit =
+      kValveSlitDepth * Gauss(d, kValveSlitHalfWidth_m) * Gauss(a, kValveSlitHalfLength_rad);
+  return 1.0 - kValveHeight * cushion * (1.0 - slit);
+}
+
+bool OnIleocaecalValve(double from_pole_m, double angle_from_medial_rad) {
+  return IleocaecalValveFactor(from_pole_m, angle_from_medial_rad) < 1.0 - 0.1 * kValveHeight;
 }
 
 double CecalPoleRelief_m(double phi_rad, double angle_rad, double radius_m) {

@@ -273,8 +273,7 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
   Eigen::Vector3d colon_middle = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& c : scene.colon_centers_m) colon_middle += c;
   colon_middle /= static_cast<double>(n);
-  const double valve_reach_m =
-      kValveFromPole_m + 0.5 * kValveLipGap_m + 4.0 * kValveLipSpread_m;
+  std::vector<bool> on_valve(rings * columns, false);  // the wireframe's dense patch
   for (size_t k = 0; k < rings; ++k) {
     const Eigen::Vector3d& t = mesh->ring_tangents[k];
     normal_axis -= normal_axis.dot(t) * t;
@@ -290,7 +289,7 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       dents.emplace_back(in_plane.normalized(), dent.depth_m * std::exp(-along * along));
     }
     const double from_pole_m = last_arc - arc[k];
-    const bool at_valve = options.cecum_landmarks && from_pole_m < valve_reach_m;
+    const bool at_valve = options.cecum_landmarks && from_pole_m < kValveReach_m;
     const Eigen::Vector3d medial = colon_middle - mesh->ring_centers_m[k];
     const double medial_angle = std::atan2(medial.dot(binormal_axis), medial.dot(normal_axis));
     for (int j = 0; j < columns; ++j) {
@@ -298,7 +297,10 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       const Eigen::Vector3d radial =
           std::cos(angle) * normal_axis + std::sin(angle) * binormal_axis;
       double radius = mesh->ring_radius_m[k] * HaustralFoldFactor(options, arc[k], angle);
-      if (at_valve) radius *= IleocaecalValveFactor(from_pole_m, angle - medial_angle);
+      if (at_valve) {
+        radius *= IleocaecalValveFactor(from_pole_m, angle - medial_angle);
+        on_valve[k * columns + j] = OnIleocaecalValve(from_pole_m, angle - medial_angle);
+      }
       for (const auto& [direction, depth_m] : dents) {
         const double c = std::max(0.0, radial.dot(direction));
         radius += depth_m * c * c * c * c;
@@ -353,6 +355,15 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
     if (k + 1 < rings) {
       AppendWireMeridians(base, base + static_cast<std::uint32_t>(columns), sectors, sector_stride,
                           &mesh->lines);
+    }
+    // On the ileocaecal valve every ring and sector, so its lips show.
+    const auto next = base + static_cast<std::uint32_t>(columns);
+    for (int j = 0; j < sectors; ++j) {
+      if (!on_valve[base + j]) continue;
+      if (on_valve[base + j + 1]) mesh->lines.insert(mesh->lines.end(), {base + j, base + j + 1});
+      if (k + 1 < rings && j % sector_stride != 0 && on_valve[next + j]) {
+        mesh->lines.insert(mesh->lines.end(), {base + j, next + j});
+      }
     }
   }
 

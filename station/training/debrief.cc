@@ -45,6 +45,17 @@ Debrief CalcDebrief(const Metrics& m, const std::vector<Event>& events, v1::Diff
   // completed: 50 × progress × (weight / other weights) × component per
   // part other than time (CalcScore's renormalisation), the cecum nothing.
   double per_weight = 50.0;
+  if (!m.completed) {
+    // Said first: a trainee reading only amber parts would not know why.
+    d.headline = Format("Cecum not reached: the tip got %.2f m of the %.2f m", m.max_tip_arc_m,
+                        cecum_arc_m);
+    if (region_at) d.headline += ", as far as the " + region_at(m.max_tip_arc_m);
+    d.headline += other_weight > 0.0
+                      ? Format("; every part below is scaled by that %.0f %% of the way",
+                               100.0 * c.progress)
+                      : Format("; the cecum part gives %.0f %% of its points, the way made",
+                               100.0 * c.progress);
+  }
   if (m.completed) {
     d.parts.push_back({"cecum", 50.0, 50.0, Format("reached in %.1f s", m.time_to_cecum_s), {}});
     d.parts.push_back({"time", 50.0 * w.time * c.time, 50.0 * w.time,
@@ -53,8 +64,7 @@ Debrief CalcDebrief(const Metrics& m, const std::vector<Event>& events, v1::Diff
     // The time part is out of play; the others share the 50 points.
     per_weight = 50.0 * c.progress / other_weight;
     d.parts.push_back({"cecum", 0.0, 50.0,
-                       Format("not reached: %.0f %% of the way (every part below scaled by it)",
-                              100.0 * c.progress),
+                       Format("not reached: %.0f %% of the way", 100.0 * c.progress),
                        {}});
   } else {  // only time counts (easy) and it was not reached: the way made
     d.parts.push_back({"cecum", 50.0 * c.progress, 50.0,
@@ -90,6 +100,7 @@ Debrief CalcDebrief(const Metrics& m, const std::vector<Event>& events, v1::Diff
 
 std::string DebriefText(const Debrief& debrief, const std::string& indent) {
   std::string text;
+  if (!debrief.headline.empty()) text += indent + debrief.headline + "\n";
   double sum = 0.0;
   for (const DebriefPart& p : debrief.parts) {
     sum += p.points;

@@ -26,6 +26,12 @@ struct DebriefPart {
 // The score split into its weighed parts: the parts' points sum to the
 // score before it is bounded to [0, 100]; `score` is CalcScore's.
 struct Debrief {
+  // One line above the parts where they need a reason to read them; empty
+  // when the cecum was reached. Not reached: how far the tip got, where,
+  // and that every part is scaled by that share of the way, e.g.
+  // "Cecum not reached: the tip got 0.92 m of the 1.53 m, as far as the
+  //  transverse; every part below is scaled by that 60 % of the way".
+  std::string headline;
   std::vector<DebriefPart> parts;
   double score{0.0};
 
@@ -41,7 +47,8 @@ Debrief CalcDebrief(const Metrics& metrics, const std::vector<Event>& events,
                     v1::Difficulty difficulty, double cecum_arc_m, const ScoreParams& params,
                     const std::function<std::string(double arc_m)>& region_at);
 
-// One line per part for the terminal, e.g.
+// The headline (when there is one), then one line per part for the
+// terminal, e.g.
 //   "    pain 14.2 of 20.0 (pain 4.1 s): at 41.2 s for 3.1 s in the sigmoid"
 std::string DebriefText(const Debrief& debrief, const std::string& indent);
 

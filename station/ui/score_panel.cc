@@ -52,11 +52,18 @@ std::string SittingLine(const training::Sitting& sitting) {
 
 void DrawDebrief(cv::Mat& canvas, const cv::Rect& box, const training::Debrief& debrief,
                  const std::string& sitting_line, double scale) {
-  // Parts, the total, the sitting: equal lines filling the box.
-  const int lines = static_cast<int>(debrief.parts.size()) + 2;
+  // The headline (a cecum not reached), the parts, the total, the sitting:
+  // equal lines filling the box.
+  const int headline = debrief.headline.empty() ? 0 : 1;
+  const int lines = headline + static_cast<int>(debrief.parts.size()) + 2;
   const int line = box.height / std::max(lines, 1);
   const int name_width = box.width * 30 / 100;
   int y = box.y;
+  if (headline) {
+    // Thin strokes: the line is long and drawn small; bold blurs it.
+    DrawTextFitted(canvas, debrief.headline, {box.x, y, box.width, line}, 0.7 * scale, kAmber);
+    y += line;
+  }
   for (const training::DebriefPart& part : debrief.parts) {
     const bool damage = part.name == "damage";
     const bool cost = damage ? part.points < 0.0 : part.points < part.max_points - 0.05;

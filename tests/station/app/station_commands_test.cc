@@ -112,6 +112,20 @@ TEST(SimAndReplay, TheDebriefsPartsSumToTheReplayedScore) {
   double sum = 0.0;
   int parts = 0;
   std::istringstream lines(replay.out.substr(sim.out.size()));
+  // 20 s of the novice is far short of the cecum: the first line says so,
+  // how far the tip got and where (the summary line's deepest tip and region).
+  std::string headline;
+  std::getline(lines, headline);
+  const double deepest_m = NumberAfter(sim.out, "deepest_tip_arc_m");
+  const size_t region_at = sim.out.find("deepest_region=") + 15;
+  const std::string region = sim.out.substr(region_at, sim.out.find(' ', region_at) - region_at);
+  char expected[96];
+  std::snprintf(expected, sizeof(expected), "  Cecum not reached: the tip got %.2f m of the ",
+                deepest_m);
+  EXPECT_EQ(headline.rfind(expected, 0), 0u) << replay.out;
+  EXPECT_NE(headline.find(", as far as the " + region + "; every part below is scaled by that "),
+            std::string::npos)
+      << headline;
   for (std::string line; std::getline(lines, line);) {
     ASSERT_EQ(line.rfind("  ", 0), 0u) << line;
     const std::string name = line.substr(2, line.find(' ', 2) - 2);
@@ -151,6 +165,82 @@ TEST(Snapshot, TheCarmAngleAndZoomGiveAnotherImageAndBadValuesAreRefused) {
   const ProcessResult tilt = with({"--tilt-deg", "10"}, dir / "tilt");
   EXPECT_EQ(tilt.exit_code, 2);
   EXPECT_NE(tilt.err.find("--c-arm-deg"), std::string::npos) << tilt.err;
+  fs::remove_all(dir);
+}
+
+// snapshot --session: the views from where a recorded session left the
+// scope (docs/views.md), e.g. at the cecum's pole after an expert's run.
+// Here a short novice run: the tip it reports is the replay's last row's.
+TEST(Snapshot, ASessionsLastStepPutsTheTipWhereItEnded) {
+  const fs::path dir = MakeTempDir("snapshot-session");
+  const fs::path session = dir / "novice.session";
+  const ProcessResult sim = RunProgram(
+      {kStationBin, "sim", "--case", VES_SOURCE_DIR "/patient_db/cases/standard-adult.textproto",
+       "--operator", "novice", "--seconds", "8", "--segments", "60", "--session-out",
+       session.string()},
+      dir / "sim");
+  ASSERT_EQ(sim.exit_code, 0) << sim.out << sim.err;
+  const ProcessResult replay = RunProgram(
+      {kStationBin, "replay", session.string(), "--csv", (dir / "replay.csv").string()},
+      dir / "replay");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  const std::string csv = ReadFile(dir / "replay.csv");
+  const size_t last_row = csv.rfind('\n', csv.size() - 2) + 1;
+  // t_s, inserted_m, tip_arc_m, ...
+  const size_t tip_at = csv.find(',', csv.find(',', last_row) + 1) + 1;
+  const double last_tip_m = std::atof(csv.c_str() + tip_at);
+  ASSERT_GT(last_tip_m, 0.05) << "the novice did not go in";
+
+  const fs::path out = dir / "views";
+  const ProcessResult snapshot =
+      RunProgram({kStationBin, "snapshot", "--session", session.string(), "--width", "160",
+                  "--height", "120", "--out", out.string()},
+                 dir / "snapshot");
+  ASSERT_EQ(snapshot.exit_code, 0) << snapshot.out << snapshot.err;
+  EXPECT_NEAR(NumberAfter(snapshot.out, "tip_arc_m"), last_tip_m, 1e-4) << snapshot.out;
+  // The replayed outcome, as the run's own summary line has it.
+  const std::string outcome = sim.out.substr(0, sim.out.find(' '));
+  ASSERT_EQ(outcome.rfind("outcome=", 0), 0u) << sim.out;
+  EXPECT_NE(snapshot.out.find(" " + outcome + " "), std::string::npos) << snapshot.out;
+  for (const char* image : {"endoscope_wireframe.png", "endoscope_polygon.png",
+                            "endoscope_texture.png", "fluoroscopy_ap.png"}) {
+    const cv::Mat png = cv::imread((out / image).string());
+    EXPECT_EQ(png.cols, 160) << image;
+    EXPECT_EQ(png.rows, 120) << image;
+  }
+  // --advance-mm: then pushed on by position (from where a session stopped
+  // at the cecum's entrance to its pole): the tip goes deeper.
+  const ProcessResult advanced =
+      RunProgram({kStationBin, "snapshot", "--session", session.string(), "--advance-mm", "30",
+                  "--width", "160", "--height", "120", "--out", (dir / "advanced").string()},
+                 dir / "advanced");
+  ASSERT_EQ(advanced.exit_code, 0) << advanced.out << advanced.err;
+  EXPECT_GT(NumberAfter(advanced.out, "inserted_m"), NumberAfter(snapshot.out, "inserted_m") + 0.025)
+      << advanced.out;
+  EXPECT_GT(NumberAfter(advanced.out, "tip_arc_m"), last_tip_m + 0.005) << advanced.out;
+  const ProcessResult no_session = RunProgram(
+      {kStationBin, "snapshot", "--case", "standard-adult", "--insert-mm", "100", "--advance-mm",
+       "30", "--out", (dir / "no-session").string()},
+      dir / "no-session");
+  EXPECT_EQ(no_session.exit_code, 2);
+  EXPECT_NE(no_session.err.find("--advance-mm needs --session"), std::string::npos)
+      << no_session.err;
+  // The record sets the case and the insertion: asking for them too is refused.
+  const ProcessResult both =
+      RunProgram({kStationBin, "snapshot", "--session", session.string(), "--insert-mm", "100",
+                  "--out", (dir / "both").string()},
+                 dir / "both");
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_NE(both.err.find("--insert-mm cannot be used with --session"), std::string::npos)
+      << both.err;
+  // A file that is no session is refused, naming it.
+  std::ofstream(dir / "bad.session") << "not a session";
+  const ProcessResult bad =
+      RunProgram({kStationBin, "snapshot", "--session", (dir / "bad.session").string(), "--out",
+                  (dir / "bad").string()},
+                 dir / "bad");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("bad.session"), std::string::npos) << bad.err;
   fs::remove_all(dir);
 }
 

@@ -105,6 +105,38 @@ TEST(Debrief, ThePartsOfASessionThatDidNotReachTheCecumSumToItsScore) {
   }
 }
 
+// Every part of a session short of the cecum is scaled by the share of the
+// way, so every one reads amber; the line above them says why, with how
+// far the tip got and where (issue #48).
+TEST(Debrief, ASessionShortOfTheCecumSaysSoAboveItsParts) {
+  const ScoreParams params;
+  Metrics m = Completed();
+  m.completed = false;
+  m.max_tip_arc_m = 0.6;
+  const Debrief medium = CalcDebrief(m, Events(), v1::DIFFICULTY_MEDIUM, kCecumArc_m, params, Region);
+  EXPECT_EQ(medium.headline,
+            "Cecum not reached: the tip got 0.60 m of the 1.50 m, as far as the transverse; "
+            "every part below is scaled by that 40 % of the way");
+  const std::string text = DebriefText(medium, "  ");
+  EXPECT_EQ(text.rfind("  " + medium.headline + "\n  cecum 0.0 of 50.0 ", 0), 0u)
+      << "the headline first, then the parts:\n" << text;
+  // Easy: only time counts, so only the cecum's part gives the way made.
+  const Debrief easy = CalcDebrief(m, Events(), v1::DIFFICULTY_EASY, kCecumArc_m, params, Region);
+  EXPECT_EQ(easy.headline,
+            "Cecum not reached: the tip got 0.60 m of the 1.50 m, as far as the transverse; "
+            "the cecum part gives 40 % of its points, the way made");
+  // No region names (none given): the line still reads.
+  const Debrief unnamed = CalcDebrief(m, Events(), v1::DIFFICULTY_HARD, kCecumArc_m, params, {});
+  EXPECT_EQ(unnamed.headline.rfind("Cecum not reached: the tip got 0.60 m of the 1.50 m; ", 0),
+            0u)
+      << unnamed.headline;
+  // Reached: no headline; the parts say it all.
+  const Debrief reached =
+      CalcDebrief(Completed(), Events(), v1::DIFFICULTY_MEDIUM, kCecumArc_m, params, Region);
+  EXPECT_TRUE(reached.headline.empty()) << reached.headline;
+  EXPECT_EQ(DebriefText(reached, "  ").rfind("  cecum 50.0 of 50.0 ", 0), 0u);
+}
+
 TEST(Debrief, DamageCostsItsPointsWithItsPlacesAndTheBoundIsSaid) {
   const ScoreParams params;
   Metrics m = Completed();

@@ -189,6 +189,46 @@ TEST(ScorePanel, TheDebriefIsOnTheScreenWhenTheSessionIsOver) {
   EXPECT_GT(ChangedIn(ready, debriefed, box), 0.01);
 }
 
+// Short of the cecum every part is scaled by the way made and reads amber;
+// the debrief's first line says why (issue #48), in amber, above the parts.
+TEST(ScorePanel, ADebriefShortOfTheCecumSaysSoOnItsFirstLine) {
+  const ScreenLayout layout = MakeScreenLayout({1366, 768});
+  ScreenModel model;
+  ControlState controls;
+  model.phase = SessionPhase::kOver;
+  model.outcome = "time limit reached";
+  model.debrief = ThreePartDebrief();
+  model.sitting_line = "session 1 of this sitting     best: 1 (0/100)     last: 1 (0/100)";
+  const cv::Mat plain = ComposeScreen(layout, cv::Mat(), cv::Mat(), model, controls);
+  model.debrief.headline =
+      "Cecum not reached: the tip got 0.55 m of the 1.53 m, as far as the sigmoid; every part "
+      "below is scaled by that 36 % of the way";
+  const cv::Mat headed = ComposeScreen(layout, cv::Mat(), cv::Mat(), model, controls);
+  const cv::Rect& b = layout.banner;
+  const cv::Rect box(b.x, b.y + b.height * 22 / 100, b.width, b.height * 68 / 100);
+  // Six lines now: the headline, three parts, the total, the sitting.
+  const int line = box.height / 6;
+  const auto amber_in = [](const cv::Mat& image, const cv::Rect& r) {
+    int amber = 0;
+    for (int y = r.y; y < r.y + r.height; ++y) {
+      for (int x = r.x; x < r.x + r.width; ++x) {
+        const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+        amber += p[2] > 180 && p[1] > 120 && p[1] < 210 && p[0] < 90;
+      }
+    }
+    return amber;
+  };
+  const cv::Rect first(box.x, box.y, box.width, line);
+  EXPECT_GT(amber_in(headed, first), 200) << "no amber headline on the first line";
+  EXPECT_GT(ChangedIn(plain, headed, first), 0.01);
+  cv::Mat grey;
+  cv::cvtColor(headed(box), grey, cv::COLOR_BGR2GRAY);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_GT(cv::countNonZero(grey(cv::Rect(0, i * line, box.width, line)) > 90), 20)
+        << "line " << i << " is empty";
+  }
+}
+
 TEST(ScorePanel, TheSittingLineNamesTheBestAndTheLast) {
   training::Sitting sitting;
   EXPECT_EQ(SittingLine(sitting), "");
