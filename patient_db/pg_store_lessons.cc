@@ -1,5 +1,6 @@
 // PgStore: curricula, groups, assignments and lesson verdicts
 // (docs/lessons.md). Schema: migration 2, the same SQL as SQLite.
+#include <map>
 #include <optional>
 #include <pqxx/pqxx>
 
@@ -171,6 +172,23 @@ StoreResult<std::string> PgStore::GetTraineeGroup(const std::string& trainee_id)
   return out;
 }
 
+StoreResult<std::vector<std::string>> PgStore::GetTraineeGroups(
+    const std::vector<std::string>& trainee_ids) {
+  std::map<std::string, std::string> group_of;
+  StoreStatus st = Transact("get trainee groups", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+    group_of.clear();
+    for (const auto& r : tx.exec_params(
+             "SELECT trainee_id, group_name FROM trainee_groups "
+             "WHERE trainee_id IN (SELECT json_array_elements_text($1::json))",
+             JsonStringArray(trainee_ids))) {
+      group_of[r[0].as<std::string>()] = r[1].as<std::string>();
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return InKeyOrder(trainee_ids, std::move(group_of));
+}
+
 StoreResult<std::vector<std::string>> PgStore::ListGroupTrainees(const std::string& institution,
                                                                  const std::string& group) {
   std::vector<std::string> out;
@@ -229,6 +247,33 @@ StoreResult<std::vector<AssignmentRow>> PgStore::ListAssignments(const std::stri
   return out;
 }
 
+StoreResult<std::vector<std::vector<AssignmentRow>>> PgStore::ListAssignmentsOf(
+    const std::vector<std::string>& trainee_ids) {
+  std::map<std::string, std::vector<AssignmentRow>> of;
+  StoreStatus st = Transact("list assignments of trainees", TxMode::kRead,
+                            [&](pqxx::transaction_base& tx) {
+    of.clear();
+    // ListAssignments' query for every listed trainee at once, in its order per trainee.
+    for (const auto& r : tx.exec_params(
+             "SELECT t.trainee_id, a.curriculum_id, a.assignee_kind, a.assignee, "
+             "a.institution, a.assigned_by, a.assigned_unix_ms FROM trainees t "
+             "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
+             "JOIN curriculum_assignments a ON (a.assignee_kind = 'trainee' AND a.assignee = "
+             "t.trainee_id) OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
+             "AND a.institution = t.institution) "
+             "WHERE t.trainee_id IN (SELECT json_array_elements_text($1::json)) "
+             "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
+             JsonStringArray(trainee_ids))) {
+      of[r[0].as<std::string>()].push_back(
+          {r[1].as<std::string>(), r[2].as<std::string>() == "group", r[3].as<std::string>(),
+           r[4].as<std::string>(), r[5].as<std::string>(), r[6].as<int64_t>()});
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return InKeyOrder(trainee_ids, std::move(of));
+}
+
 StoreResult<bool> PgStore::PutLessonVerdict(const LessonVerdictRow& v) {
   bool inserted = false;
   StoreStatus st = Transact("put verdict", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
@@ -280,6 +325,27 @@ StoreResult<std::vector<LessonVerdictRow>> PgStore::ListLessonVerdicts(
   });
   if (!st.ok()) return st;
   return out;
+}
+
+StoreResult<std::vector<std::vector<LessonVerdictRow>>> PgStore::ListLessonVerdictsOf(
+    const std::vector<std::string>& trainee_ids) {
+  std::map<std::string, std::vector<LessonVerdictRow>> of;
+  StoreStatus st = Transact("list verdicts of trainees", TxMode::kRead,
+                            [&](pqxx::transaction_base& tx) {
+    of.clear();
+    for (const auto& r : tx.exec_params(
+             std::string("SELECT ") + kVerdictColumns +
+                 " FROM lesson_verdicts WHERE trainee_id IN "
+                 "(SELECT json_array_elements_text($1::json)) "
+                 "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
+             JsonStringArray(trainee_ids))) {
+      LessonVerdictRow v = ReadVerdictRow(r);
+      of[v.trainee_id].push_back(std::move(v));
+    }
+    return StoreStatus::Ok();
+  });
+  if (!st.ok()) return st;
+  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<std::string>> PgStore::ListUnjudgedLessonSessions(

@@ -513,18 +513,20 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
 
 StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
-  std::vector<TraineeActivity> out;
+  std::map<std::string, TraineeActivity> of;
   StoreStatus st = Transact("trainee activity", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const std::string& id : trainee_ids) {
-      const auto r = tx.exec_params(
-          "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = $1", id);
-      out.push_back({r[0][0].as<int64_t>(), r[0][1].as<int64_t>()});
+    of.clear();
+    for (const auto& r : tx.exec_params(
+             "SELECT trainee_id, COUNT(*), MAX(end_unix_ms) FROM sessions "
+             "WHERE trainee_id IN (SELECT json_array_elements_text($1::json)) "
+             "GROUP BY trainee_id",
+             JsonStringArray(trainee_ids))) {
+      of[r[0].as<std::string>()] = {r[1].as<int64_t>(), r[2].as<int64_t>()};
     }
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;
-  return out;
+  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<StationRow>> PgStore::ListStations(const std::string& institution,

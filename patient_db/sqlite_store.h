@@ -63,14 +63,20 @@ class SqliteStore final : public Store {
   StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) override;
   StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) override;
   StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) override;
+  StoreResult<std::vector<std::string>> GetTraineeGroups(
+      const std::vector<std::string>& trainee_ids) override;
   StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
                                                           const std::string& group) override;
   StoreStatus AddAssignment(const AssignmentRow& row) override;
   StoreResult<std::vector<AssignmentRow>> ListAssignments(const std::string& trainee_id) override;
+  StoreResult<std::vector<std::vector<AssignmentRow>>> ListAssignmentsOf(
+      const std::vector<std::string>& trainee_ids) override;
   StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) override;
   StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) override;
   StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
       const std::string& trainee_id) override;
+  StoreResult<std::vector<std::vector<LessonVerdictRow>>> ListLessonVerdictsOf(
+      const std::vector<std::string>& trainee_ids) override;
   StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
                                                                    int limit) override;
   StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;

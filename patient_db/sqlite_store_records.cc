@@ -521,19 +521,17 @@ StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
   Reader r = Read();
   SqliteStatement* s = r.db().Prepare(
-      "SELECT COUNT(*), COALESCE(MAX(end_unix_ms), 0) FROM sessions WHERE trainee_id = ?", nullptr);
+      "SELECT trainee_id, COUNT(*), MAX(end_unix_ms) FROM sessions "
+      "WHERE trainee_id IN (SELECT value FROM json_each(?)) GROUP BY trainee_id",
+      nullptr);
   if (!s) return Internal(r.db(), "trainee activity");
-  std::vector<TraineeActivity> out;
-  for (const std::string& id : trainee_ids) {
-    s->Bind(1, id);
-    int rc = SQLITE_OK;
-    TraineeActivity a;
-    if (s->Step(&rc)) a = {s->Int(0), s->Int(1)};
-    s->Reset();
-    if (rc != SQLITE_OK) return Internal(r.db(), "trainee activity");
-    out.push_back(a);
-  }
-  return out;
+  s->Bind(1, JsonStringArray(trainee_ids));
+  int rc = SQLITE_OK;
+  std::map<std::string, TraineeActivity> of;
+  while (s->Step(&rc)) of[s->Text(0)] = {s->Int(1), s->Int(2)};
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "trainee activity");
+  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<SessionRow>> SqliteStore::ListOperatorSessions(

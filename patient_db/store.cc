@@ -1,6 +1,7 @@
 #include "patient_db/store.h"
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "patient_db/limits.h"
@@ -54,6 +55,11 @@ StationRow MergeStationReport(const StationRow* stored, const StationRow& report
     out.health_session_end_unix_ms = report.health_session_end_unix_ms;
   }
   return out;
+}
+
+std::string JsonStringArray(const std::vector<std::string>& ids) {
+  // replace: an id that is not UTF-8 cannot throw here; it then matches no row.
+  return nlohmann::json(ids).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string& requested_owner,

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -164,6 +165,28 @@ StationRow MergeStationReport(const StationRow* stored, const StationRow& report
 std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string& requested_owner,
                                        const std::vector<std::string>& requested,
                                        std::string* refusal);
+
+// `ids` as a JSON array of strings: how the stores pass a list of keys to one
+// query (SQLite json_each, PostgreSQL json_array_elements_text). Pure.
+std::string JsonStringArray(const std::vector<std::string>& ids);
+
+// A batched read's results, `found` by key, in the order of `keys`: a key
+// with no rows gets T{}, a key listed twice the same value twice. Pure.
+template <typename T>
+std::vector<T> InKeyOrder(const std::vector<std::string>& keys, std::map<std::string, T> found) {
+  std::vector<T> out(keys.size());
+  std::map<std::string, size_t> first;  // key -> its first position in `keys`
+  for (size_t i = 0; i < keys.size(); ++i) {
+    auto [at, fresh] = first.emplace(keys[i], i);
+    if (!fresh) {
+      out[i] = out[at->second];
+      continue;
+    }
+    auto it = found.find(keys[i]);
+    if (it != found.end()) out[i] = std::move(it->second);
+  }
+  return out;
+}
 
 // A session record as stored: the searchable columns plus the serialized body.
 struct SessionRow {
@@ -389,7 +412,7 @@ class Store {
       const std::string& institution, const std::string& case_id,
       const std::string& operator_kind, int limit) = 0;
   // The trainee's session count and latest end_unix_ms (0, 0 with none), for
-  // each of `trainee_ids` in order: one read, without listing the rows.
+  // each of `trainee_ids` in order: one query, without listing the rows.
   virtual StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
       const std::vector<std::string>& trainee_ids) = 0;
 
@@ -420,17 +443,27 @@ class Store {
   // Trainee ids of the group, sorted.
   virtual StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
                                                                   const std::string& group) = 0;
+  // For each of `trainee_ids`, in order, what GetTraineeGroup gives: one read
+  // for the whole list (the trainee list's page, docs/server.md).
+  virtual StoreResult<std::vector<std::string>> GetTraineeGroups(
+      const std::vector<std::string>& trainee_ids) = 0;
   // Idempotent: the same assignment again keeps the first row.
   virtual StoreStatus AddAssignment(const AssignmentRow& row) = 0;
   // The trainee's assignments, direct and through their group, oldest first.
   virtual StoreResult<std::vector<AssignmentRow>> ListAssignments(
       const std::string& trainee_id) = 0;
+  // For each of `trainee_ids`, in order, what ListAssignments gives: one read.
+  virtual StoreResult<std::vector<std::vector<AssignmentRow>>> ListAssignmentsOf(
+      const std::vector<std::string>& trainee_ids) = 0;
   // false when the session already had a verdict (the first one is kept).
   virtual StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) = 0;
   virtual StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) = 0;
   // The trainee's verdicts, oldest session first.
   virtual StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
       const std::string& trainee_id) = 0;
+  // For each of `trainee_ids`, in order, what ListLessonVerdicts gives: one read.
+  virtual StoreResult<std::vector<std::vector<LessonVerdictRow>>> ListLessonVerdictsOf(
+      const std::vector<std::string>& trainee_ids) = 0;
   // Lesson sessions stored without a verdict yet (oldest first, at most `limit`);
   // trainee_id empty: everyone's.
   virtual StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(

@@ -3,9 +3,12 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <optional>
 
 #include "patient_db/case_bundle.h"
 #include "server/services.h"
+#include "server/session_replay.h"
+#include "server/session_series.h"
 #include "station/training/lesson_gate.h"
 #include "ves/v1/session.pb.h"
 
@@ -23,8 +26,9 @@ std::string JoinLines(const std::vector<std::string>& lines) {
 
 }  // namespace
 
-LessonJudge::LessonJudge(patient_db::Store* store, training::JudgeBudget budget)
-    : store_(store), budget_(budget) {}
+LessonJudge::LessonJudge(patient_db::Store* store, training::JudgeBudget budget,
+                         SessionSeries* series)
+    : store_(store), budget_(budget), series_(series) {}
 
 LessonJudge::~LessonJudge() { Stop(); }
 
@@ -65,6 +69,8 @@ uint64_t LessonJudge::judged() const {
   std::lock_guard lock(mutex_);
   return judged_;
 }
+
+uint64_t LessonJudge::series_recorded() const { return series_recorded_.load(); }
 
 void LessonJudge::Loop() {
   for (;;) {
@@ -138,6 +144,8 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
   v.lesson_id = record.lesson_id();
   v.session_start_unix_ms = record.start_unix_ms();
   std::vector<std::string> checks;
+  // The session page's series, recorded from the judged replay.
+  std::string series_json;
   auto curriculum_id = store_->FindLessonCurriculum(record.lesson_id());
   ves::v1::Curriculum curriculum;
   const ves::v1::Lesson* lesson = nullptr;
@@ -171,8 +179,24 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
                             " times and never finished (the server stopped during it)");
       gate.rejected = true;
     } else {
+      // Its step is checked by the judge before any replayed step reaches the
+      // recorder; a zero step would give the recorder no rate.
+      std::optional<ReplayRecorder> recorder;
+      const SeriesRates rates = SeriesRatesFor(record.input_log());
+      if (record.input_log().dt_s() > 0) {
+        recorder.emplace(record.input_log(), rates.series_hz, rates.shape_hz, kSeriesShapePoints);
+      }
+      std::optional<training::RunResult> replayed;
       try {
-        gate = training::JudgeLessonSession(*lesson, colon_case.value, record, &cancel_, budget_);
+        gate = training::JudgeLessonSession(
+            *lesson, colon_case.value, record, &cancel_, budget_,
+            [&](const training::InputSample&, const training::SessionRunner& runner) {
+              if (recorder) recorder->OnStep(runner);
+            },
+            &replayed);
+        if (recorder && replayed) {
+          series_json = SeriesJsonText(session_uuid, recorder->Finish(*replayed), rates);
+        }
       } catch (const training::JudgeCancelled& cancelled) {
         store_->AddJudgeStarts(session_uuid, -1);  // a clean stop is not a failed start
         return StoreStatus::Error(StoreCode::kInternal, cancelled.what());  // judged next start
@@ -185,6 +209,18 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
   }
   v.detail = JoinLines(checks);
   v.judged_unix_ms = NowUnixMs();
+  // Stored before the verdict: a page that sees the verdict finds the plots.
+  if (!series_json.empty()) {
+    const StoreStatus stored =
+        store_->PutSessionSeries({session_uuid, kSeriesFormatVersion, NowUnixMs(), series_json});
+    if (stored.ok()) {
+      ++series_recorded_;
+    } else {
+      spdlog::warn("lesson judge: series of {} not stored: {}", session_uuid, stored.message);
+      series_json.clear();
+    }
+  }
+  if (series_json.empty() && series_ != nullptr) series_->Enqueue(session_uuid);
   auto put = store_->PutLessonVerdict(v);
   if (!put.ok()) return put.status;
   if (!put.value) return store_->GetLessonVerdict(session_uuid);  // judged before: that one stands

@@ -27,13 +27,19 @@
 // gets a final rejected verdict, so no record can cost more than that again.
 namespace ves::server {
 
+class SessionSeries;  // session_series.h
+
 // Replays of one session that may start without finishing (the server died
 // during them) before the session gets a rejected verdict instead of a third.
 inline constexpr int kMaxJudgeStarts = 2;
 
 class LessonJudge {
  public:
-  explicit LessonJudge(patient_db::Store* store, training::JudgeBudget budget = {});
+  // The judge's replay of a lesson session also gives the session page its
+  // series (stored before the verdict); when it does not run to its end the
+  // session is handed to `series` (when not null) to compute it.
+  explicit LessonJudge(patient_db::Store* store, training::JudgeBudget budget = {},
+                       SessionSeries* series = nullptr);
   ~LessonJudge();  // Stop()
   LessonJudge(const LessonJudge&) = delete;
   LessonJudge& operator=(const LessonJudge&) = delete;
@@ -51,6 +57,8 @@ class LessonJudge {
       const std::string& session_uuid);
 
   uint64_t judged() const;
+  // Series stored from the judge's own replays.
+  uint64_t series_recorded() const;
 
  private:
   void Loop();
@@ -59,6 +67,7 @@ class LessonJudge {
 
   patient_db::Store* store_;
   training::JudgeBudget budget_;
+  SessionSeries* series_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::string> queue_;  // guarded by mutex_
@@ -66,6 +75,7 @@ class LessonJudge {
   bool stopping_ = false;          // guarded by mutex_
   std::atomic<bool> cancel_{false};  // read by the replay under way
   uint64_t judged_ = 0;            // guarded by mutex_
+  std::atomic<uint64_t> series_recorded_{0};
   std::thread thread_;
   std::mutex cases_mutex_;
   std::map<std::string, ves::v1::ColonCase> cases_;  // by payload hash; guarded by cases_mutex_

@@ -356,8 +356,10 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
         if (judge && result.outcome == patient_db::SessionPut::kStored) {
           judge->Enqueue(result.first.uuid);  // durable now; judged off the gRPC threads
         }
-        if (series && result.outcome == patient_db::SessionPut::kStored) {
-          series->Enqueue(result.first.uuid);  // the session page's plots, computed once
+        // The session page's plots, computed once: a lesson session's by the
+        // judge's replay, a free run's by the series worker.
+        if (series && !judge && result.outcome == patient_db::SessionPut::kStored) {
+          series->Enqueue(result.first.uuid);
         }
         response->set_uuid(result.first.uuid);
         response->set_body_sha256_hex(result.first.body_sha256_hex);

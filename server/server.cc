@@ -197,8 +197,8 @@ VesServer::VesServer(ServerOptions options, std::unique_ptr<patient_db::Store> s
     : options_(std::move(options)), store_(std::move(store)) {
   writer_ = std::make_unique<SessionWriter>(store_.get());
   auth_ = std::make_unique<Authenticator>(store_.get());
-  judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget);
   series_ = std::make_unique<SessionSeries>(store_.get());
+  judge_ = std::make_unique<LessonJudge>(store_.get(), options_.judge_budget, series_.get());
   live_ = std::make_unique<LiveHub>();
   if (!options_.live_relay_url.empty()) {
     LivePgRelayOptions relay;

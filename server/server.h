@@ -79,8 +79,8 @@ class VesServer {
   std::unique_ptr<SessionsService> sessions_;
   std::unique_ptr<TraineesService> trainees_;
   std::unique_ptr<AdminService> admin_;
+  std::unique_ptr<SessionSeries> series_;  // before judge_, which hands it sessions
   std::unique_ptr<LessonJudge> judge_;
-  std::unique_ptr<SessionSeries> series_;
   std::unique_ptr<LessonsService> lessons_;
   std::unique_ptr<LiveService> live_service_;
   std::unique_ptr<grpc::Server> server_;

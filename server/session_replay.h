@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "station/training/replay.h"
 #include "ves/v1/session.pb.h"
 
 // What the web pages show of a stored session (docs/web.md): time series and
@@ -45,5 +46,28 @@ struct ReplayCancelled : std::runtime_error {
 SessionReplay ReplaySession(const v1::SessionRecord& record, double series_hz = 10.0,
                             double shape_hz = 5.0, int max_points = 80,
                             const std::atomic<bool>* cancel = nullptr);
+
+// What ReplaySession keeps of each step, for a replay run by someone else:
+// the lesson judge's replay records a lesson session's series as it judges
+// (docs/web.md, "Session series"), so that session is replayed once. Pass
+// OnStep to the replay's step callback, then Finish with its result.
+class ReplayRecorder {
+ public:
+  // `log`: the replayed input log (its step and sample count set the rates).
+  ReplayRecorder(const v1::InputLog& log, double series_hz, double shape_hz, int max_points,
+                 const std::atomic<bool>* cancel = nullptr);
+  // Throws ReplayCancelled once `cancel` is true.
+  void OnStep(const training::SessionRunner& runner);
+  SessionReplay Finish(const training::RunResult& result);
+
+ private:
+  int64_t n_steps_;
+  int64_t series_every_;
+  int64_t shape_every_;
+  int max_points_;
+  const std::atomic<bool>* cancel_;
+  int64_t step_ = 0;
+  SessionReplay out_;
+};
 
 }  // namespace ves::server

@@ -75,20 +75,28 @@ json SeriesJson(const std::string& uuid, const SessionReplay& replay, double ser
           {"frames", std::move(frames)}};
 }
 
-std::string ComputeSeriesJson(const v1::SessionRecord& record, const std::atomic<bool>* cancel) {
-  const double duration_s =
-      static_cast<double>(record.input_log().sample_count()) * record.input_log().dt_s();
-  // 10 Hz plots and 5 Hz shapes for a short session; a long one gets as many
-  // frames as the bounds allow, less the first and last steps' (a 10-minute
-  // session: 2.5 Hz and 1 Hz). SeriesJson thins whatever rounding adds.
-  const double series_hz =
-      duration_s > 150.0 ? std::max(0.01, (kSeriesMaxPlotFrames - 4) / duration_s) : 10.0;
-  const double shape_hz =
-      std::min(series_hz, duration_s > 120.0 ? (kSeriesMaxShapeFrames - 4) / duration_s : 5.0);
-  const SessionReplay replay =
-      ReplaySession(record, series_hz, shape_hz, kSeriesShapePoints, cancel);
-  return WebApi::HtmlSafeJson(SeriesJson(record.uuid(), replay, series_hz, shape_hz)
+SeriesRates SeriesRatesFor(const v1::InputLog& log) {
+  const double duration_s = static_cast<double>(log.sample_count()) * log.dt_s();
+  // A 10-minute session: 2.5 Hz and 1 Hz, less the first and last steps'
+  // frames. SeriesJson thins whatever rounding adds.
+  SeriesRates r;
+  r.series_hz = duration_s > 150.0 ? std::max(0.01, (kSeriesMaxPlotFrames - 4) / duration_s) : 10.0;
+  r.shape_hz =
+      std::min(r.series_hz, duration_s > 120.0 ? (kSeriesMaxShapeFrames - 4) / duration_s : 5.0);
+  return r;
+}
+
+std::string SeriesJsonText(const std::string& uuid, const SessionReplay& replay,
+                           const SeriesRates& rates) {
+  return WebApi::HtmlSafeJson(SeriesJson(uuid, replay, rates.series_hz, rates.shape_hz)
                                   .dump(-1, ' ', false, json::error_handler_t::replace));
+}
+
+std::string ComputeSeriesJson(const v1::SessionRecord& record, const std::atomic<bool>* cancel) {
+  const SeriesRates rates = SeriesRatesFor(record.input_log());
+  const SessionReplay replay =
+      ReplaySession(record, rates.series_hz, rates.shape_hz, kSeriesShapePoints, cancel);
+  return SeriesJsonText(record.uuid(), replay, rates);
 }
 
 json LessonVerdictJson(patient_db::Store& store, const v1::SessionRecord& record) {

@@ -20,7 +20,10 @@
 // What a session page shows of a stored session, computed once (docs/web.md,
 // "Session series"): the plots' data and a replay track thinned for the
 // browser, as JSON text kept in the store beside the session. A background
-// worker computes it after each upload; a session stored without one (before
+// worker computes it after each upload of a free run; the lesson judge
+// records a lesson session's from the replay it judges (the session is
+// replayed once), or hands it to the worker when its replay did not run to
+// the end. A session stored without one (before
 // series existed, or whose computation a restart lost) gets it on its first
 // page view, and then it is stored too.
 namespace ves::server {
@@ -44,6 +47,18 @@ inline constexpr int kMaxConcurrentLazySeries = 2;
 // "final_tip_arc_m", "summary", "frames"} (frames as the /replay route's).
 nlohmann::json SeriesJson(const std::string& uuid, const SessionReplay& replay, double series_hz,
                           double shape_hz);
+
+// The rates a series is recorded at: 10 Hz plots and 5 Hz shapes for a short
+// session; a long one gets as many frames as the bounds allow.
+struct SeriesRates {
+  double series_hz = 10.0;
+  double shape_hz = 5.0;
+};
+SeriesRates SeriesRatesFor(const v1::InputLog& log);
+
+// SeriesJson as the stored JSON text (HTML-safe).
+std::string SeriesJsonText(const std::string& uuid, const SessionReplay& replay,
+                           const SeriesRates& rates);
 
 // Re-runs the record and returns its series as JSON text (HTML-safe). Throws
 // as ReplaySession does (ReplayCancelled once `cancel` is true).
@@ -86,6 +101,8 @@ class SessionSeries {
   // (ask again); FAILED_PRECONDITION when the record cannot be replayed.
   grpc::Status Get(const std::string& uuid, const v1::SessionRecord& record, std::string* json);
 
+  // Series computed by this worker's own replays (a lesson session's comes
+  // from the judge's replay and is not counted here).
   uint64_t computed_in_background() const;
   uint64_t computed_on_view() const;
 

@@ -557,24 +557,32 @@ HttpReply WebApi::Api(const HttpRequest& request, const std::string& raw_path,
     v1::ListTraineesResponse resp;
     s = ListTraineesCall(deps_, who, req, &resp);
     if (!s.ok()) return ErrorOf(s);
-    // The call admitted reading this institution's trainees: their groups
-    // and session listings are read for the same page.
+    // The call admitted reading this institution's trainees: their groups,
+    // activity, assignments and verdicts are read for the whole page, one
+    // store read each (not per trainee: docs/server.md, "Web pages at scale").
     json trainees = json::array();
     std::map<std::string, std::vector<std::string>> groups;
     std::vector<std::string> ids;
     for (const auto& t : resp.trainees()) ids.push_back(t.trainee_id());
+    auto group_of = deps_.store->GetTraineeGroups(ids);
+    if (!group_of.ok()) return ErrorOf(ToGrpcStatus(group_of.status));
     auto activity = deps_.store->GetTraineeActivity(ids);
     if (!activity.ok()) return ErrorOf(ToGrpcStatus(activity.status));
+    auto assignments = deps_.store->ListAssignmentsOf(ids);
+    if (!assignments.ok()) return ErrorOf(ToGrpcStatus(assignments.status));
+    auto verdicts = deps_.store->ListLessonVerdictsOf(ids);
+    if (!verdicts.ok()) return ErrorOf(ToGrpcStatus(verdicts.status));
     CurriculumCache curricula(deps_.store);
     for (int i = 0; i < resp.trainees_size(); ++i) {
       const auto& t = resp.trainees(i);
       json row = ProtoJson(t);
-      auto group = deps_.store->GetTraineeGroup(t.trainee_id());
-      row["group"] = group.ok() ? group.value : "";
-      if (group.ok() && !group.value.empty()) groups[group.value].push_back(t.trainee_id());
+      const std::string& group = group_of.value[i];
+      row["group"] = group;
+      if (!group.empty()) groups[group].push_back(t.trainee_id());
       row["sessions"] = activity.value[i].sessions;
       row["last_activity_unix_ms"] = activity.value[i].last_end_unix_ms;
-      row["curricula"] = CurriculaProgressJson(*deps_.store, curricula, t.trainee_id());
+      row["curricula"] =
+          CurriculaProgressJson(curricula, assignments.value[i], verdicts.value[i]);
       trainees.push_back(std::move(row));
     }
     json group_list = json::array();

@@ -104,16 +104,24 @@ const v1::Curriculum* CurriculumCache::Get(const std::string& curriculum_id) {
 
 json CurriculaProgressJson(patient_db::Store& store, CurriculumCache& curricula,
                            const std::string& trainee_id, bool detail) {
-  json out = json::array();
   auto assignments = store.ListAssignments(trainee_id);
-  if (!assignments.ok() || assignments.value.empty()) return out;
+  if (!assignments.ok() || assignments.value.empty()) return json::array();
+  auto verdicts = store.ListLessonVerdicts(trainee_id);
+  if (!verdicts.ok()) return json::array();
+  return CurriculaProgressJson(curricula, assignments.value, verdicts.value, detail);
+}
+
+json CurriculaProgressJson(CurriculumCache& curricula,
+                           const std::vector<patient_db::AssignmentRow>& assignments,
+                           const std::vector<patient_db::LessonVerdictRow>& verdicts,
+                           bool detail) {
+  json out = json::array();
+  if (assignments.empty()) return out;
   std::vector<v1::Curriculum> assigned;
-  for (const auto& a : assignments.value) {
+  for (const auto& a : assignments) {
     if (const v1::Curriculum* c = curricula.Get(a.curriculum_id)) assigned.push_back(*c);
   }
-  auto verdicts = store.ListLessonVerdicts(trainee_id);
-  if (!verdicts.ok()) return out;
-  const Progress progress = CalcProgress(assigned, verdicts.value);
+  const Progress progress = CalcProgress(assigned, verdicts);
   std::map<std::string, size_t> index;  // curriculum id -> its entry in `out`
   for (const v1::LessonProgress& l : progress.lessons) {
     auto [it, fresh] = index.emplace(l.curriculum_id(), out.size());
@@ -302,8 +310,15 @@ std::optional<HttpReply> CohortRoute(
     std::vector<std::string> members;
     Status m = GroupMembers(deps, who, institution, path[1], &members);
     if (!m.ok()) return m;
+    // Progress comes from the members' assignments and verdicts, read for
+    // the whole group at once.
+    auto assignments = deps.store->ListAssignmentsOf(members);
+    if (!assignments.ok()) return ToGrpcStatus(assignments.status);
+    auto verdicts = deps.store->ListLessonVerdictsOf(members);
+    if (!verdicts.ok()) return ToGrpcStatus(verdicts.status);
     CurriculumCache curricula(deps.store);
-    for (const std::string& id : members) {
+    for (size_t i = 0; i < members.size(); ++i) {
+      const std::string& id = members[i];
       auto trainee = deps.store->GetTrainee(id);
       if (!trainee.ok()) return ToGrpcStatus(trainee.status);
       auto rows = SessionsIn(*deps.store, id, from, to, kMaxExportSessions);
@@ -316,7 +331,7 @@ std::optional<HttpReply> CohortRoute(
       json row = SplitFiguresJson(rows.value);
       row["trainee_id"] = id;
       row["display_name"] = trainee.value.display_name;
-      row["curricula"] = CurriculaProgressJson(*deps.store, curricula, id);
+      row["curricula"] = CurriculaProgressJson(curricula, assignments.value[i], verdicts.value[i]);
       trainees.push_back(std::move(row));
     }
     return Status::OK;

@@ -40,6 +40,12 @@ class CurriculumCache {
 // passes, required passes, best score and completed.
 nlohmann::json CurriculaProgressJson(patient_db::Store& store, CurriculumCache& curricula,
                                      const std::string& trainee_id, bool detail = false);
+// The same from the trainee's assignments and verdicts read beforehand (the
+// trainee list reads them for its whole page at once).
+nlohmann::json CurriculaProgressJson(CurriculumCache& curricula,
+                                     const std::vector<patient_db::AssignmentRow>& assignments,
+                                     const std::vector<patient_db::LessonVerdictRow>& verdicts,
+                                     bool detail = false);
 
 // Figures of a set of sessions (a trainee's lesson attempts or practice
 // runs): attempts, cecum_reached, best_score and last_score (of the latest

@@ -187,7 +187,8 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
 
 GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& lesson_case,
                               const v1::SessionRecord& record, const std::atomic<bool>* cancel,
-                              const JudgeBudget& budget) {
+                              const JudgeBudget& budget, const StepCallback& observe,
+                              std::optional<RunResult>* replayed) {
   GateResult refused;
   Checks c(&refused);
   c.Rule(record.lesson_id() == lesson.lesson_id(),
@@ -218,8 +219,9 @@ GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& les
   bool wireframe_used = false;
   RunResult result;
   try {
-    result = ReplayRecord(rerun, [&](const InputSample& input, const SessionRunner&) {
+    result = ReplayRecord(rerun, [&](const InputSample& input, const SessionRunner& runner) {
       if (input.view_mode == ViewMode::kWireframe) wireframe_used = true;
+      if (observe) observe(input, runner);
       if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) {
         throw JudgeCancelled("lesson judge: replay cancelled");
       }
@@ -237,6 +239,7 @@ GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& les
     c.Rule(false, std::string("replay: ") + error.what());
     return refused;
   }
+  if (replayed != nullptr) *replayed = result;
   GateResult out = CheckLessonGate(lesson, ToProto(result.metrics), result.score, wireframe_used);
   out.checks.insert(out.checks.begin(), refused.checks.begin(), refused.checks.end());
   if (result.diverged) {

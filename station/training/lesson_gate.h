@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -68,10 +69,15 @@ GateResult CheckLessonGate(const v1::Lesson& lesson, const v1::SessionMetrics& m
 // time limit allows, or has a step outside [kMinJudgedDt_s, kMaxJudgedDt_s])
 // is refused before decoding or stopped mid-replay: `rejected`, not passed,
 // with the reason in `checks`.
+// `observe`, when set, is called after every replayed step (the server
+// records the session page's series from it, so the session is replayed
+// once); `replayed`, when not null, gets the replay's result when it ran to
+// its end.
 GateResult JudgeLessonSession(const v1::Lesson& lesson, const v1::ColonCase& lesson_case,
                               const v1::SessionRecord& record,
                               const std::atomic<bool>* cancel = nullptr,
-                              const JudgeBudget& budget = {});
+                              const JudgeBudget& budget = {}, const StepCallback& observe = {},
+                              std::optional<RunResult>* replayed = nullptr);
 
 class JudgeCancelled : public std::runtime_error {
  public:

@@ -59,11 +59,12 @@ class LessonStore : public ::testing::TestWithParam<LessonBackend> {
     return c;
   }
 
-  // A stored session of t1; lesson_id non-empty queues it for judging.
-  void StoreSession(const std::string& uuid, const std::string& lesson_id, int64_t start) {
+  // A stored session of `trainee` (t1); lesson_id non-empty queues it for judging.
+  void StoreSession(const std::string& uuid, const std::string& lesson_id, int64_t start,
+                    const std::string& trainee = "t1") {
     SessionRow r;
     r.uuid = uuid;
-    r.trainee_id = "t1";
+    r.trainee_id = trainee;
     r.institution = "north";
     r.case_id = "c";
     r.case_version = 1;
@@ -192,6 +193,62 @@ TEST_P(LessonStore, LessonSessionsWaitForOneVerdictEach) {
   EXPECT_EQ(all.value[0].session_uuid, "u1");  // oldest session first
   EXPECT_EQ(store_->GetLessonVerdict("u2").status.code, StoreCode::kNotFound);
   EXPECT_FALSE(store_->PutLessonVerdict({"ghost", "t1", "a", "l1", true, 1, 1, 1, ""}).ok());
+}
+
+// The trainee list reads a page's groups, assignments and verdicts in one
+// read each: for every listed id, in order, the same as the per-trainee reads.
+TEST_P(LessonStore, BatchedReadsGiveWhatEachTraineesReadGives) {
+  ASSERT_TRUE(store_->AddTrainee({"t3", "north", "Three", 10}).ok());
+  ASSERT_TRUE(store_->PutCurriculum(Curriculum("a", "A", {"l1"})).ok());
+  ASSERT_TRUE(store_->PutCurriculum(Curriculum("b", "B", {"l2"})).ok());
+  ASSERT_TRUE(store_->SetTraineeGroup("t1", "residents").ok());
+  ASSERT_TRUE(store_->SetTraineeGroup("t2", "fellows").ok());
+  ASSERT_TRUE(store_->SetTraineeGroup("s1", "residents").ok());  // another institution's group
+  ASSERT_TRUE(store_->AddAssignment({"b", true, "residents", "north", "tok", 500}).ok());
+  ASSERT_TRUE(store_->AddAssignment({"a", false, "t1", "north", "tok", 200}).ok());
+  ASSERT_TRUE(store_->AddAssignment({"a", true, "fellows", "north", "tok", 300}).ok());
+  ASSERT_TRUE(store_->AddAssignment({"b", false, "t2", "north", "tok", 300}).ok());
+  StoreSession("u3", "l1", 3000);
+  StoreSession("u1", "l1", 1000);
+  StoreSession("u2", "l2", 2000, "t2");
+  StoreSession("u4", "l2", 2000, "t1");
+  ASSERT_TRUE(store_->PutLessonVerdict({"u3", "t1", "a", "l1", true, 80, 3000, 3100, "ok"}).ok());
+  ASSERT_TRUE(store_->PutLessonVerdict({"u1", "t1", "a", "l1", false, 20, 1000, 1100, "x"}).ok());
+  ASSERT_TRUE(store_->PutLessonVerdict({"u4", "t1", "b", "l2", true, 60, 2000, 2100, "ok"}).ok());
+  ASSERT_TRUE(store_->PutLessonVerdict({"u2", "t2", "b", "l2", true, 70, 2000, 2200, "ok"}).ok());
+
+  // Unordered, with a trainee of no group, one of another institution, an
+  // unknown id and one listed twice.
+  const std::vector<std::string> ids = {"t2", "ghost", "t1", "t3", "s1", "t1"};
+  auto groups = store_->GetTraineeGroups(ids);
+  ASSERT_TRUE(groups.ok()) << groups.status.message;
+  auto assignments = store_->ListAssignmentsOf(ids);
+  ASSERT_TRUE(assignments.ok()) << assignments.status.message;
+  auto verdicts = store_->ListLessonVerdictsOf(ids);
+  ASSERT_TRUE(verdicts.ok()) << verdicts.status.message;
+  ASSERT_EQ(groups.value.size(), ids.size());
+  ASSERT_EQ(assignments.value.size(), ids.size());
+  ASSERT_EQ(verdicts.value.size(), ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    SCOPED_TRACE(ids[i]);
+    EXPECT_EQ(groups.value[i], store_->GetTraineeGroup(ids[i]).value);
+    EXPECT_EQ(assignments.value[i], store_->ListAssignments(ids[i]).value);
+    EXPECT_EQ(verdicts.value[i], store_->ListLessonVerdicts(ids[i]).value);
+  }
+  // What the per-trainee reads give, so that the comparison above is not of empties.
+  EXPECT_EQ(groups.value,
+            (std::vector<std::string>{"fellows", "", "residents", "", "residents", "residents"}));
+  ASSERT_EQ(assignments.value[2].size(), 2u);  // t1: its own "a" (200), its group's "b" (500)
+  EXPECT_EQ(assignments.value[2][0].curriculum_id, "a");
+  EXPECT_EQ(assignments.value[2][1].curriculum_id, "b");
+  EXPECT_EQ(assignments.value[0].size(), 2u);  // t2: "a" by group, "b" directly, both at 300
+  EXPECT_TRUE(assignments.value[4].empty());   // s1's "residents" is south's group
+  ASSERT_EQ(verdicts.value[2].size(), 3u);     // t1, oldest session first
+  EXPECT_EQ(verdicts.value[2][0].session_uuid, "u1");
+  EXPECT_EQ(verdicts.value[2][2].session_uuid, "u3");
+  EXPECT_EQ(verdicts.value[0].size(), 1u);
+  EXPECT_TRUE(verdicts.value[1].empty());
+  EXPECT_TRUE(store_->ListLessonVerdictsOf({}).value.empty());
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -110,6 +110,18 @@ class SkippedStore final : public Store {
   StoreResult<std::string> FindLessonCurriculum(const std::string&) override { return Skipped(); }
   StoreStatus SetTraineeGroup(const std::string&, const std::string&) override { return {}; }
   StoreResult<std::string> GetTraineeGroup(const std::string&) override { return Skipped(); }
+  StoreResult<std::vector<std::string>> GetTraineeGroups(
+      const std::vector<std::string>&) override {
+    return Skipped();
+  }
+  StoreResult<std::vector<std::vector<AssignmentRow>>> ListAssignmentsOf(
+      const std::vector<std::string>&) override {
+    return Skipped();
+  }
+  StoreResult<std::vector<std::vector<LessonVerdictRow>>> ListLessonVerdictsOf(
+      const std::vector<std::string>&) override {
+    return Skipped();
+  }
   StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string&,
                                                           const std::string&) override {
     return {};

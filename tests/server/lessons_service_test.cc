@@ -7,12 +7,14 @@
 #include <chrono>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "patient_db/case_format.h"
 #include "server/auth.h"
 #include "server/lesson_judge.h"
+#include "server/session_series.h"
 #include "station/training/case_model.h"
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
@@ -476,6 +478,43 @@ TEST_F(Lessons, AStoredSessionWithoutAVerdictIsJudgedOnStart) {
   ASSERT_TRUE(verdict.ok()) << verdict.status.message;
   EXPECT_EQ(verdict.value.lesson_id, kFirstLesson);
   EXPECT_TRUE(server_.store().ListUnjudgedLessonSessions("", 10).value.empty());
+}
+
+// A lesson upload is replayed once (docs/web.md, "Session series"): the
+// judge's replay gives the session page its series, stored by the time the
+// verdict is, and the series worker, which takes uploads in order, computes
+// only the free run uploaded after it.
+TEST_F(Lessons, ALessonUploadIsReplayedOnceAndTheJudgeStoresItsSeries) {
+  ves::v1::Curriculum c = ShippedCurriculum();
+  c.mutable_lessons(0)->set_time_limit_s(3);
+  ves::v1::CreateCurriculumResponse created;
+  ASSERT_TRUE(Create(supervisor_, c, &created).ok());
+  const ves::v1::SessionRecord lesson =
+      ScriptedLessonSession(created.curriculum().lessons(0), "t1", "expert", 3);
+  ves::v1::UploadSessionResponse ack;
+  ASSERT_TRUE(UploadSession(server_.Client(station_), lesson, &ack).ok());
+  WaitForVerdict(lesson.uuid());
+  auto stored = server_.store().GetSessionSeries(lesson.uuid());
+  ASSERT_TRUE(stored.ok()) << stored.status.message;
+  EXPECT_EQ(server_.server().judge().series_recorded(), 1u);
+  const nlohmann::json series = nlohmann::json::parse(stored.value.json);
+  EXPECT_EQ(series["uuid"], lesson.uuid());
+  EXPECT_NEAR(series["duration_s"].get<double>(), 3.0, 0.01);
+  EXPECT_GE(series["frames"].size(), 30u);  // 10 Hz over 3 s
+  // The judged run is the record's own run (its case, scope and inputs): the
+  // page shows what the worker would have computed from the record.
+  EXPECT_EQ(stored.value.json, ComputeSeriesJson(lesson));
+
+  ves::v1::SessionRecord free_run = ScriptedLessonSession(created.curriculum().lessons(0), "t1",
+                                                          "novice", 2);
+  free_run.clear_lesson_id();
+  ASSERT_TRUE(UploadSession(server_.Client(station_), free_run, &ack).ok());
+  for (int i = 0; i < 600 && !server_.store().GetSessionSeries(free_run.uuid()).ok(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(server_.store().GetSessionSeries(free_run.uuid()).ok());
+  EXPECT_EQ(server_.server().series().computed_in_background(), 1u);
+  EXPECT_EQ(server_.server().series().computed_on_view(), 0u);
 }
 
 // A replay that kills the server (as an unbounded one once could) must not

@@ -2,13 +2,16 @@
 """A small OpenID Connect identity provider on loopback for tests/server/oidc_test.cc.
 
 Serves the discovery document, a JWKS with one RSA key, /authorize (signs the
-configured user in at once and sends the browser back with a code) and /token
+configured user in and sends the browser back with a code: at once, or after
+its own sign-in page when "page" is set, for a browser test) and /token
 (checks the client secret, the redirect URI and the PKCE S256 verifier, once
 per code, and answers an RS256 ID token). POST /control sets the user and how
 the next ID token is spoiled, to test that the server refuses it:
 
   mode: good | forged (signed by another key) | wrong_nonce | wrong_aud |
         wrong_iss | expired | alg_none | hs256
+  page: true | false (default): /authorize shows a page naming the user with
+        a "Continue" link (id "idp-continue") back to the redirect URI
 
 Standard library plus python3-cryptography (Debian; deploy/install-deps.sh).
 Writes its port to --port-file once listening; every request's method and
@@ -17,6 +20,7 @@ path, and the token request's form field names, go to --log.
 import argparse
 import base64
 import hashlib
+import html
 import json
 import secrets
 import sys
@@ -48,6 +52,7 @@ class Idp:
         self.issuer = ""
         self.user = {"sub": "idp-user-1", "email": "", "email_verified": False, "name": "Dr Test"}
         self.mode = "good"
+        self.page = False
         self.codes = {}
         self.lock = threading.Lock()
 
@@ -97,10 +102,10 @@ def make_handler(idp, log):
         def log_message(self, fmt, *args):
             pass
 
-        def reply(self, status, body, headers=()):
+        def reply(self, status, body, headers=(), content_type="application/json"):
             data = json.dumps(body).encode() if not isinstance(body, bytes) else body
             self.send_response(status)
-            self.send_header("Content-Type", "application/json")
+            self.send_header("Content-Type", content_type)
             self.send_header("Content-Length", str(len(data)))
             for name, value in headers:
                 self.send_header(name, value)
@@ -143,6 +148,15 @@ def make_handler(idp, log):
                     idp.codes[code] = (query["code_challenge"], query["nonce"])
                 location = idp.redirect_uri + "?" + urllib.parse.urlencode(
                     {"code": code, "state": query["state"]})
+                if idp.page:
+                    name = html.escape(idp.user["name"])
+                    page = ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+                            "<title>Test hospital sign-in</title></head><body>"
+                            "<h1>Test hospital sign-in</h1>"
+                            f"<p id=\"idp-user\">Signed in at the hospital as {name}.</p>"
+                            f"<p><a id=\"idp-continue\" href=\"{html.escape(location)}\">"
+                            "Continue</a></p></body></html>")
+                    return self.reply(200, page.encode(), content_type="text/html; charset=utf-8")
                 return self.reply(302, b"", [("Location", location)])
             return self.reply(404, {"error": "not_found"})
 
@@ -154,6 +168,7 @@ def make_handler(idp, log):
             if url.path == "/control":
                 settings = json.loads(body)
                 idp.mode = settings.get("mode", idp.mode)
+                idp.page = bool(settings.get("page", idp.page))
                 idp.user.update(settings.get("user", {}))
                 log.flush()
                 return self.reply(200, {"ok": True})
