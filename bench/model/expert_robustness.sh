@@ -39,7 +39,7 @@ printf '%s\n' "${runs[@]}" |
   awk '{ delete v; setting = ""
          for (i = 1; i <= NF; ++i) {
            split($i, a, "="); v[a[1]] = a[2]
-           if (a[1] == "ring_hold_s") setting = $(i + 1)  # the first key=value given
+           if (a[1] == "op_turn_from") setting = $(i + 1)  # the first key=value given
          }
          if (setting == "defaults=1") setting = "(defaults)"
          if (!("peak_roll_10ms" in v)) v["peak_roll_10ms"] = "-"
