@@ -511,6 +511,33 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
   return out;
 }
 
+StoreResult<std::vector<std::vector<SessionRow>>> PgStore::ListSessionsOf(
+    const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
+    int limit_each) {
+  const std::string sql = std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                          " FROM sessions WHERE trainee_id IN "
+                          "(SELECT json_array_elements_text($1::json))"
+                          " AND start_unix_ms >= $2 AND ($3 = 0 OR start_unix_ms < $3)"
+                          " ORDER BY start_unix_ms, uuid COLLATE \"C\"";
+  std::map<std::string, std::vector<SessionRow>> of;
+  StoreStatus st =
+      Transact("list sessions of trainees", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+        of.clear();
+        for (const auto& row :
+             tx.exec_params(sql, JsonStringArray(trainee_ids), from_unix_ms, to_unix_ms)) {
+          SessionRow s = ReadSessionRow(row);
+          s.lesson_id = row[19].as<std::string>();
+          std::vector<SessionRow>& rows = of[s.trainee_id];
+          if (limit_each < 0 || rows.size() <= static_cast<size_t>(limit_each)) {
+            rows.push_back(std::move(s));
+          }
+        }
+        return StoreStatus::Ok();
+      });
+  if (!st.ok()) return st;
+  return InKeyOrder(trainee_ids, std::move(of));
+}
+
 StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
   std::map<std::string, TraineeActivity> of;

@@ -45,6 +45,9 @@ class SqliteStore final : public Store {
                                                     const std::string& case_id,
                                                     const ListPage& page = {}) override;
   StoreResult<int64_t> CountSessions() override;
+  StoreResult<std::vector<std::vector<SessionRow>>> ListSessionsOf(
+      const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
+      int limit_each) override;
   StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string& institution,
                                                             const std::string& case_id,
                                                             const std::string& operator_kind,

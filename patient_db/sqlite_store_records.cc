@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <optional>
+#include <tuple>
 
 #include <cstdint>
 
@@ -515,6 +516,43 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list sessions");
   return out;
+}
+
+StoreResult<std::vector<std::vector<SessionRow>>> SqliteStore::ListSessionsOf(
+    const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
+    int limit_each) {
+  Reader r = Read();
+  SqliteStatement* s = r.db().Prepare(
+      std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+          " FROM sessions WHERE trainee_id IN (SELECT value FROM json_each(?))"
+          " AND start_unix_ms >= ? AND (? = 0 OR start_unix_ms < ?)",
+      nullptr);
+  if (!s) return Internal(r.db(), "list sessions of trainees");
+  s->Bind(1, JsonStringArray(trainee_ids))
+      .Bind(2, from_unix_ms)
+      .Bind(3, to_unix_ms)
+      .Bind(4, to_unix_ms);
+  int rc = SQLITE_OK;
+  std::map<std::string, std::vector<SessionRow>> of;
+  while (s->Step(&rc)) {
+    SessionRow row = ReadSessionRow(*s);
+    row.lesson_id = s->Text(19);
+    of[row.trainee_id].push_back(std::move(row));
+  }
+  s->Reset();
+  if (rc != SQLITE_OK) return Internal(r.db(), "list sessions of trainees");
+  // ListSessions' order, sorted here rather than by SQLite (as the verdicts
+  // of ListLessonVerdictsOf are: SQLite's sort of a whole group's rows is
+  // the slower part).
+  for (auto& [trainee, rows] : of) {
+    std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+      return std::tie(a.start_unix_ms, a.uuid) < std::tie(b.start_unix_ms, b.uuid);
+    });
+    if (limit_each >= 0 && rows.size() > static_cast<size_t>(limit_each) + 1) {
+      rows.resize(static_cast<size_t>(limit_each) + 1);
+    }
+  }
+  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(

@@ -405,6 +405,14 @@ class Store {
                                                             const std::string& case_id,
                                                             const ListPage& page = {}) = 0;
   virtual StoreResult<int64_t> CountSessions() = 0;
+  // For each of `trainee_ids`, in order, the sessions started in
+  // [from_unix_ms, to_unix_ms) (to 0: no upper bound), oldest first, as
+  // ListSessions lists them, at most `limit_each` + 1 each (so that a caller
+  // can tell there were more): one read for the whole list (the group's
+  // cohort page, docs/server.md).
+  virtual StoreResult<std::vector<std::vector<SessionRow>>> ListSessionsOf(
+      const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
+      int limit_each) = 0;
   // The institution's sessions of a case run by `operator_kind` ("expert":
   // the scripted expert), newest first, at most `limit`, without bodies or
   // lesson ids: the expert band of a learning curve (docs/web.md).

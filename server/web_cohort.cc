@@ -316,19 +316,22 @@ std::optional<HttpReply> CohortRoute(
     if (!assignments.ok()) return ToGrpcStatus(assignments.status);
     auto verdicts = deps.store->ListLessonVerdictsOf(members);
     if (!verdicts.ok()) return ToGrpcStatus(verdicts.status);
+    // And their sessions in the range, also in one read: one read per
+    // trainee made a 200-trainee group's page take ~230 ms.
+    auto sessions = deps.store->ListSessionsOf(members, from, to, kMaxExportSessions);
+    if (!sessions.ok()) return ToGrpcStatus(sessions.status);
     CurriculumCache curricula(deps.store);
     for (size_t i = 0; i < members.size(); ++i) {
       const std::string& id = members[i];
       auto trainee = deps.store->GetTrainee(id);
       if (!trainee.ok()) return ToGrpcStatus(trainee.status);
-      auto rows = SessionsIn(*deps.store, id, from, to, kMaxExportSessions);
-      if (!rows.ok()) return ToGrpcStatus(rows.status);
-      if (rows.value.size() > static_cast<size_t>(kMaxExportSessions)) {
+      const std::vector<patient_db::SessionRow>& rows = sessions.value[i];
+      if (rows.size() > static_cast<size_t>(kMaxExportSessions)) {
         return Status(StatusCode::OUT_OF_RANGE, "more than " +
                                                     std::to_string(kMaxExportSessions) +
                                                     " sessions of " + id + " in this range");
       }
-      json row = SplitFiguresJson(rows.value);
+      json row = SplitFiguresJson(rows);
       row["trainee_id"] = id;
       row["display_name"] = trainee.value.display_name;
       row["curricula"] = CurriculaProgressJson(curricula, assignments.value[i], verdicts.value[i]);

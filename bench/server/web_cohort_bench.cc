@@ -7,7 +7,8 @@
 // assigned to every group, with its verdict. Timed, each request on a new
 // connection, one at a time: GET /api/v1/trainees?page_size=500 (what
 // trainees.html asks), GET /api/v1/groups/{g}/cohort (all dates, and a
-// 14-day range), the group's CSV and a trainee's report.
+// 14-day range), the group's CSV, a trainee's report, and last the cohort
+// page of one group holding every trainee.
 // Usage: web_cohort_bench [--trainees N] [--sessions N] [--group-size N] [--requests R]
 #include <sys/resource.h>
 #include <unistd.h>
@@ -182,6 +183,16 @@ int main(int argc, char** argv) {
   Time("GET groups/{g}/cohort (14 days)", cohort_range, port, token, requests);
   Time("GET groups/{g}/sessions.csv (14 days)", csv, port, token, requests);
   Time("GET trainees/{id}/report", report, port, token, requests);
+  // Then every trainee in one group: the largest cohort page an institution
+  // of this size can ask for (the store's reads per page, not per trainee).
+  for (int t = 0; t < trainees; ++t) {
+    server->store().SetTraineeGroup("trainee-" + std::to_string(t), "everyone");
+  }
+  server->store().AddAssignment({"basics", true, "everyone", "north", "bench", 1});
+  const std::vector<std::string> everyone = {"/api/v1/groups/everyone/cohort"};
+  ves::bench::MeasureGets(everyone, port, token, 10);
+  std::snprintf(what, sizeof what, "GET groups/{g}/cohort (all %d trainees)", trainees);
+  Time(what, everyone, port, token, requests);
   server->Shutdown(std::chrono::milliseconds(0));
   server.reset();
   std::filesystem::remove_all(dir);

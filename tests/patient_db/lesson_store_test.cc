@@ -251,6 +251,61 @@ TEST_P(LessonStore, BatchedReadsGiveWhatEachTraineesReadGives) {
   EXPECT_TRUE(store_->ListLessonVerdictsOf({}).value.empty());
 }
 
+// The group's cohort page reads its members' sessions in a range in one
+// read: for every listed id, in order, what ListSessions gives from `from`
+// on, cut at `to`, at most limit + 1.
+TEST_P(LessonStore, BatchedSessionReadGivesWhatEachTraineesListingGives) {
+  StoreSession("u5", "", 5000);
+  StoreSession("u3", "l1", 3000);
+  StoreSession("u1", "", 1000);
+  StoreSession("u2b", "l2", 2000);  // two at the same start: uuid order
+  StoreSession("u2a", "", 2000);
+  StoreSession("v2", "l1", 2000, "t2");
+  StoreSession("v9", "", 9000, "t2");
+  StoreSession("w1", "", 1000, "s1");
+  auto each = [&](const std::string& id, int64_t from, int64_t to, int limit) {
+    ListPage page;
+    page.has_after = from > 0;
+    page.after_number = from;
+    page.limit = limit + 1;
+    std::vector<SessionRow> rows = store_->ListSessions(id, "", page).value;
+    std::erase_if(rows, [&](const SessionRow& r) { return to != 0 && r.start_unix_ms >= to; });
+    return rows;
+  };
+  const std::vector<std::string> ids = {"t2", "ghost", "t1", "s1", "t1"};
+  struct Range {
+    int64_t from, to;
+    int limit;
+  };
+  for (const Range& r : {Range{0, 0, 100}, Range{2000, 5000, 100}, Range{1500, 0, 2},
+                         Range{9001, 0, 100}}) {
+    SCOPED_TRACE(std::to_string(r.from) + ".." + std::to_string(r.to));
+    auto batched = store_->ListSessionsOf(ids, r.from, r.to, r.limit);
+    ASSERT_TRUE(batched.ok()) << batched.status.message;
+    ASSERT_EQ(batched.value.size(), ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) {
+      SCOPED_TRACE(ids[i]);
+      EXPECT_EQ(batched.value[i], each(ids[i], r.from, r.to, r.limit));
+    }
+  }
+  // What the per-trainee reads give, so that the comparison above is not of empties.
+  auto uuids = [](const std::vector<SessionRow>& rows) {
+    std::vector<std::string> out;
+    for (const auto& r : rows) out.push_back(r.uuid);
+    return out;
+  };
+  auto all = store_->ListSessionsOf(ids, 0, 0, 100).value;
+  EXPECT_EQ(uuids(all[2]), (std::vector<std::string>{"u1", "u2a", "u2b", "u3", "u5"}));
+  EXPECT_EQ(all[2][2].lesson_id, "l2");
+  EXPECT_EQ(uuids(all[0]), (std::vector<std::string>{"v2", "v9"}));
+  EXPECT_TRUE(all[1].empty());
+  auto range = store_->ListSessionsOf(ids, 2000, 5000, 100).value;
+  EXPECT_EQ(uuids(range[2]), (std::vector<std::string>{"u2a", "u2b", "u3"}));
+  auto capped = store_->ListSessionsOf(ids, 1500, 0, 2).value;
+  EXPECT_EQ(uuids(capped[2]), (std::vector<std::string>{"u2a", "u2b", "u3"}));  // limit + 1
+  EXPECT_TRUE(store_->ListSessionsOf({}, 0, 0, 100).value.empty());
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Backends, LessonStore,
     ::testing::Values(LessonBackend{"sqlite",

@@ -88,6 +88,11 @@ class SkippedStore final : public Store {
     return {};
   }
   StoreResult<int64_t> CountSessions() override { return Skipped(); }
+  StoreResult<std::vector<std::vector<SessionRow>>> ListSessionsOf(const std::vector<std::string>&,
+                                                                   int64_t, int64_t,
+                                                                   int) override {
+    return Skipped();
+  }
   StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string&, const std::string&,
                                                             const std::string&, int) override {
     return Skipped();
