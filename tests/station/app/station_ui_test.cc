@@ -572,7 +572,7 @@ TEST_F(StationUi, ASittingReachesTheCecumRepeatsCleanAndSwitchesCase) {
   // as a keyboard does) until the session's record is committed: it ended.
   Keys({"f"});
   X({"xdotool", "keydown", "w"});
-  const bool ended = WaitForOutput(out, "committed to the outbox", seconds(200));
+  const bool ended = WaitForOutput(out, "committed to the outbox", seconds(480));
   X({"xdotool", "keyup", "w"});
   ASSERT_TRUE(ended) << "the held push key did not end the session:\n"
                      << ReadFile(out) << ReadFile(dir_ / "interactive.err");
