@@ -68,7 +68,8 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
   const double press_step =
       params.abdominal_pressure_ramp_s > 0.0 ? dt / params.abdominal_pressure_ramp_s : 1.0;
   for (std::size_t r = 0; r < s->abdominal_pressure_level.size(); ++r) {
-    const double asked = input.abdominal_pressure[r] > 0.0 ? std::min(input.abdominal_pressure[r], 1.0) : 0.0;
+    const double asked =
+        input.abdominal_pressure[r] > 0.0 ? std::min(input.abdominal_pressure[r], 1.0) : 0.0;
     double& level = s->abdominal_pressure_level[r];
     level = std::clamp(asked, level - press_step, level + press_step);
   }
