@@ -7,6 +7,7 @@ the source with comments and literals removed, which is enough for this code
 base's style; `--report` lists the longest functions and files.
 
 Usage: layout_check.py ROOT [--report]
+       layout_check.py --self-test   (the checker finds breaches it must find)
 Exit 0 when every rule holds, 1 naming each breach.
 """
 import pathlib
@@ -110,9 +111,52 @@ def functions(text: str):
     return
 
 
+def self_test() -> int:
+    """A 121-line function and a 601-line file are breaches; a 120-line
+    function, braces in comments, strings and preprocessor lines are not."""
+    body = "\n".join(f"  x += {i};" for i in range(118))
+    long_fn = "int Long(int x) {\n" + body + "\n  return x;\n}\n"  # 121 lines
+    ok_fn = "int Ok(int x) {\n" + "\n".join(body.splitlines()[:117]) + "\n  return x;\n}\n"
+    noise = '// {{{ not code\nconst char* s = "{{";\n#define OPEN {\nnamespace a {\nstruct S {\n'
+    got = {name: last - first + 1 for name, first, last in functions(noise + long_fn + ok_fn + "};\n}\n")}
+    failures = []
+    if got.get("Long") != 121:
+        failures.append(f"Long measured {got.get('Long')} lines, want 121")
+    if got.get("Ok") != 120:
+        failures.append(f"Ok measured {got.get('Ok')} lines, want 120")
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        src = pathlib.Path(tmp) / "server"
+        src.mkdir()
+        (src / "big.cc").write_text("int a;\n" * (MAX_FILE_LINES + 1))
+        (src / "fine.cc").write_text(ok_fn)
+        (src / "fine_test.cc").write_text(long_fn)  # tests are exempt
+        breaches = check(pathlib.Path(tmp), report=False)
+        want = ["server/big.cc: 601 lines (at most 600)"]
+        if breaches != want:
+            failures.append(f"breaches {breaches}, want {want}")
+    for f in failures:
+        print("self-test:", f)
+    print("self-test:", "passed" if not failures else "FAILED")
+    return 1 if failures else 0
+
+
 def main() -> int:
+    if "--self-test" in sys.argv:
+        return self_test()
     root = pathlib.Path(sys.argv[1]).resolve()
-    report = "--report" in sys.argv
+    breaches = check(root, report="--report" in sys.argv)
+    for b in breaches:
+        print(b)
+    print(f"{len(breaches)} breaches of the house rules (files <= {MAX_FILE_LINES} lines, "
+          f"functions <= {MAX_FUNCTION_LINES} lines; docs/architecture.md)")
+    return 1 if breaches else 0
+
+
+def check(root: pathlib.Path, report: bool):
+    """The breaches under ROOT, one line each; with `report`, prints the
+    longest files and functions too."""
+    root = root.resolve()
     breaches = []
     longest = []
     files = []
@@ -140,10 +184,9 @@ def main() -> int:
         print("longest functions:")
         for n, f in sorted(longest, reverse=True)[:25]:
             print(f"  {n:5d} {f}")
-    for b in breaches:
-        print(b)
-    print(f"{len(files)} product files checked, {len(longest)} functions; {len(breaches)} breaches")
-    return 1 if breaches else 0
+    if report:
+        print(f"{len(files)} product files checked, {len(longest)} functions; {len(breaches)} breaches")
+    return breaches
 
 
 if __name__ == "__main__":
