@@ -148,7 +148,8 @@ int main(int argc, char** argv) {
   const double press[9] = {0, 0, get("press_sig", 0.0), get("press_desc", 0.0), 0,
                            get("press_trans", 0.0), 0, 0, 0};
   auto state = ves::model::MakeInitialState(params);
-  auto scratch = ves::model::MakeScratch(params);
+  auto scratch =
+      ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(get));
   auto out = ves::model::MakeStepOutput(params);
   const double pain_m = ves::training::MetricThresholds{}.pain_stretch_m;
   double t_cecum = -1.0, inserted_at_cecum = -1.0, max_tip = 0.0, peak_force = 0.0;

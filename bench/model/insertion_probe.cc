@@ -163,7 +163,8 @@ int main(int argc, char** argv) {
                                                options);
   ves::bench::ApplyModelOverrides(ves::bench::ProbeEnv, &params);
   auto state = ves::model::MakeInitialState(params);
-  auto scratch = ves::model::MakeScratch(params);
+  auto scratch =
+      ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(ves::bench::ProbeEnv));
   auto out = ves::model::MakeStepOutput(params);
 
   std::unique_ptr<ves::training::ScriptedOperator> scripted;

@@ -73,7 +73,8 @@ int main(int argc, char** argv) {
     if (p.region == Region::kCecum && cecum_m == pts.back().arc_m) cecum_m = p.arc_m;
   }
   auto state = ves::model::MakeInitialState(params);
-  auto scratch = ves::model::MakeScratch(params);
+  auto scratch =
+      ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(get));
   auto out = ves::model::MakeStepOutput(params);
   const ves::training::MetricThresholds thresholds;
   std::vector<Track> track;

@@ -20,12 +20,14 @@
 //   every point: mu (friction x)
 //   mobile points: soft_k (suspension, N/m^2), mobile_kc_scale (suspension x),
 //     relax_s, meso_k, meso_m, pleat (limit), tension
-//   colon: shear, anchor_arc (0/1), reach_gathers (0/1), abdomen (m),
+//   colon: shear, anchor_arc (0/1), abdomen (m),
 //     across (0/1), ring_onset_s, window (contact search, segments), arc_ratio
 //   scope: ei (insertion tube EI x), bend_ei, links, growth, passive_m, passive_ei
 //   step: dt_ms, pleat_k, toe_k, toe_strain, toe_regions (bit 1 << Region),
-//     pleat_set_s, pleat_release_s, press_k, press_slack, gather (the set pleat
-//     ratio at which the lumen hugs the scope, 0 off), gather_clear (m)
+//     pleat_set_s, pleat_release_s, press_k, press_slack
+//   experiments (model::ModelExperiments, ExperimentsWithOverrides): gather
+//     (the set pleat ratio at which the lumen hugs the scope, 0 off),
+//     gather_clear (m)
 namespace ves::bench {
 
 using OverrideGetter = std::function<double(const char* key, double fallback)>;
@@ -87,8 +89,6 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
   colon.mesentery_shear_ratio = get("shear", colon.mesentery_shear_ratio);
   colon.mesentery_anchor_by_arc = get("anchor_arc", colon.mesentery_anchor_by_arc ? 1.0 : 0.0) != 0.0;
   colon.abdomen_margin_m = get("abdomen", colon.abdomen_margin_m);
-  params->mesentery_reach_gathers =
-      get("reach_gathers", params->mesentery_reach_gathers ? 1.0 : 0.0) != 0.0;
   params->contacts_across_scope =
       get("across", params->contacts_across_scope ? 1.0 : 0.0) != 0.0;
   params->ring_onset_s = get("ring_onset_s", params->ring_onset_s);
@@ -112,12 +112,18 @@ inline void ApplyModelOverrides(const OverrideGetter& get, model::ModelParams* p
       static_cast<std::uint32_t>(get("toe_regions", params->colon_toe_regions));
   params->colon_pleat_set_s = get("pleat_set_s", params->colon_pleat_set_s);
   params->colon_pleat_release_s = get("pleat_release_s", params->colon_pleat_release_s);
-  params->lumen_gather_pleat = get("gather", params->lumen_gather_pleat);
-  params->lumen_gather_clearance_m = get("gather_clear", params->lumen_gather_clearance_m);
   params->abdominal_pressure_stiffness_N_per_m2 =
       get("press_k", params->abdominal_pressure_stiffness_N_per_m2);
   params->abdominal_pressure_slack_m = get("press_slack", params->abdominal_pressure_slack_m);
   params->abdominal_pressure_ramp_s = get("press_ramp_s", params->abdominal_pressure_ramp_s);
+}
+
+// The model's experiments (MakeScratch) with the overrides applied.
+inline model::ModelExperiments ExperimentsWithOverrides(const OverrideGetter& get) {
+  model::ModelExperiments experiments;
+  experiments.lumen_gather_pleat = get("gather", experiments.lumen_gather_pleat);
+  experiments.lumen_gather_clearance_m = get("gather_clear", experiments.lumen_gather_clearance_m);
+  return experiments;
 }
 
 // A case file as the model's parameters with every override applied: the

@@ -10,6 +10,10 @@
 
 namespace ves::model::internal {
 
+// (row, column) of ColonSystem::diag's entries in a block, and back.
+inline constexpr int kDiagEntry[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+inline constexpr int kDiagIndex[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+
 // Rotation of the entry frame: +z along the entry axis (the anus point's rest
 // tangent), +y the world's +y (anterior) made perpendicular to it.
 Eigen::Matrix3d CalcEntryRotation(const ModelParams& params);
@@ -35,8 +39,8 @@ double CalcRootInsideLength(const ModelState& state);
 // Moves each inserted sample's tracked colon segment by a local search (at most
 // contact_search_window segments each way), then evaluates eqs. (9)-(17):
 // per-sample force on the scope, its linearised stiffness and the contact list.
-void EvaluateContacts(const ModelParams& params, ModelState* state, Scratch* scratch,
-                      StepOutput* output);
+void EvaluateContacts(const ModelParams& params, const CompiledModel& model, ModelState* state,
+                      Scratch* scratch, StepOutput* output);
 
 // Ring contacts (Scratch::ring_contacts): the colon points between two
 // samples' tracked segments held around the scope piece between them.
@@ -49,16 +53,13 @@ void EvaluateRingContacts(const ModelParams& params, ModelState* state, Scratch*
 void SolveScope(const ModelParams& params, const StepInput& input, double target_insertion_m,
                 ModelState* state, Scratch* scratch, StepOutput* output);
 
-// Fills the constant parts of the colon system in scratch (MakeScratch).
-void PrepareColonSystem(const ModelParams& params, Scratch* scratch);
-
 // Linearly implicit update of the colon points in 3-D (scope held at its new
 // shape): suspension, mesentery, axial links, kink tension and contact
 // stiffness in one block-tridiagonal solve. Writes the points' increments into
 // scratch->colon_system.solution (zero for the points not solved) and updates
 // their tangents.
-void SolveColon(const ModelParams& params, const StepInput& input, ModelState* state,
-                Scratch* scratch);
+void SolveColon(const ModelParams& params, const CompiledModel& model, const StepInput& input,
+                ModelState* state, Scratch* scratch);
 
 // Solves the symmetric positive definite block-tridiagonal system of the
 // colon for points 1..last (ColonSystem: diagonal blocks diag, off-diagonal
@@ -66,6 +67,15 @@ void SolveColon(const ModelParams& params, const StepInput& input, ModelState* s
 // out (its other points untouched); gain is work space. SolveColon's
 // elimination, on its own so that model_bench can time it.
 void SolveBlockTridiagonal(int last, ColonSystem* system);
+
+// Step's outputs (step_outputs.cc): shares the contacts' forces onto the
+// colon points and fills the per-point outputs, their peaks, the tip's arc
+// (into state too) and the velocity norm, whose sum starts at sample_speed2
+// (the samples' squared speeds). Returns the sum of the colon points' squared
+// displacements (for the finiteness check).
+double WriteStepOutputs(const ModelParams& params, const CompiledModel& model,
+                        double sample_speed2, ModelState* state, const Scratch* scratch,
+                        StepOutput* output);
 
 // Recomputes the current tangents of points from..to (central differences).
 void UpdateColonTangents(int from, int to, ModelState* state);

@@ -80,10 +80,6 @@ void ValidateParams(const ModelParams& p) {
           "must be in [0, 1e6] s (0: never)");
   Require(InRange(p.colon_pleat_release_s, 0.0, 1e6), "colon_pleat_release_s",
           p.colon_pleat_release_s, "must be in [0, 1e6] s (0: at once)");
-  Require(InRange(p.lumen_gather_pleat, 0.0, 0.99), "lumen_gather_pleat", p.lumen_gather_pleat,
-          "must be in [0, 0.99] (0: off)");
-  Require(InRange(p.lumen_gather_clearance_m, 0.0, 0.05), "lumen_gather_clearance_m",
-          p.lumen_gather_clearance_m, "must be in [0, 0.05] m");
   Require(p.tracking_arc_ratio == 0.0 || InRange(p.tracking_arc_ratio, 1.0, 25.0),
           "tracking_arc_ratio", p.tracking_arc_ratio, "must be 0 (no limit) or in [1, 25]");
   Require(p.contact_search_window >= 1 && p.contact_search_window <= 64, "contact_search_window",
@@ -169,9 +165,10 @@ ModelState MakeInitialState(const ModelParams& params) {
   return s;
 }
 
-Scratch MakeScratch(const ModelParams& params) {
+Scratch MakeScratch(const ModelParams& params, const ModelExperiments& experiments) {
   const int n = params.scope.link_count;
   Scratch sc;
+  sc.compiled = CompileModel(params, experiments);
   sc.articulated_stiffness.resize(n);
   sc.articulated_bias.resize(n);
   sc.motion_subspace.resize(n);
@@ -194,8 +191,19 @@ Scratch MakeScratch(const ModelParams& params) {
   sc.lumen_normal_known.assign(params.colon.points.size(), 0);
   const size_t N = params.colon.points.size();
   sc.colon_system.Resize(static_cast<int>(N));
-  internal::PrepareColonSystem(params, &sc);
+  sc.colon_arrays.Resize(static_cast<int>(N));
   return sc;
+}
+
+void ColonSolverArrays::Resize(int points) {
+  const size_t size = static_cast<size_t>(points) + kColonLanePadding;
+  for (CoordinateArrays* xyz : {&position_m, &reference_m, &tangent, &pair_impulse}) {
+    for (auto& v : *xyz) v.assign(size, 0.0);
+  }
+  for (auto& v : pair_block) v.assign(size, 0.0);
+  rest_gap_m.assign(size, 1.0);
+  tether_distance_m.assign(size, 0.0);
+  gap_m.assign(size + 1, 0.0);
 }
 
 void ColonSystem::Resize(int points) {

@@ -8,7 +8,9 @@
 #include <Eigen/Geometry>
 
 #include "station/model/colon.h"
+#include "station/model/compiled_model.h"
 #include "station/model/endoscope.h"
+#include "station/model/experiments.h"
 
 // The endoscope-colon model of paper §3 (docs/model.md). A step is a pure
 // function of (params, input, state): no I/O, threads, clocks or globals, and
@@ -58,15 +60,16 @@ struct ModelParams {
   // The colon wall along the tube (docs/model.md, "Axial links"), per unit
   // strain of a gap (so independent of N). In tension it may be J-shaped
   // like other soft tissue (a compliant toe up to colon_toe_strain, then the
-  // wall's linear modulus EA); by default it has no toe: with a 10 N toe the
-  // scope stretched the sigmoid and transverse by 20 % and the expert got
-  // less deep (docs/model-shortening-notes.md). Shortened, it folds onto the scope (pleats)
-  // softly down to each region's pleat_limit, then the folds are packed.
+  // wall's linear modulus EA); by default the toe is as stiff as the wall, so
+  // there is none: a soft toe lets the scope stretch the sigmoid and
+  // transverse colon and the expert reaches less deep
+  // (docs/model-shortening-notes.md). Shortened, the wall folds onto the
+  // scope (pleats) softly down to each region's pleat_limit, then the folds
+  // are packed.
   double colon_toe_stiffness_N{500.0};
   double colon_toe_strain{0.2};
   // Regions whose wall has the toe (bit 1 << Region; all by default): a gap
-  // has it when both its points are in one of them. A toe in the sigmoid
-  // alone was measured on 2026-12-03 and not kept either
+  // has it when both its points are in one of them
   // (docs/model-shortening-notes.md, "A sigmoid that stretches").
   std::uint32_t colon_toe_regions{~0u};
   double colon_tension_stiffness_N{500.0};
@@ -85,13 +88,6 @@ struct ModelParams {
   // stays gathered while the scope re-advances (docs/model.md).
   double colon_pleat_set_s{0.5};
   double colon_pleat_release_s{600.0};
-  // Off by default (0): a colon whose folds have set hugs the scope. Where the
-  // set pleat ratio (rest gap over natural gap) falls from 1 to this value,
-  // the lumen's radius falls linearly from the case's to the scope's plus
-  // lumen_gather_clearance_m. Measured, not kept: docs/model-shortening-notes.md,
-  // "A lumen that gathers onto the scope".
-  double lumen_gather_pleat{0.0};
-  double lumen_gather_clearance_m{1e-3};
   // The mobile colon's weight per metre (wall and contents, estimate): on
   // turning the patient (StepInput::patient_position) the change of gravity
   // from supine acts on it, so the mobile colon sags toward the lower side.
@@ -99,30 +95,25 @@ struct ModelParams {
   // The assistant's hand on the abdomen (StepInput::abdominal_pressure): at
   // full pressure a pressed region's points are held within the slack of
   // their mesentery root with this stiffness per metre of colon; the hand
-  // presses in and lets go over abdominal_pressure_ramp_s (a hand pressed in
-  // at once snapped the sigmoid inward: a 109 N spike at the base;
-  // docs/model.md, "Position and pressure").
+  // presses in and lets go over abdominal_pressure_ramp_s (pressed in at
+  // once, it snaps the sigmoid inward with a spike of about 100 N at the
+  // base; docs/model.md, "Position and pressure").
   double abdominal_pressure_stiffness_N_per_m2{10000.0};
   double abdominal_pressure_slack_m{0.01};
   double abdominal_pressure_ramp_s{5.0};
-  // Experiment (docs/model-shortening-notes.md): a mobile point's tether reach shrinks with the
-  // local gathering of the colon (reach times the pleat ratio of its two
-  // gaps, never below the mesentery length), so gathered colon lies on its
-  // root. false: the reach is fixed.
-  bool mesentery_reach_gathers{false};
   // A sample's wall contact pushes across the scope's axis: the side of a
   // cylinder takes only radial loads (the tip keeps its end face). Where the
   // colon folds askew onto the scope the lumen plane's offset points along
-  // the shaft, and held a withdrawing scope like a barb (docs/model.md,
-  // "Contact"). false: along the offset, as before 2026-12-02.
+  // the shaft and would hold a withdrawing scope like a barb (docs/model.md,
+  // "Contact"). false: along the offset (contact_geometry_test compares).
   bool contacts_across_scope{true};
   // A ring contact (a colon point held round the scope piece between two
   // samples) takes its load over this time once it appears, linearly. The
   // tracking hands a point from a sample's segment to a ring in one step,
   // and where the colon folds sharply the point is then millimetres inside:
-  // at once, a 5-11 N one-step jump the hand felt as a roll torque spike of
-  // up to 2.2 N m. 10 ms: the resolution of the hand force (docs/model.md,
-  // "Ring contacts"). 0: at once.
+  // taken at once, its load is a one-step jump of 5-11 N that the hand feels
+  // as a roll torque spike of up to 2.2 N m. 10 ms: the resolution of the
+  // hand force (docs/model.md, "Ring contacts"). 0: at once.
   double ring_onset_s{0.01};
   bool operator==(const ModelParams&) const = default;
 };
@@ -216,7 +207,7 @@ struct ModelState {
   std::vector<double> colon_gap_m;
   std::vector<double> colon_tether_distance_m;
   // The lumen's radius at each point (the case's, or less where the folds
-  // have set: ModelParams::lumen_gather_pleat).
+  // have set: ModelExperiments::lumen_gather_pleat).
   std::vector<double> colon_lumen_radius_m;
   std::vector<double> wall_deformation_m;    // largest radial l at each point
   // How far each colon point's ring contact has come on (0..1;
@@ -288,14 +279,6 @@ struct RingContact {
   double onset{1.0};              // share of the load taken (ModelParams::ring_onset_s)
 };
 
-// Three arrays, one per coordinate (x, y, z) of each point.
-using CoordinateArrays = std::array<std::vector<double>, 3>;
-
-// Arrays of the colon solver hold this many entries past the last point:
-// its loops take four points (or pairs) at a time, and the last group may
-// run past the end (those lanes are computed and never read).
-inline constexpr int kColonLanePadding = 4;
-
 // The colon's block-tridiagonal system (3x3 blocks, points 0..N-1), one
 // array per entry so that the solver's loops take four points at a time
 // (docs/model.md, "Speed").
@@ -315,7 +298,9 @@ struct ColonSystem {
   void Resize(int points);  // zeroes every entry
 };
 
-// SolveColon's per-coordinate arrays (padded by kColonLanePadding).
+// SolveColon's per-step arrays, one per coordinate (padded by
+// kColonLanePadding); the constants they are combined with are the
+// CompiledModel's.
 struct ColonSolverArrays {
   // Copies of the colon's state, taken at the start of each solve.
   CoordinateArrays position_m;       // p_WColon
@@ -330,36 +315,14 @@ struct ColonSolverArrays {
   // ColonSystem::diag) and dt F (its force on point i) this step.
   std::array<std::vector<double>, 6> pair_block;
   CoordinateArrays pair_impulse;
-  // Constant parts, computed once by MakeScratch from the rest geometry (a
-  // Scratch belongs to the params it was made from).
-  std::array<std::vector<double>, 6> own_diag;  // [i]: D_c h_i I + dt K_c h_i P_i (upper triangle)
-  std::vector<double> suspension_rhs_factor;    // [i]: -(dt K_c h_i)
-  CoordinateArrays rest_tangent;
-  CoordinateArrays tether_anchor_m;
-  CoordinateArrays tether_root_direction;
-  CoordinateArrays tether_side;
-  std::vector<double> has_tether_side;  // [i]: 1 where tether_side is set, else 0
-  std::vector<double> tether_length_m;
-  std::vector<double> mesentery_length_m;
-  std::vector<double> length_m;                  // [i]: h_i
-  std::vector<std::uint8_t> mobile;              // [i]: 1 where the tissue is mobile
-  std::vector<Eigen::Vector3d> rest_position_m;  // the points' (kept together: read every step)
-  std::vector<double> reach_gathers;             // [i]: 1 where the reach gathers, else 0
-  std::vector<double> natural_span_m;            // [i]: rest gaps behind and ahead of i
-  std::vector<double> pair_kink_N_per_m;         // [i]: T / gap of pair (i, i+1)
-  std::vector<double> pair_pleat_limit;          // [i]: smaller pleat_limit of i, i+1
-  std::vector<double> pair_toe_N;                // [i]: the toe's stiffness of gap i
-  std::vector<double> pair_toe_strain;           // [i]: where gap i's toe ends, as a strain
-  // [i]: gap i's material length where it has a gathered reserve (its toe
-  // then ends there, also after its folds have set), else 0.
-  std::vector<double> pair_reserve_end_m;
-  std::vector<double> inverse_material_gap;      // [i]: 1 / gap i's material length
-  CoordinateArrays pair_rest_direction;          // [i]: unit, i -> i+1 at rest
-  CoordinateArrays pair_rest_mean_tangent;       // [i]: mean of i's, i+1's
+  void Resize(int points);
 };
 
-// Work arrays for Step, sized once.
+// What Step works with besides the state: the compiled model (constant,
+// built once by MakeScratch; Step only reads it) and the work arrays of a
+// step (sized once; the state, not these, is what a step leaves for the next).
 struct Scratch {
+  CompiledModel compiled;
   std::vector<Eigen::Matrix<double, 6, 6>> articulated_stiffness;
   std::vector<Eigen::Matrix<double, 6, 1>> articulated_bias;
   std::vector<Eigen::Matrix<double, 6, 2>> motion_subspace;
@@ -386,15 +349,12 @@ struct Scratch {
   // The colon's system and the solver's per-coordinate arrays (SolveColon).
   ColonSystem colon_system;
   ColonSolverArrays colon_arrays;
-  // Constant parts, computed once by MakeScratch (padded as colon_arrays).
-  std::vector<double> colon_tether_N_per_m;        // [i]: mesentery stiffness * h_i
-  std::vector<double> colon_relax_factor;          // [i]: dt / (suspension relaxation + dt)
-  std::vector<double> colon_pair_gap_m;            // [i]: rest distance of points i, i+1
-  double tracking_arc_ratio{0.0};                  // as used (ModelParams::tracking_arc_ratio)
 };
 
 ModelState MakeInitialState(const ModelParams& params);  // validates params; may throw
-Scratch MakeScratch(const ModelParams& params);
+// Compiles the model (CompileModel) and sizes the work arrays; the
+// experiments are the benches' (the product uses the defaults).
+Scratch MakeScratch(const ModelParams& params, const ModelExperiments& experiments = {});
 StepOutput MakeStepOutput(const ModelParams& params);
 
 // One time step of dt_s (docs/model.md): contacts (eqs. 9-17), a linearly

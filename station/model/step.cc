@@ -1,4 +1,4 @@
-// Step: one time step of the endoscope-colon model (docs/model.md §Time step).
+// Step: one time step of the endoscope-colon model (docs/model.md, "Time step").
 #include <algorithm>
 #include <cmath>
 
@@ -42,51 +42,37 @@ bool AllFinite(const ModelState& s, const StepOutput& out, double colon_sum_m2) 
   return std::isfinite(colon_sum_m2);
 }
 
-}  // namespace
-
-void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc,
-          StepOutput* out) {
-  const double dt = params.dt_s;
-  SetKnobRestAngles(params, input, s);
-  // The roll turns the shaft in place; its surface slides round by spin * a.
-  const double spin_rad = input.roll_rad - s->roll_rad;
-  internal::SpinScope(params, input.roll_rad, s);
-
-  // 1. Contacts at the current shapes (eqs. 9-17).
-  internal::EvaluateContacts(params, s, sc, out);
-  const int samples = static_cast<int>(s->samples.size());
-  const int first_inside = s->first_inside_sample;  // samples before it are outside
-  // The inside samples' positions before the scope moves (SolveColon reads them too).
-  for (int i = first_inside; i < samples; ++i) sc->sample_delta_m[i] = s->p_WSample[i];
-
-  // 2. Scope: eq. (6), linearly implicit, O(n).
-  internal::SolveScope(params, input, input.insertion_m, s, sc, out);
-  internal::UpdateScopeKinematics(params, s);
-
-  // 3. Colon: suspension, mesentery, axial links, contacts, linearly implicit, O(N).
-  //    The assistant's hand presses in and lets go gradually.
-  const double press_step =
-      params.abdominal_pressure_ramp_s > 0.0 ? dt / params.abdominal_pressure_ramp_s : 1.0;
+// The assistant's hand presses in and lets go gradually
+// (ModelParams::abdominal_pressure_ramp_s).
+void UpdatePressureLevels(const ModelParams& params, const StepInput& input, ModelState* s) {
+  const double press_step = params.abdominal_pressure_ramp_s > 0.0
+                                ? params.dt_s / params.abdominal_pressure_ramp_s
+                                : 1.0;
   for (std::size_t r = 0; r < s->abdominal_pressure_level.size(); ++r) {
     const double asked =
         input.abdominal_pressure[r] > 0.0 ? std::min(input.abdominal_pressure[r], 1.0) : 0.0;
     double& level = s->abdominal_pressure_level[r];
     level = std::clamp(asked, level - press_step, level + press_step);
   }
-  internal::SolveColon(params, input, s, sc);
+}
 
-  // 4. Friction memory: the stick spring stretches by the tangential relative
-  //    displacement of scope surface and wall during the step (the surface
-  //    also turned with the spin). The friction round the shaft is a torque
-  //    the hand holds: a (n x F_t) . t about each sample's axis t.
-  double speed2 = 0.0;
+// Friction memory: the stick spring stretches by the tangential relative
+// displacement of scope surface and wall during the step (the surface also
+// turned with the spin). The friction round the shaft is a torque the hand
+// holds: a (n x F_t) . t about each sample's axis t. Leaves each inside
+// sample's move in sample_delta_m and returns the sum of their squares.
+double UpdateFrictionMemory(const ModelParams& params, double spin_rad, ModelState* s,
+                            Scratch* sc, StepOutput* out) {
+  const double dt = params.dt_s;
   const auto& pts = params.colon.points;
   const double scope_radius_m = 0.5 * params.scope.outer_diameter_m;
-  for (int i = first_inside; i < samples; ++i) {
+  const int samples = static_cast<int>(s->samples.size());
+  double moved2_m2 = 0.0;
+  for (int i = s->first_inside_sample; i < samples; ++i) {
     SampleContact& c = s->contact[i];
     const Eigen::Vector3d dp = s->p_WSample[i] - sc->sample_delta_m[i];
     sc->sample_delta_m[i] = dp;
-    speed2 += dp.squaredNorm();
+    moved2_m2 += dp.squaredNorm();
     if (!c.touching) continue;
     const int k = c.segment;
     const Eigen::Vector3d dc = (1.0 - c.segment_t) * sc->colon_system.Solution(k) +
@@ -108,90 +94,44 @@ void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scra
     }
     c.slip_m += rel;
   }
-  speed2 /= dt * dt;
+  return moved2_m2;
+}
+
+}  // namespace
+
+void Step(const ModelParams& params, const StepInput& input, ModelState* s, Scratch* sc,
+          StepOutput* out) {
+  const CompiledModel& model = sc->compiled;
+  const double dt = params.dt_s;
+  SetKnobRestAngles(params, input, s);
+  // The roll turns the shaft in place; its surface slides round by spin * a.
+  const double spin_rad = input.roll_rad - s->roll_rad;
+  internal::SpinScope(params, input.roll_rad, s);
+
+  // 1. Contacts at the current shapes (eqs. 9-17).
+  internal::EvaluateContacts(params, model, s, sc, out);
+  const int samples = static_cast<int>(s->samples.size());
+  // The inside samples' positions before the scope moves (SolveColon reads them too).
+  for (int i = s->first_inside_sample; i < samples; ++i) sc->sample_delta_m[i] = s->p_WSample[i];
+
+  // 2. Scope: eq. (6), linearly implicit, O(n).
+  internal::SolveScope(params, input, input.insertion_m, s, sc, out);
+  internal::UpdateScopeKinematics(params, s);
+
+  // 3. Colon: suspension, mesentery, axial links, contacts, linearly implicit, O(N).
+  UpdatePressureLevels(params, input, s);
+  internal::SolveColon(params, model, input, s, sc);
+
+  // 4. Friction memory (eqs. 16-17's stick spring).
+  const double sample_speed2 = UpdateFrictionMemory(params, spin_rad, s, sc, out) / (dt * dt);
 
   // 5. Outputs.
-  const int N = static_cast<int>(pts.size());
-  std::fill(out->wall_force_N.begin(), out->wall_force_N.end(), 0.0);
-  std::fill(s->wall_deformation_m.begin(), s->wall_deformation_m.end(), 0.0);
-  for (int j = 0; j < out->contact_count; ++j) {
-    const Contact& contact = out->contacts[j];
-    const SampleContact& c = s->contact[contact.sample];
-    const int k = contact.segment;
-    out->wall_force_N[k] += (1.0 - c.segment_t) * contact.normal_force_N;
-    out->wall_force_N[k + 1] += c.segment_t * contact.normal_force_N;
-    const int nearest = c.segment_t < 0.5 ? k : k + 1;
-    s->wall_deformation_m[nearest] =
-        std::max(s->wall_deformation_m[nearest], contact.penetration_m);
-  }
-  for (int j = 0; j < sc->ring_contact_count; ++j) {
-    const RingContact& rc = sc->ring_contacts[j];
-    out->wall_force_N[rc.point] += rc.force_N;
-    s->wall_deformation_m[rc.point] = std::max(s->wall_deformation_m[rc.point], rc.penetration_m);
-  }
-  // The peaks in locals, written once after the loop: as members of *out they
-  // could be any of the doubles the loop stores, and each point would read
-  // them back from memory.
-  double peak_stretch_m = 0.0;
-  double peak_stretch_arc_m = 0.0;
-  double peak_wall_force_N = 0.0;
-  double peak_fixed_moved2_m2 = 0.0;  // squared: one square root for the peak
-  double peak_material_ratio = 1.0;  // a gap over its material length, the largest
-  double colon_sum_m2 = 0.0;
-  // The gap behind point i and the one ahead of it (0 past the ends, where
-  // the point's own is used).
-  double gap_behind_m = 0.0;
-  // The points' constants from the scratch's compact copies: the points
-  // themselves are large and this loop visits every one.
-  const ColonSolverArrays& constants = sc->colon_arrays;
-  for (int i = 0; i < N; ++i) {
-    const double moved2_m2 = s->colon_displacement_m[i].squaredNorm();
-    colon_sum_m2 += moved2_m2;
-    speed2 += s->colon_velocity_m_per_s[i].squaredNorm();
-    // Mesentery stretch: how far the tether is pulled beyond its reach.
-    const double stretch =
-        std::max(0.0, s->colon_tether_distance_m[i] - constants.tether_length_m[i]);
-    out->stretch_m[i] = stretch;
-    if (stretch > peak_stretch_m) {
-      peak_stretch_m = stretch;
-      peak_stretch_arc_m = pts[i].arc_m;
-    }
-    if (constants.mobile[i] == 0) {
-      peak_fixed_moved2_m2 = std::max(peak_fixed_moved2_m2, moved2_m2);
-    }
-    peak_wall_force_N = std::max(peak_wall_force_N, out->wall_force_N[i]);
-    // Pleat ratio: the tube's current length over its rest length around r_i.
-    const double gap_ahead_m = i + 1 < N ? s->colon_gap_m[i] : 0.0;
-    peak_material_ratio =
-        std::max(peak_material_ratio, gap_ahead_m * constants.inverse_material_gap[i]);
-    const double rest_m = constants.length_m[i];  // half of each neighbouring gap at rest
-    out->pleat_ratio[i] = 0.5 * (gap_ahead_m + gap_behind_m) / rest_m;
-    gap_behind_m = gap_ahead_m;
-  }
-  out->peak_stretch_m = peak_stretch_m;
-  out->peak_stretch_arc_m = peak_stretch_arc_m;
-  out->peak_wall_force_N = peak_wall_force_N;
-  out->peak_fixed_displacement_m = std::sqrt(peak_fixed_moved2_m2);
-  out->peak_wall_strain = peak_material_ratio - 1.0;
-  SampleContact tip = s->contact[samples - 1];
-  if (tip.inside) {
-    // Where the tip is now, along the colon's material (a copy: the contact
-    // memory itself moves on at the next step's evaluation).
-    internal::TrackSegment(*s, params.contact_search_window, s->p_WSample[samples - 1], &tip);
-    const int k = tip.segment;
-    const double t =
-        internal::CalcSegmentHit(params, *s, k, s->p_WSample[samples - 1]).t;
-    const double a0 = pts[k].arc_m;
-    s->tip_arc_m = a0 + t * (pts[k + 1].arc_m - a0);
-  } else {
-    s->tip_arc_m = 0.0;
-  }
+  const double colon_sum_m2 = internal::WriteStepOutputs(params, model, sample_speed2, s, sc, out);
   s->time_s += dt;
   ++s->step_count;
   out->X_WTip = s->X_WTip;
   out->tip_arc_m = s->tip_arc_m;
   out->inserted_m = s->inserted_m;
-  out->velocity_norm_m_per_s = std::sqrt(speed2);
   out->finite = AllFinite(*s, *out, colon_sum_m2);
 }
 

@@ -194,6 +194,7 @@ struct LoopDrive {
   double withdraw_m{0.25};
   double roll_max_rad{std::numeric_limits<double>::infinity()};
   double end_s{45.0};
+  ModelExperiments experiments{};  // the product's model by default
 };
 
 // `each_step` sees the simulation after every step, and whether that step
@@ -201,7 +202,7 @@ struct LoopDrive {
 void FormAndWithdrawALoop(const ModelParams& params, const LoopDrive& drive,
                           const std::function<void(const Sim&, bool withdrew)>& each_step) {
   constexpr double kWithdrawAt_m = 0.60;
-  Sim sim(params);
+  Sim sim(params, drive.experiments);
   StepInput in;
   in.thrust_mode = ThrustMode::kPosition;
   double command_m = 0.0;
@@ -364,21 +365,25 @@ TEST(ColonDerived, KeptGapsAndTetherDistancesMatchTheCurrentPoints) {
   EXPECT_EQ(largest_tether_error_m, 0.0);
 }
 
-// ModelParams::lumen_gather_pleat: off, the lumen keeps the case's radius; on,
-// it closes onto the scope where folds have set (a withdrawn loop sets them),
-// never tighter than the scope plus the clearance, and stays open elsewhere.
+// ModelExperiments::lumen_gather_pleat: off, the lumen keeps the case's
+// radius; on, it closes onto the scope where folds have set (a withdrawn loop
+// sets them), never tighter than the scope plus the clearance, and stays open
+// elsewhere.
 TEST(LumenGather, TheLumenClosesOntoTheScopeOnlyWhereFoldsHaveSet) {
-  const auto narrowest = [](const ModelParams& params, double* open_where_unset_m) {
+  const auto narrowest = [](const ModelParams& params, const ModelExperiments& experiments,
+                            double* open_where_unset_m) {
     double narrowest_ratio = 1.0;
     *open_where_unset_m = 0.0;
-    FormAndWithdrawALoop(params, [&](const Sim& sim) {
+    LoopDrive drive;
+    drive.experiments = experiments;
+    FormAndWithdrawALoop(params, drive, [&](const Sim& sim, bool) {
       if (sim.state.step_count % 50 != 0) return;
       const auto& pts = sim.params.colon.points;
       const auto& rest_gap_m = sim.state.colon_pair_rest_gap_m;
-      const auto& natural_gap_m = sim.scratch.colon_pair_gap_m;
+      const auto& natural_gap_m = sim.scratch.compiled.pair_gap_m;
       const auto& lumen_m = sim.state.colon_lumen_radius_m;
-      const double tightest_m =
-          0.5 * sim.params.scope.outer_diameter_m + sim.params.lumen_gather_clearance_m;
+      const double tightest_m = 0.5 * sim.params.scope.outer_diameter_m +
+                                sim.scratch.compiled.experiments.lumen_gather_clearance_m;
       const int N = static_cast<int>(pts.size());
       for (int i = 1; i + 1 < N; ++i) {
         narrowest_ratio = std::min(narrowest_ratio, lumen_m[i] / pts[i].radius_m);
@@ -394,11 +399,12 @@ TEST(LumenGather, TheLumenClosesOntoTheScopeOnlyWhereFoldsHaveSet) {
     return narrowest_ratio;
   };
   double unset_error_m = 0.0;
-  ModelParams params = LoadParams("standard-adult");
-  EXPECT_EQ(narrowest(params, &unset_error_m), 1.0);
-  params.lumen_gather_pleat = 0.7;
-  params.lumen_gather_clearance_m = 0.005;
-  const double gathered = narrowest(params, &unset_error_m);
+  const ModelParams params = LoadParams("standard-adult");
+  ModelExperiments experiments;
+  EXPECT_EQ(narrowest(params, experiments, &unset_error_m), 1.0);
+  experiments.lumen_gather_pleat = 0.7;
+  experiments.lumen_gather_clearance_m = 0.005;
+  const double gathered = narrowest(params, experiments, &unset_error_m);
   std::printf("LumenGather: the narrowest lumen is %.2f of the case's radius\n", gathered);
   EXPECT_LT(gathered, 0.8);
   EXPECT_EQ(unset_error_m, 0.0);

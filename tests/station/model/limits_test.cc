@@ -162,5 +162,18 @@ TEST(ModelAllocation, ShorteningColonNeverAllocatesAndStaysFinite) {
   EXPECT_THROW(MakeInitialState(params), std::invalid_argument);
 }
 
+// The benches' experiments are checked when the model is compiled: a bad
+// value is refused, the product's (the defaults) pass.
+TEST(ModelExperimentsLimits, ABadExperimentIsRefusedWhenTheModelIsCompiled) {
+  const ModelParams params = BendParams(TissueParams{});
+  EXPECT_NO_THROW(MakeScratch(params));
+  ModelExperiments experiments;
+  experiments.lumen_gather_pleat = 1.5;
+  EXPECT_THROW(MakeScratch(params, experiments), std::invalid_argument);
+  experiments = ModelExperiments{};
+  experiments.lumen_gather_clearance_m = -0.001;
+  EXPECT_THROW(CompileModel(params, experiments), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace ves::model

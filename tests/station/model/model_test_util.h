@@ -64,10 +64,10 @@ inline TissueParams RigidTissue(double mu_s, double mu_d) {
 
 // Holds params, state, scratch and output; Run() steps with an input rule.
 struct Sim {
-  explicit Sim(ModelParams p)
+  explicit Sim(ModelParams p, const ModelExperiments& experiments = {})
       : params(std::move(p)),
         state(MakeInitialState(params)),
-        scratch(MakeScratch(params)),
+        scratch(MakeScratch(params, experiments)),
         out(MakeStepOutput(params)) {}
 
   void StepOnce(const StepInput& input) { Step(params, input, &state, &scratch, &out); }
