@@ -36,8 +36,9 @@ int RunSimCommand(const CommandArgs& args);
 // snapshot_command.cc: the views of paper §4 as PNG files for a case and insertion.
 int RunSnapshotCommand(const CommandArgs& args);
 
-// run_command.cc: a training session end to end (case, run, outbox, upload); sync.
+// run_command.cc: a training session end to end (case, run, outbox, upload).
 int RunRunCommand(const CommandArgs& args);
+// sync_command.cc: journal recovery, then the outbox to the server.
 int RunSyncCommand(const CommandArgs& args);
 
 }  // namespace ves::station
