@@ -155,10 +155,12 @@ int RunHeadless(const RunOptions& o, const sync::StationPaths& paths, const Obta
       controls.Store(ModelControls{act.knob_up_rad, act.knob_right_rad, act.view_mode,
                                    act.fluoroscopy_on, act.abdominal_press,
                                    act.patient_position});
+      const std::uint64_t steps_before = source.model_steps();
       rig.Step();
       if (runner.diverged()) break;
-      if (!source.stepped()) {
-        // A running session always steps unless the device reads NaN: give up.
+      if (source.model_steps() == steps_before) {
+        // A running session always steps unless the device reads NaN (the
+        // cycle then trips the safe state and hands the model nothing): give up.
         std::cerr << kName << ": the device reported non-finite readings: session aborted\n";
         runner.session().Abort();
         break;
