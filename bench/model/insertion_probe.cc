@@ -1,64 +1,68 @@
 // insertion_probe: drives the model on a case and prints where the tip is,
 // once per simulated second, so a model or operator change can be judged by
 // what it does to an insertion (docs/model-shortening-notes.md, "To measure").
-//   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150]
-// Without PROBE_OPERATOR it inserts by position at the given speed with the
+//   insertion_probe CASE_FILE [speed_mm_per_s=20] [seconds=120] [segments=150] [--flag ...]
+// Without --operator it inserts by position at the given speed with the
 // simple steering rule (knobs turned toward the lumen 4 cm ahead), which is
-// the "a loop forms" driver of the model tests. PROBE_* variables:
-//   PROBE_OPERATOR=novice|expert   a scripted operator drives instead
-//   PROBE_ADVANCE, PROBE_WITHDRAW, PROBE_PUSH, PROBE_PULL, PROBE_LOOP_LIMIT,
-//   PROBE_ROLL_RATE, PROBE_SETTLE  the expert's settings (ExpertOperator::Settings)
-//   PROBE_WITHDRAW_AT=M            position rule: at M metres inserted, withdraw
-//   PROBE_WITHDRAW_M=W             ... by W metres (default 0.25)
-//   PROBE_ROLL=R                   ... turning the roll at R rad/s (+: clockwise)
-//   PROBE_ROLL_MAX=A               ... up to A rad at most (default: no limit)
-//   PROBE_PIN_TIP=1                ... with the tip held where the withdrawal began
-//                                  (a perfect hook; also for PROBE_REDUCE)
-//   PROBE_REINSERT=1               ... then insert again; PROBE_WITHDRAW_EVERY=E
+// the "a loop forms" driver of the model tests. Flags (--key=value; --key
+// alone is --key=1; '-' and '_' alike in a key):
+//   --operator=novice|expert   a scripted operator drives instead
+//   --advance, --withdraw, --push, --pull, --loop-limit,
+//   --roll-rate, --settle      the expert's settings (ExpertOperator::Settings)
+//   --withdraw-at=M            position rule: at M metres inserted, withdraw
+//   --withdraw-m=W             ... by W metres (default 0.25)
+//   --roll=R                   ... turning the roll at R rad/s (+: clockwise)
+//   --roll-max=A               ... up to A rad at most (default: no limit)
+//   --pin-tip                  ... with the tip held where the withdrawal began
+//                                  (a perfect hook; also for --reduce)
+//   --reinsert                 ... then insert again; --withdraw-every=E
 //                                  repeats the withdrawal every E metres
-//   PROBE_<KEY>=V                  a model setting, KEY one of the keys of
-//                                  bench/model/model_overrides.h in capitals
-//                                  (PROBE_MU=0.5 halves friction, PROBE_SOFT_K,
-//                                  PROBE_EI, PROBE_MESO_K, PROBE_PLEAT, PROBE_LINKS ...)
-//   PROBE_DUMP_EVERY=S             draw both shapes to /tmp/probe_T.png every S s
-//   PROBE_WALL=F                   print when and where the wall force rises over F N
-//   PROBE_FORCES=S                 every S s: what holds the scope along its axis
+//   --<key>=V                  a model setting, key one of the keys of
+//                                  bench/model/model_overrides.h
+//                                  (--mu=0.5 halves friction, --soft-k,
+//                                  --ei, --meso-k, --pleat, --links ...)
+//   --dump-every=S             draw both shapes to /tmp/probe_T.png every S s
+//   --wall=F                   print when and where the wall force rises over F N
+//   --forces=S                 every S s: what holds the scope along its axis
 //                                  (friction, wall normals, rings; the largest)
-//   PROBE_JOINTS=1                 at the end: the inserted links' lengths and bends
-//   PROBE_TIP_RESIST=F             an axial F newtons on the tip against its advance
-//   PROBE_SLACK=1                  at the end: the extremes of the inserted length
+//   --joints                   at the end: the inserted links' lengths and bends
+//   --tip-resist=F             an axial F newtons on the tip against its advance
+//   --slack                    at the end: the extremes of the inserted length
 //                                  less the colon's path behind the tip
-//   PROBE_PLEAT_PROFILE=M          each second: the pleat ratio in 2 cm bins of the
+//   --pleat-profile=M          each second: the pleat ratio in 2 cm bins of the
 //                                  first M metres of colon
-//   PROBE_TIP_AIM=1                each second: the tip's place and axis, and its
+//   --tip-aim                  each second: the tip's place and axis, and its
 //                                  angle off the lumen ahead
-//   PROBE_REGION_MOVE=R            each second: how far region R's points (a Region
+//   --region-move=R            each second: how far region R's points (a Region
 //                                  number, 2 = sigmoid) have moved from rest
-//   PROBE_REGIONS=S                every S s: each region's path, chord and pleats
-//   PROBE_PHASES=1                 a scripted operator's hand reversing (push / pull)
-//   PROBE_INPUT=1                  ... with its push and roll
-//   PROBE_PUSH_FORCE=F             a constant push of F newtons, knobs neutral (Fig. 10)
-//   PROBE_STIFF_COLON=1            the case as --stiff-colon loads it
-//   PROBE_KNOB_MAX=A               position rule: the knobs turned at most A rad in all
-//   PROBE_REDUCE=1                 position rule: reduce by the loop index, over
-//                                  PROBE_FIXED_LIMIT (0.06 m) with the tip in fixed
-//                                  colon or PROBE_MOBILE_LIMIT (0.25 m) in mobile
+//   --regions=S                every S s: each region's path, chord and pleats
+//   --phases                   a scripted operator's hand reversing (push / pull)
+//   --input                    ... with its push and roll
+//   --push-force=F             a constant push of F newtons, knobs neutral (Fig. 10)
+//   --stiff-colon              the case as --stiff-colon loads it
+//   --knob-max=A               position rule: the knobs turned at most A rad in all
+//   --reduce                   position rule: reduce by the loop index, over
+//                                  --fixed-limit (0.06 m) with the tip in fixed
+//                                  colon or --mobile-limit (0.25 m) in mobile
 //                                  colon, until the tip comes back 1.5 cm; with
-//                                  PROBE_REDUCE_AGAIN_M, PROBE_STALL_S, PROBE_HOLD_S,
-//                                  PROBE_UNHOOK, PROBE_STIFFEN=X (the insertion tube
+//                                  --reduce-again-m, --stall-s, --hold-s,
+//                                  --unhook, --stiffen=X (the insertion tube
 //                                  X times stiffer after the first reduction),
-//                                  PROBE_HOOK=A (the tip bent at least A rad while
+//                                  --hook=A (the tip bent at least A rad while
 //                                  withdrawing)
-//   PROBE_SPIKE_DETAIL=1, PROBE_LOST=1, PROBE_SIDE=1, PROBE_TRACK=1,
-//   PROBE_TRACK_DETAIL=1           more detail on force spikes, lost tracking, the
+//   --spike-detail, --lost, --side, --track,
+//   --track-detail             more detail on force spikes, lost tracking, the
 //                                  mesentery's side and the tracked arcs
-// Each variable is read once, before the run.
+// Each flag is read once, before the run; one that nothing reads (misspelt,
+// or an expert setting without --operator) stops the probe (exit 2).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -89,7 +93,6 @@ double TipIntoFixedColon(const ves::model::ModelParams& params, double tip_arc_m
   return tip_arc_m - start->arc_m;
 }
 
-using ves::bench::ProbeEnv;
 using ves::model::StepInput;
 
 // The colon's current path length from the anus to the tip's place in its
@@ -149,64 +152,75 @@ void DumpShape(const ves::model::ModelParams& params, const ves::model::ModelSta
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: insertion_probe CASE_FILE [speed_mm_s] [seconds] [segments]\n");
+  constexpr char kUsage[] =
+      "usage: insertion_probe CASE_FILE [speed_mm_s] [seconds] [segments] [--key=value ...]\n";
+  std::optional<ves::bench::ProbeFlags> parsed;
+  try {
+    parsed.emplace(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "insertion_probe: %s\n%s", error.what(), kUsage);
     return 2;
   }
-  const double speed_m_per_s = (argc > 2 ? std::atof(argv[2]) : 20.0) / 1000.0;
-  const double seconds = argc > 3 ? std::atof(argv[3]) : 120.0;
+  const ves::bench::ProbeFlags& flags = *parsed;
+  const std::vector<std::string>& args = flags.positional();
+  if (args.empty() || args.size() > 4) {
+    std::fprintf(stderr, "%s", kUsage);
+    return 2;
+  }
+  const double speed_m_per_s = (args.size() > 1 ? std::atof(args[1].c_str()) : 20.0) / 1000.0;
+  const double seconds = args.size() > 2 ? std::atof(args[2].c_str()) : 120.0;
   ves::training::CaseModelOptions options;
-  if (argc > 4) options.segments = std::atoi(argv[4]);
-  const auto colon_case = ves::patient_db::LoadCaseFile(argv[1]);
-  options.stiff_colon = std::getenv("PROBE_STIFF_COLON") != nullptr;
+  if (args.size() > 3) options.segments = std::atoi(args[3].c_str());
+  const auto colon_case = ves::patient_db::LoadCaseFile(args[0]);
+  options.stiff_colon = flags.Has("stiff_colon");
   auto params = ves::training::MakeModelParams(colon_case, ves::training::DefaultEndoscopeSpec(),
                                                options);
-  ves::bench::ApplyModelOverrides(ves::bench::ProbeEnv, &params);
+  ves::bench::ApplyModelOverrides(flags.Getter(), &params);
   auto state = ves::model::MakeInitialState(params);
   auto scratch =
       ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(ves::bench::ProbeEnv));
   auto out = ves::model::MakeStepOutput(params);
 
   std::unique_ptr<ves::training::ScriptedOperator> scripted;
-  if (const char* kind = std::getenv("PROBE_OPERATOR")) {
+  if (const char* kind = flags.Text("operator")) {
     scripted = ves::training::MakeScriptedOperator(
-        kind, params.dt_s, ves::bench::ExpertSettingsWithOverrides(ves::bench::ProbeEnv));
+        kind, params.dt_s, ves::bench::ExpertSettingsWithOverrides(flags.Getter()));
   }
-  const double withdraw_at_m = ProbeEnv("withdraw_at", 1e9);
-  const double withdraw_m = ProbeEnv("withdraw_m", 0.25);
-  const double roll_rate = ProbeEnv("roll", 0.0);
-  const double roll_max_rad = ProbeEnv("roll_max", 0.0);
-  const double dump_every_s = ProbeEnv("dump_every", 0.0);
+  const double withdraw_at_m = flags.Get("withdraw_at", 1e9);
+  const double withdraw_m = flags.Get("withdraw_m", 0.25);
+  const double roll_rate = flags.Get("roll", 0.0);
+  const double roll_max_rad = flags.Get("roll_max", 0.0);
+  const double dump_every_s = flags.Get("dump_every", 0.0);
   double next_dump_s = 0.0, next_forces_s = 0.0;
   StepInput in;
   in.thrust_mode = ves::model::ThrustMode::kPosition;
   const double gain_per_s = ves::training::ExpertOperator::kSteerGain_per_s;  // the simple rule
-  // PROBE_KNOB_MAX: the hand turns the knobs at most this far (no windup).
-  const double knob_max = ProbeEnv("knob_max", 10.0);
-  const double tip_resist_N = ProbeEnv("tip_resist", 0.0);
+  // --knob-max: the hand turns the knobs at most this far (no windup).
+  const double knob_max = flags.Get("knob_max", 10.0);
+  const double tip_resist_N = flags.Get("tip_resist", 0.0);
   double command_m = 0.0;
   int phase = 0;  // position rule: 0 inserting, 1 withdrawing, 2 holding
-  // PROBE_REINSERT=1: after the withdrawal, insert again (reductions repeat
-  // every PROBE_WITHDRAW_EVERY metres of insertion when that is set).
-  const bool reinsert = std::getenv("PROBE_REINSERT") != nullptr;
+  // --reinsert: after the withdrawal, insert again (reductions repeat
+  // every --withdraw-every metres of insertion when that is set).
+  const bool reinsert = flags.Has("reinsert");
   double withdraw_at_m_next = withdraw_at_m;
   double withdraw_at_reached_m = 0.0;
-  const double withdraw_every_m = ProbeEnv("withdraw_every", 0.0);
-  // PROBE_REDUCE=1: reduce by the loop index (limits PROBE_FIXED_LIMIT and
-  // PROBE_MOBILE_LIMIT, m) until the tip comes back 1.5 cm.
-  const bool reduce_rule = std::getenv("PROBE_REDUCE") != nullptr;
-  const double fixed_limit_m = ProbeEnv("fixed_limit", 0.06);
-  const double mobile_limit_m = ProbeEnv("mobile_limit", 0.25);
+  const double withdraw_every_m = flags.Get("withdraw_every", 0.0);
+  // --reduce: reduce by the loop index (limits --fixed-limit and
+  // --mobile-limit, m) until the tip comes back 1.5 cm.
+  const bool reduce_rule = flags.Has("reduce");
+  const double fixed_limit_m = flags.Get("fixed_limit", 0.06);
+  const double mobile_limit_m = flags.Get("mobile_limit", 0.25);
   ves::training::LoopIndex loop_index;
   double reduce_tip_max_m = 0.0;
   Eigen::Vector3d pinned_tip_W = Eigen::Vector3d::Zero();
-  const bool pin_tip = std::getenv("PROBE_PIN_TIP") != nullptr;
+  const bool pin_tip = flags.Has("pin_tip");
   constexpr double kPinStiffness_N_per_m = 2000.0;
   bool stiffened = false;
   bool was_pulling = false;
   double last_reduce_tip_m = -1.0;
   double hold_until_s = 0.0;
-  double stall_tip_m = 0.0, stall_since_s = 0.0;  // PROBE_HOLD_S: hold still this long after a reduction
+  double stall_tip_m = 0.0, stall_since_s = 0.0;  // --hold-s: hold still this long after a reduction
   std::printf("t_s inserted_m tip_arc_m base_N roll_Nm stretch_m@arc wall_N fixed_mm "
               "min_pleat knob_up knob_right\n");
   double next_print_s = 0.0;
@@ -216,38 +230,47 @@ int main(int argc, char** argv) {
   long over_10N_steps = 0, steps = 0;
   double stretch_over_s[4] = {0, 0, 0, 0};  // time with the stretch over 1, 2, 3, 4 cm
   int spikes_printed = 0;
-  const bool spike_detail = std::getenv("PROBE_SPIKE_DETAIL") != nullptr;
+  const bool spike_detail = flags.Has("spike_detail");
   bool wall_was_over = false;
   double base_jump_sum_N = 0.0, last_base_N = 0.0;
   ves::bench::TenStepMean base_10ms_N;
   long over_10N_mean_steps = 0;
   ves::model::ModelState previous = state, before_previous = state;
-  // PROBE_SLACK: the scope inside less the colon's current path behind the
+  // --slack: the scope inside less the colon's current path behind the
   // tip (what the lumen holds beyond the colon's length), its extremes.
-  const bool track_slack = std::getenv("PROBE_SLACK") != nullptr;
+  const bool track_slack = flags.Has("slack");
   double slack_min_m = 1e9, slack_max_m = -1e9, slack_min_s = 0.0, slack_max_s = 0.0;
-  // The rest of the PROBE_ variables, read once (header comment and
+  // The rest of the flags, read once (header comment and
   // docs/model-shortening-notes.md, "How to reproduce").
-  const char* const push_force = std::getenv("PROBE_PUSH_FORCE");
-  const bool print_phases = std::getenv("PROBE_PHASES") != nullptr;
-  const double reduce_again_m = ProbeEnv("reduce_again_m", 0.10);
-  const double stall_s = ProbeEnv("stall_s", 1e9);
-  const double hold_s = ProbeEnv("hold_s", 0.0);
-  const bool unhook = std::getenv("PROBE_UNHOOK") != nullptr;
-  const double stiffen = ProbeEnv("stiffen", 1.0);
-  const double hook_rad = ProbeEnv("hook", 0.0);
-  const double wall_over_N = ProbeEnv("wall", 0.0);
-  const double forces_every_s = ProbeEnv("forces", 0.0);
-  const bool print_lost = std::getenv("PROBE_LOST") != nullptr;
-  const bool print_side = std::getenv("PROBE_SIDE") != nullptr;
-  const bool print_regions = std::getenv("PROBE_REGIONS") != nullptr;
-  const long regions_every_s = std::max(1L, static_cast<long>(ProbeEnv("regions", 10)));
-  const double pleat_profile_m = ProbeEnv("pleat_profile", 0.0);
-  const bool print_tip_aim = std::getenv("PROBE_TIP_AIM") != nullptr;
-  const char* const region_move = std::getenv("PROBE_REGION_MOVE");
-  const bool print_track = std::getenv("PROBE_TRACK") != nullptr;
-  const bool print_track_detail = std::getenv("PROBE_TRACK_DETAIL") != nullptr;
-  const bool print_input = std::getenv("PROBE_INPUT") != nullptr;
+  const char* const push_force = flags.Text("push_force");
+  const bool print_phases = flags.Has("phases");
+  const double reduce_again_m = flags.Get("reduce_again_m", 0.10);
+  const double stall_s = flags.Get("stall_s", 1e9);
+  const double hold_s = flags.Get("hold_s", 0.0);
+  const bool unhook = flags.Has("unhook");
+  const double stiffen = flags.Get("stiffen", 1.0);
+  const double hook_rad = flags.Get("hook", 0.0);
+  const double wall_over_N = flags.Get("wall", 0.0);
+  const double forces_every_s = flags.Get("forces", 0.0);
+  const bool print_lost = flags.Has("lost");
+  const bool print_side = flags.Has("side");
+  const bool print_regions = flags.Has("regions");
+  const long regions_every_s = std::max(1L, static_cast<long>(flags.Get("regions", 10)));
+  const double pleat_profile_m = flags.Get("pleat_profile", 0.0);
+  const bool print_tip_aim = flags.Has("tip_aim");
+  const char* const region_move = flags.Text("region_move");
+  const bool print_track = flags.Has("track");
+  const bool print_track_detail = flags.Has("track_detail");
+  const bool print_input = flags.Has("input");
+  const bool print_joints = flags.Has("joints");
+  // Every flag is read by now: one nothing read is misspelt or has no
+  // effect in this run (an expert setting without --operator).
+  if (const std::vector<std::string> unread = flags.Unread(); !unread.empty()) {
+    for (const std::string& key : unread) {
+      std::fprintf(stderr, "insertion_probe: --%s is not a flag of this run\n", key.c_str());
+    }
+    return 2;
+  }
   while (state.time_s < seconds) {
     const auto p = ves::training::Perceive(params, state, out);
     if (push_force != nullptr) {
@@ -266,7 +289,7 @@ int main(int argc, char** argv) {
       }
       was_pulling = pulling;
     } else {
-      // PROBE_PIN_TIP: while withdrawing (either rule) the tip is held where
+      // --pin-tip: while withdrawing (either rule) the tip is held where
       // the withdrawal began, a perfect hook, to see how far a reduction goes.
       in.tip_force_W_N = pin_tip && phase == 1
                              ? Eigen::Vector3d(kPinStiffness_N_per_m *
@@ -282,7 +305,7 @@ int main(int argc, char** argv) {
         const double loop_m = loop_index.Update(state.inserted_m, state.tip_arc_m);
         const double limit_m = TipIntoFixedColon(params, state.tip_arc_m) >= 0.08 ? fixed_limit_m : mobile_limit_m;
         // After a reduction, the next one waits until the tip has gone
-        // PROBE_REDUCE_AGAIN_M (default 0.10 m) deeper: a loop re-formed by
+        // --reduce-again-m (default 0.10 m) deeper: a loop re-formed by
         // pushing on is taut before the tip moves.
         const bool deeper = state.tip_arc_m > last_reduce_tip_m + reduce_again_m;
         const bool full = state.inserted_m > params.scope.working_length_m - 0.08;
@@ -312,7 +335,7 @@ int main(int argc, char** argv) {
             phase = 0;
             hold_until_s = state.time_s + hold_s;
             if (unhook) in.knob_up_rad = in.knob_right_rad = 0.0;
-            // Experiment: PROBE_STIFFEN=R stiffens the insertion tube R times
+            // Experiment: --stiffen=R stiffens the insertion tube R times
             // after the first reduction (a variable-stiffness colonoscope).
             if (!stiffened && stiffen != 1.0) {
               stiffened = true;
@@ -343,7 +366,7 @@ int main(int argc, char** argv) {
         command_m -= speed_m_per_s * params.dt_s;
         in.roll_rad += roll_rate * params.dt_s;
         if (roll_max_rad > 0.0) in.roll_rad = std::clamp(in.roll_rad, -roll_max_rad, roll_max_rad);
-        // PROBE_HOOK=A: while withdrawing, angulate the tip to at least A rad
+        // --hook=A: while withdrawing, angulate the tip to at least A rad
         // in the direction it is bent (hook the flexure).
         const double bend = std::hypot(in.knob_up_rad, in.knob_right_rad);
         if (hook_rad > 0.0 && bend > 1e-3 && bend < hook_rad) {
@@ -376,7 +399,7 @@ int main(int argc, char** argv) {
     max_tip_arc_m = std::max(max_tip_arc_m, state.tip_arc_m);
     max_stretch_m = std::max(max_stretch_m, out.peak_stretch_m);
     max_wall_N = std::max(max_wall_N, out.peak_wall_force_N);
-    // PROBE_WALL=F: where and when the wall force first rises over F N.
+    // --wall=F: where and when the wall force first rises over F N.
     if (wall_over_N > 0.0) {
       const bool over = out.peak_wall_force_N > wall_over_N;
       if (over && !wall_was_over) {
@@ -468,7 +491,7 @@ int main(int argc, char** argv) {
         }
       }
     }
-    // PROBE_FORCES=S: every S s, what holds the scope along its own axis:
+    // --forces=S: every S s, what holds the scope along its own axis:
     // friction and the axial part of the wall normals, and the largest ones.
     if (forces_every_s > 0.0 && state.time_s + 1e-9 >= next_forces_s) {
       next_forces_s += forces_every_s;
@@ -688,7 +711,7 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (std::getenv("PROBE_JOINTS")) {  // the inserted joints: length, bend, stiffness, sample
+  if (print_joints) {  // the inserted joints: length, bend, stiffness, sample
     const int root = state.first_inside_link > 0 ? state.first_inside_link - 1 : 0;
     for (int k = root; k < std::min<int>(root + 40, state.link_length_m.size()); ++k) {
       int first_sample = -1;

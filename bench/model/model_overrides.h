@@ -5,7 +5,10 @@
 #include <cstdlib>
 #include <functional>
 #include <map>
+#include <set>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "patient_db/case_format.h"
 #include "station/training/case_model.h"
@@ -14,8 +17,8 @@
 #include "station/training/scripted_operator.h"
 
 // The model (and scripted expert) settings the probing tools override, by key, in one place so
-// that expert_sweep (key=value arguments) and insertion_probe (PROBE_KEY
-// environment variables) cannot drift apart (docs/model-shortening-notes.md).
+// that expert_sweep (key=value arguments) and insertion_probe (--key=value
+// flags) cannot drift apart (docs/model-shortening-notes.md).
 // `get(key, fallback)` returns the override or the fallback.
 //   every point: mu (friction x)
 //   mobile points: soft_k (suspension, N/m^2), mobile_kc_scale (suspension x),
@@ -155,13 +158,59 @@ inline training::ExpertOperator::Settings ExpertSettingsWithOverrides(const Over
   return expert;
 }
 
-// insertion_probe's getter: key "meso_k" is the variable PROBE_MESO_K.
-inline double ProbeEnv(const char* key, double fallback) {
-  std::string name = "PROBE_";
-  for (const char* c = key; *c != '\0'; ++c) name += static_cast<char>(std::toupper(*c));
-  const char* value = std::getenv(name.c_str());
-  return value != nullptr ? std::atof(value) : fallback;
-}
+// insertion_probe's command line: positional arguments, and flags
+// --key=value or --key alone (the value 1); a key may be written with '-' or
+// '_' (--meso-k=2 and --meso_k=2 are the key meso_k). Each flag is read by
+// Has/Get/Text; Unread() names those nothing asked for (misspelt, or of no
+// effect in this run).
+class ProbeFlags {
+ public:
+  // Throws std::invalid_argument for a flag without a key ("--", "--=1").
+  ProbeFlags(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i) {
+      const std::string arg = argv[i];
+      if (arg.rfind("--", 0) != 0) {
+        positional_.push_back(arg);
+        continue;
+      }
+      const std::size_t eq = arg.find('=');
+      std::string key = arg.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
+      if (key.empty()) throw std::invalid_argument("flag '" + arg + "' has no name");
+      std::replace(key.begin(), key.end(), '-', '_');
+      values_[key] = eq == std::string::npos ? "1" : arg.substr(eq + 1);
+    }
+  }
+  bool Has(const char* key) const {
+    asked_.insert(key);
+    return values_.count(key) > 0;
+  }
+  double Get(const char* key, double fallback) const {
+    const char* value = Text(key);
+    return value != nullptr ? std::atof(value) : fallback;
+  }
+  // The flag's text; nullptr when it was not given.
+  const char* Text(const char* key) const {
+    asked_.insert(key);
+    const auto it = values_.find(key);
+    return it != values_.end() ? it->second.c_str() : nullptr;
+  }
+  OverrideGetter Getter() const {
+    return [this](const char* key, double fallback) { return Get(key, fallback); };
+  }
+  const std::vector<std::string>& positional() const { return positional_; }
+  std::vector<std::string> Unread() const {
+    std::vector<std::string> unread;
+    for (const auto& [key, value] : values_) {
+      if (asked_.count(key) == 0) unread.push_back(key);
+    }
+    return unread;
+  }
+
+ private:
+  std::map<std::string, std::string> values_;
+  mutable std::set<std::string> asked_;
+  std::vector<std::string> positional_;
+};
 
 // The mean of the last 10 values added (zeros before that): a 10 ms mean at
 // the 1 ms step, the resolution the session metrics give a hand's force.

@@ -1,20 +1,16 @@
 #pragma once
 
-#include <string>
 #include <vector>
+
+#include "cli/subcommands.h"
 
 // The subcommands of ves-admin (admins and supervisors). Each lives in its own
 // *_command.cc and returns the exit status: 0 success, 1 the operation failed
 // (e.g. server refused), 2 bad arguments or invalid input.
 namespace ves::admin {
 
-using CommandArgs = std::vector<std::string>;
-
-struct Command {
-  const char* name;
-  const char* summary;
-  int (*run)(const CommandArgs& args);
-};
+using CommandArgs = cli::CommandArgs;
+using Command = cli::Command;
 
 const std::vector<Command>& AllCommands();
 

@@ -1,20 +1,16 @@
 #pragma once
 
-#include <string>
 #include <vector>
+
+#include "cli/subcommands.h"
 
 // The subcommands of ves-station. Each lives in its own <name>_command.cc,
 // parses its own arguments (Boost.Program_options) and returns the process
 // exit status: 0 success, 1 the work failed, 2 bad arguments or bad input.
 namespace ves::station {
 
-using CommandArgs = std::vector<std::string>;
-
-struct Command {
-  const char* name;
-  const char* summary;
-  int (*run)(const CommandArgs& args);
-};
+using CommandArgs = cli::CommandArgs;
+using Command = cli::Command;
 
 // Every subcommand, in the order `ves-station --help` lists them.
 const std::vector<Command>& AllCommands();
@@ -36,8 +32,9 @@ int RunSimCommand(const CommandArgs& args);
 // snapshot_command.cc: the views of paper §4 as PNG files for a case and insertion.
 int RunSnapshotCommand(const CommandArgs& args);
 
-// run_command.cc: a training session end to end (case, run, outbox, upload); sync.
+// run_command.cc: a training session end to end (case, run, outbox, upload).
 int RunRunCommand(const CommandArgs& args);
+// sync_command.cc: journal recovery, then the outbox to the server.
 int RunSyncCommand(const CommandArgs& args);
 
 }  // namespace ves::station

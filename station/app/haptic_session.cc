@@ -49,7 +49,7 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   haptics::BaseResponse response;
   response.update_count = ++updates_;
   stepped_ = false;
-  if (armed_ && std::isfinite(insertion_m) &&
+  if (armed_ &&
       insertion_m + insertion_offset_m_ - runner_->state().inserted_m >= kStartInsertion_m) {
     // The first insertion past the anus: the session's clock starts now.
     armed_ = false;
@@ -62,10 +62,6 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
     if (on_start_) on_start_(start_unix_ms);
   }
   if (runner_->session().state() != training::SessionState::kRunning) return response;
-  if (!std::isfinite(insertion_m) || !std::isfinite(roll_rad)) {
-    response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();
-    return response;
-  }
   if (have_previous_) {
     encoder_travel_m_ += std::abs(insertion_m - previous_insertion_m_);
     roll_travel_rad_ += std::abs(roll_rad - previous_roll_rad_);

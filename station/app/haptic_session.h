@@ -81,8 +81,10 @@ class SessionModelSource final : public haptics::BaseResponseSource {
 
   // Loop thread. While the session runs: one model step. Otherwise an idle
   // response (no force) whose update count still advances: the model thread
-  // is alive, there is just no session to render. Never throws; a non-finite
-  // reading or a diverged model gives NaN, which the safety monitor trips on.
+  // is alive, there is just no session to render. The readings are finite:
+  // HapticCycle::Run checks them where they enter and calls no source with a
+  // non-finite one. Never throws; a diverged model gives NaN, which the
+  // safety monitor trips on.
   haptics::BaseResponse Update(double insertion_m, double roll_rad, double dt_s) override;
 
   // Called on the loop thread before each Update with the encoder readings

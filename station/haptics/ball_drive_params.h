@@ -33,9 +33,6 @@ struct BallDriveParams {
   double roll_backlash_rad{0.0175};  // total play, ~1°
   double roll_gear_stiffness_Nm_per_rad{50.0};
   double roll_gear_damping_Nm_s_per_rad{0.02};
-  // Limits the output is always clamped to.
-  double max_force_N{10.0};
-  double max_torque_Nm{0.3};
   bool operator==(const BallDriveParams&) const = default;
 };
 

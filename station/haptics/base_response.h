@@ -31,7 +31,8 @@ inline double CalcCouplingForce_N(double coupling_stiffness_N_per_m, double devi
 class BaseResponseSource {
  public:
   virtual ~BaseResponseSource() = default;
-  // Called from the 1 kHz loop: must not block, throw or allocate.
+  // Called from the 1 kHz loop: must not block, throw or allocate. The
+  // readings are finite (HapticCycle::Run checks them before the call).
   virtual BaseResponse Update(double insertion_m, double roll_rad, double dt_s) = 0;
 };
 

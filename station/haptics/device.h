@@ -60,9 +60,13 @@ struct DeviceCounters {
 class HapticDevice {
  public:
   virtual ~HapticDevice() = default;
-  // Drains everything that arrived; updates *state. Never blocks.
+  // Drains everything that arrived; updates *state. Never blocks. The
+  // readings are checked once, by HapticCycle::Run right after this call: a
+  // non-finite one trips the safe state there and goes no further.
   virtual void Read(double now_s, DeviceState* state) = 0;
   // Sends the command for this period (and SYNC, heartbeat when due).
+  // `command` is finite and within the loop's OutputLimits (haptic_cycle.h):
+  // HapticCycle::Run clamps it, the one clamp on the way to the motors.
   virtual void Write(double now_s, const MotorCommand& command) = 0;
   // Announces a fault on the bus (EMCY from the station's node).
   virtual void SendEmergency(double now_s, EmcyCode code) = 0;

@@ -56,16 +56,21 @@ HapticCycle::HapticCycle(HapticDevice* device, BaseResponseSource* source, Cycle
 const CycleOutput& HapticCycle::Run(double now_s) {
   if (!start_s_) start_s_ = now_s;
   device_->Read(now_s, &device_state_);
+  // The one check of the device's readings, where they enter the station: a
+  // non-finite one (a sensor's NaN) never reaches the model or a controller
+  // and trips the safe state (kNonFinite) in this period.
+  const bool readings_finite = AllFinite(device_state_);
   const double dt_s = options_.period_s;
   const bool coupled = options_.control.mode == ControlMode::kCoupled;
   std::optional<std::uint64_t> model_count;
-  if (coupled) {
+  if (coupled && readings_finite) {
     output_.base = source_->Update(device_state_.insertion_m, device_state_.roll_rad, dt_s);
     model_count = output_.base.update_count;
   }
+  // The model's response is checked where it enters the cycle.
   const bool non_finite =
-      !AllFinite(device_state_) || (coupled && !(std::isfinite(output_.base.thrust_force_N) &&
-                                                 std::isfinite(output_.base.roll_torque_Nm)));
+      !readings_finite || (coupled && !(std::isfinite(output_.base.thrust_force_N) &&
+                                        std::isfinite(output_.base.roll_torque_Nm)));
   safety_.Check(device_state_, now_s, non_finite, model_count);
   if (safety_.recoveries() != seen_recoveries_) {
     // A transient fault cleared: track from where the scope is now, not
@@ -90,6 +95,8 @@ const CycleOutput& HapticCycle::Run(double now_s) {
             CalcCoupledCommand(device_state_, output_.base, options_.control, dt_s, &controller_);
         break;
     }
+    // The one clamp of the motor command (OutputLimits, the one setting):
+    // what the device is written is finite and within the limits.
     bool bad_command = false;
     command = ClampCommand(command, options_.limits, &bad_command);
     if (bad_command) {

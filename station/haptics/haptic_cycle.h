@@ -21,6 +21,9 @@
 
 namespace ves::haptics {
 
+// The limits of what the motors render at the scope: the one setting of the
+// one clamp (ClampCommand in Run). Every command the cycle writes is within
+// them; the driver relies on it (HapticDevice::Write).
 struct OutputLimits {
   double max_force_N{10.0};
   double max_torque_Nm{0.3};

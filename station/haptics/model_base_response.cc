@@ -31,7 +31,7 @@ BaseResponse ModelBaseResponse::Update(double insertion_m, double roll_rad, doub
   model::Step(params_, input, &state_, &scratch_, &output_);
   BaseResponse response;
   response.update_count = ++updates_;
-  if (!output_.finite || !std::isfinite(coupling_force_N)) {
+  if (!output_.finite) {  // the model diverged (a NaN offset poisons it too)
     response.thrust_force_N = std::numeric_limits<double>::quiet_NaN();
     return response;
   }

@@ -7,11 +7,6 @@
 #include <string>
 
 namespace ves::haptics {
-namespace {
-
-double FiniteOrZero(double value) { return std::isfinite(value) ? value : 0.0; }
-
-}  // namespace
 
 Ves4Device::Ves4Device(CanBus bus, BallDriveParams params, Ves4DeviceOptions options)
     : bus_(std::move(bus)), params_(params), options_(options) {
@@ -133,17 +128,16 @@ void Ves4Device::Handle(double now_s, const can_frame& frame, DeviceState* state
 void Ves4Device::Write(double now_s, const MotorCommand& command) {
   MotorVoltages voltages{};
   if (command.powered) {
-    // Feed-forward of the back-EMF from the measured (filtered) speed.
-    const double thrust_force_N =
-        std::clamp(FiniteOrZero(command.thrust_force_N), -params_.max_force_N, params_.max_force_N);
-    const double roll_torque_Nm = std::clamp(FiniteOrZero(command.roll_torque_Nm),
-                                             -params_.max_torque_Nm, params_.max_torque_Nm);
-    voltages.thrust_V = CalcThrustVoltage(params_, thrust_force_N, insertion_velocity_m_per_s_);
-    voltages.roll_V = CalcRollVoltage(params_, roll_torque_Nm, roll_velocity_rad_per_s_);
-    voltages.thrust_V = std::clamp(FiniteOrZero(voltages.thrust_V), -params_.thrust.max_voltage_V,
+    // The command is finite and within the loop's OutputLimits (device.h).
+    // Feed-forward of the back-EMF from the measured (filtered) speed; the
+    // pair saturates at its supply voltage.
+    voltages.thrust_V =
+        CalcThrustVoltage(params_, command.thrust_force_N, insertion_velocity_m_per_s_);
+    voltages.roll_V = CalcRollVoltage(params_, command.roll_torque_Nm, roll_velocity_rad_per_s_);
+    voltages.thrust_V = std::clamp(voltages.thrust_V, -params_.thrust.max_voltage_V,
                                    params_.thrust.max_voltage_V);
-    voltages.roll_V = std::clamp(FiniteOrZero(voltages.roll_V), -params_.roll.max_voltage_V,
-                                 params_.roll.max_voltage_V);
+    voltages.roll_V =
+        std::clamp(voltages.roll_V, -params_.roll.max_voltage_V, params_.roll.max_voltage_V);
   }
   last_voltages_ = voltages;
   Send(now_s, EncodeMotorPdo(voltages));

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "station/haptics/haptic_cycle.h"
 #include "station/training/replay.h"
 
 namespace ves::station {
@@ -87,10 +88,37 @@ TEST_F(SessionModelSourceTest, LogsTheCouplingForceItPushedTheModelWithAndRender
   EXPECT_NEAR(source_.encoder_travel_m(), 0.0, 1e-12);  // one reading: no travel yet
 }
 
-TEST_F(SessionModelSourceTest, ANonFiniteReadingGivesNaNAndIsNotLogged) {
+// A device whose insertion encoder reads NaN; every other reading is fresh
+// and healthy.
+class NanEncoderDevice final : public haptics::HapticDevice {
+ public:
+  void Read(double now_s, haptics::DeviceState* state) override {
+    state->insertion_m = std::nan("");
+    state->last_encoder_time_s = now_s;
+    state->last_sensor_time_s = now_s;
+    state->last_heartbeat_time_s = now_s;
+    state->device_nmt_state = haptics::NmtState::kOperational;
+    state->motors_enabled = true;
+  }
+  void Write(double, const haptics::MotorCommand& command) override { written = command; }
+  void SendEmergency(double, haptics::EmcyCode) override {}
+  void Enable(double) override {}
+  void ClearFaultFlags(haptics::DeviceState*) override {}
+  haptics::DeviceCounters counters() const override { return {}; }
+  haptics::MotorCommand written{0.0, 0.0, true};
+};
+
+TEST_F(SessionModelSourceTest, ANonFiniteReadingTripsTheCycleAndNeverReachesTheSession) {
   source_.Start(0, 0.0, 0.0);
-  const haptics::BaseResponse response = source_.Update(std::nan(""), 0.0, params_.dt_s);
-  EXPECT_TRUE(std::isnan(response.thrust_force_N));
+  NanEncoderDevice device;
+  haptics::CycleOptions options;
+  options.period_s = params_.dt_s;
+  options.control.mode = haptics::ControlMode::kCoupled;
+  haptics::HapticCycle cycle(&device, &source_, options);
+  cycle.Rearm();
+  const haptics::CycleOutput& output = cycle.Run(0.0);
+  EXPECT_EQ(output.fault, haptics::SafetyFault::kNonFinite);
+  EXPECT_FALSE(device.written.powered);
   EXPECT_FALSE(source_.stepped());
   EXPECT_EQ(runner_.session().steps(), 0u);
 }

@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
+#include "station/haptics/haptic_cycle.h"
 #include "station/haptics/sim_rig.h"
 #include "tests/station/haptics/scripted_source.h"
 
@@ -389,6 +391,43 @@ TEST(Safety, NanFromTheModelGivesZeroOutputInTheSamePeriod) {
   ExpectEmcyAtDevice(rig, EmcyCode::kSoftwareNonFinite);
   source.poison = false;
   ExpectOnlyRearmLeavesSafeState(rig, SafetyFault::kNonFinite);
+}
+
+// A device whose force sensor reads NaN; every other reading is fresh and
+// healthy.
+class NanForceSensorDevice final : public HapticDevice {
+ public:
+  void Read(double now_s, DeviceState* state) override {
+    state->force_N = std::numeric_limits<double>::quiet_NaN();
+    state->last_encoder_time_s = now_s;
+    state->last_sensor_time_s = now_s;
+    state->last_heartbeat_time_s = now_s;
+    state->device_nmt_state = NmtState::kOperational;
+    state->motors_enabled = true;
+  }
+  void Write(double, const MotorCommand& command) override { written.push_back(command); }
+  void SendEmergency(double, EmcyCode code) override { emergencies.push_back(code); }
+  void Enable(double) override {}
+  void ClearFaultFlags(DeviceState*) override {}
+  DeviceCounters counters() const override { return {}; }
+  std::vector<MotorCommand> written;
+  std::vector<EmcyCode> emergencies;
+};
+
+TEST(Safety, NanFromTheForceSensorTripsInItsPeriodAndNeverReachesTheModel) {
+  NanForceSensorDevice device;
+  testing::ScriptedSource source;
+  CycleOptions options;
+  options.control.mode = ControlMode::kCoupled;
+  HapticCycle cycle(&device, &source, options);
+  cycle.Rearm();
+  const CycleOutput& output = cycle.Run(0.0);
+  EXPECT_EQ(output.fault, SafetyFault::kNonFinite);
+  EXPECT_EQ(source.updates(), 0u);  // the model never saw the reading
+  ASSERT_EQ(device.written.size(), 1u);
+  EXPECT_FALSE(device.written[0].powered);
+  ASSERT_EQ(device.emergencies.size(), 1u);
+  EXPECT_EQ(device.emergencies[0], EmcyCode::kSoftwareNonFinite);
 }
 
 TEST(Safety, InfiniteCommandIsZeroedAndTrips) {

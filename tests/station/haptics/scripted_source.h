@@ -3,6 +3,7 @@
 // A synthetic BaseResponseSource for the coupled mode in tests: a virtual
 // wall along insertion (the model's "colon wall" reduced to one spring), an
 // optional constant load, and switches to stall or poison the model.
+#include <cstdint>
 #include <limits>
 
 #include "station/haptics/base_response.h"
@@ -30,6 +31,7 @@ class ScriptedSource final : public BaseResponseSource {
   double constant_torque_Nm{0.0};
   bool stalled{false};
   bool poison{false};
+  std::uint64_t updates() const { return count_; }
 
  private:
   std::uint64_t count_{0};
