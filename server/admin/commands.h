@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "cli/subcommands.h"
+#include "patient_db/cli/subcommands.h"
 
 // The subcommands of ves-admin (admins and supervisors). Each lives in its own
 // *_command.cc and returns the exit status: 0 success, 1 the operation failed

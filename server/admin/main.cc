@@ -1,6 +1,6 @@
 // ves-admin: the command line of admins and supervisors (DESIGN.md §6). The first
 // argument picks a subcommand; `ves-admin --help` lists them.
-#include "cli/subcommands.h"
+#include "patient_db/cli/subcommands.h"
 #include "server/admin/commands.h"
 
 int main(int argc, char** argv) {

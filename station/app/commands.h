@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "cli/subcommands.h"
+#include "patient_db/cli/subcommands.h"
 
 // The subcommands of ves-station. Each lives in its own <name>_command.cc,
 // parses its own arguments (Boost.Program_options) and returns the process

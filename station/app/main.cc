@@ -1,6 +1,6 @@
 // ves-station: the training tower's one program (DESIGN.md §1). The first
 // argument picks a subcommand; `ves-station --help` lists them.
-#include "cli/subcommands.h"
+#include "patient_db/cli/subcommands.h"
 #include "station/app/commands.h"
 
 int main(int argc, char** argv) {
