@@ -168,7 +168,9 @@ HttpReply WebApi::Dispatch(const HttpRequest& request, LiveWatchSlot* live) {
       if (api) r.headers.emplace_back("Cache-Control", "no-store");
       return r;
     }
-    methods += (methods.empty() ? "" : ", ") + std::string(route.method);
+    if (methods.find(route.method) == std::string::npos) {
+      methods += (methods.empty() ? "" : ", ") + std::string(route.method);
+    }
   }
   const std::string shown = patient_db::PrintableExcerpt(path, 80);
   if (methods == "WS") {
