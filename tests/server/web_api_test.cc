@@ -437,7 +437,7 @@ TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
 TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
   for (const std::string page :
        {"/", "/index.html", "/trainees.html", "/trainee.html", "/session.html", "/progress.html",
-        "/audit.html", "/live.html", "/stations.html"}) {
+        "/audit.html", "/live.html", "/stations.html", "/group.html", "/report.html"}) {
     const HttpResult r = Get(page);
     EXPECT_EQ(r.status, 200) << page;
     EXPECT_EQ(r.Header("content-type"), "text/html; charset=utf-8") << page;
@@ -448,9 +448,13 @@ TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
   const HttpResult chart = Get("/chart.js");
   EXPECT_EQ(chart.status, 200);
   EXPECT_NE(chart.body.find("Chart.js"), std::string::npos);
-  const HttpResult app = Get("/app.js");
-  EXPECT_EQ(app.status, 200);
-  EXPECT_EQ(app.body.find("innerHTML"), std::string::npos) << "data must go in as text";
+  for (const char* script : {"/common.js", "/sign_in.js", "/trainees.js", "/curves.js",
+                             "/session.js", "/audit.js", "/stations.js", "/live.js", "/cohort.js",
+                             "/workflow.js"}) {
+    const HttpResult js = Get(script);
+    EXPECT_EQ(js.status, 200) << script;
+    EXPECT_EQ(js.body.find("innerHTML"), std::string::npos) << script << ": data must go in as text";
+  }
   EXPECT_EQ(Get("/../etc/passwd").status, 404);
 }
 
