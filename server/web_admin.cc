@@ -22,11 +22,8 @@ HttpReply ListStations(WebCall& call) {
   req.set_institution(call.Query("institution"));
   req.set_page_size(static_cast<uint32_t>(call.page_size));
   req.set_page_token(call.Query("page_token"));
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::ListStationsResponse resp;
-  s = ListStationsCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &ListStationsCall, &resp)) return *refused;
   json stations = json::array();
   for (const auto& st : resp.stations()) {
     json row = {{"station_id", st.station_id()},

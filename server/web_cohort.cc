@@ -369,11 +369,8 @@ HttpReply GroupProgress(WebCall& call) {
   v1::GetProgressRequest req;
   req.set_group(call.Param("group"));
   req.set_institution(call.Query("institution"));
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::GetProgressResponse resp;
-  s = GetProgressCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &GetProgressCall, &resp)) return *refused;
   return JsonReply(200, ProtoJson(resp));
 }
 

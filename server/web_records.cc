@@ -47,11 +47,8 @@ HttpReply AddTrainee(WebCall& call) {
                  "body: must be {\"trainee_id\": ..., \"display_name\": ..., "
                  "\"institution\": ...}");
   }
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::AddTraineeResponse resp;
-  s = AddTraineeCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &AddTraineeCall, &resp)) return *refused;
   return JsonReply(200, ProtoJson(resp));
 }
 
@@ -61,11 +58,8 @@ HttpReply ListTrainees(WebCall& call) {
   req.set_institution(call.Query("institution"));
   req.set_page_size(static_cast<uint32_t>(call.page_size));
   req.set_page_token(call.Query("page_token"));
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::ListTraineesResponse resp;
-  s = ListTraineesCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &ListTraineesCall, &resp)) return *refused;
   // The call admitted reading this institution's trainees: their groups,
   // activity, assignments and verdicts are read for the whole page, one
   // store read each (not per trainee: docs/server.md, "Web pages at scale").
@@ -132,11 +126,8 @@ HttpReply ListSessions(WebCall& call) {
   req.set_case_id(call.Query("case_id"));
   req.set_page_size(static_cast<uint32_t>(call.page_size));
   req.set_page_token(call.Query("page_token"));
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::ListSessionsResponse resp;
-  s = ListSessionsCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &ListSessionsCall, &resp)) return *refused;
   return JsonReply(200, ProtoJson(resp));
 }
 
@@ -157,11 +148,8 @@ HttpReply SessionSeriesRoute(WebCall& call) {
 HttpReply GetSession(WebCall& call) {
   v1::GetSessionRequest req;
   req.set_uuid(call.Param("uuid"));
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::GetSessionResponse resp;
-  s = GetSessionCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &GetSessionCall, &resp)) return *refused;
   v1::SessionRecord summary = resp.record();
   summary.clear_input_log();  // bulky and of no use to a reader
   summary.clear_replay_setup();

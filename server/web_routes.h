@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "server/auth.h"
 #include "server/services.h"
 #include "server/web_api.h"
+#include "server/web_reply.h"
 
 // The HTTP routes of ves-server as one table (docs/web.md, "Routes"): each
 // row a method, a path pattern, the roles the pipeline lets through and the
@@ -89,6 +91,20 @@ inline const std::vector<patient_db::StoreRole> kReaders = {
 inline const std::vector<patient_db::StoreRole> kSupervisors = {
     patient_db::StoreRole::kAdmin, patient_db::StoreRole::kSupervisor};
 inline const std::vector<patient_db::StoreRole> kAdmins = {patient_db::StoreRole::kAdmin};
+
+// Admits `request` (WebCall::Admit), then runs it through `fn`, one of the
+// calls of server/pipeline.h: nullopt with *response filled, else the
+// refusal as the reply.
+template <class Request, class Response>
+std::optional<HttpReply> AdmitAndCall(WebCall& call, const Request& request,
+                                      grpc::Status (*fn)(const ServiceDeps&, const Principal&,
+                                                         const Request&, Response*),
+                                      Response* response) {
+  grpc::Status s = call.Admit(request);
+  if (s.ok()) s = fn(call.deps, call.who, request, response);
+  if (!s.ok()) return ErrorOf(s);
+  return std::nullopt;
+}
 
 // Whether `path` (without query) matches `pattern`; fills `params` with the
 // raw (still %-encoded) segments of its {name}s.

@@ -91,11 +91,8 @@ bool MayWrite(const Principal& who) {
 HttpReply ListCurricula(WebCall& call) {
   v1::ListCurriculaRequest req;
   req.set_page_size(100);
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::ListCurriculaResponse resp;
-  s = ListCurriculaCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &ListCurriculaCall, &resp)) return *refused;
   json out = json::array();
   for (const auto& c : resp.curricula()) {
     out.push_back(
@@ -125,11 +122,8 @@ HttpReply AssignCurriculum(WebCall& call) {
   } else {
     req.set_trainee_id(body["trainee_id"]);
   }
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::AssignCurriculumResponse resp;
-  s = AssignCurriculumCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &AssignCurriculumCall, &resp)) return *refused;
   return JsonReply(200, {{"curriculum_id", req.curriculum_id()},
                          {assignee_field, body[assignee_field]},
                          {"trainee_ids", std::vector<std::string>(resp.trainee_ids().begin(),
@@ -148,11 +142,8 @@ HttpReply SetTraineeGroup(WebCall& call) {
   v1::SetTraineeGroupRequest req;
   req.set_trainee_id(call.Param("id"));
   req.set_group(body["group"]);
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
   v1::SetTraineeGroupResponse resp;
-  s = SetTraineeGroupCall(call.deps, call.who, req, &resp);
-  if (!s.ok()) return ErrorOf(s);
+  if (auto refused = AdmitAndCall(call, req, &SetTraineeGroupCall, &resp)) return *refused;
   return JsonReply(200, {{"trainee_id", req.trainee_id()}, {"group", req.group()}});
 }
 
