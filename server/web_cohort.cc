@@ -203,23 +203,16 @@ namespace {
 // and audit row: a printed report is an export.
 HttpReply TraineeReport(WebCall& call) {
   const std::string& id = call.Param("id");
-  HttpReply bad;
-  int64_t from = 0, to = 0;
-  if (!QueryTimeRange(call.query, &from, &to, &bad)) return bad;
-  v1::ListSessionsRequest req;  // the trainee id's bounds
-  req.set_trainee_id(id);
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
-  std::vector<patient_db::SessionRow> sessions;
-  std::vector<patient_db::LessonVerdictRow> verdicts;
-  s = ExportSessionsCall(call.deps, call.who, id, from, to, &sessions, &verdicts);
-  if (!s.ok()) return ErrorOf(s);
+  TraineeExport read;
+  if (auto refused = ReadTraineeExport(call, &read)) return *refused;
+  const std::vector<patient_db::SessionRow>& sessions = read.sessions;
+  const int64_t from = read.from_unix_ms, to = read.to_unix_ms;
   patient_db::Store& store = *call.deps.store;
   auto trainee = store.GetTrainee(id);
   auto group = store.GetTraineeGroup(id);
   if (!trainee.ok()) return ErrorOf(ToGrpcStatus(trainee.status));
   std::map<std::string, const patient_db::LessonVerdictRow*> verdict_of;
-  for (const auto& v : verdicts) verdict_of[v.session_uuid] = &v;
+  for (const auto& v : read.verdicts) verdict_of[v.session_uuid] = &v;
   json rows = json::array();
   for (const auto& r : sessions) {
     auto v = verdict_of.find(r.uuid);

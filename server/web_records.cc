@@ -99,23 +99,13 @@ HttpReply ListTrainees(WebCall& call) {
 
 // GET trainees/{id}/sessions.csv: the export (docs/web.md, "Export").
 HttpReply ExportSessions(WebCall& call) {
-  const std::string& id = call.Param("id");
-  v1::ListSessionsRequest req;  // the trainee id's bounds
-  req.set_trainee_id(id);
-  int64_t from = 0, to = 0;
-  HttpReply bad;
-  if (!QueryTimeRange(call.query, &from, &to, &bad)) return bad;
-  Status s = call.Admit(req);
-  if (!s.ok()) return ErrorOf(s);
-  std::vector<patient_db::SessionRow> sessions;
-  std::vector<patient_db::LessonVerdictRow> verdicts;
-  s = ExportSessionsCall(call.deps, call.who, id, from, to, &sessions, &verdicts);
-  if (!s.ok()) return ErrorOf(s);
+  TraineeExport out;
+  if (auto refused = ReadTraineeExport(call, &out)) return *refused;
   HttpReply r;
   r.content_type = "text/csv; charset=utf-8";
-  r.body = SessionsCsv(sessions, verdicts);
-  r.headers.emplace_back("Content-Disposition",
-                         "attachment; filename=\"ves-sessions-" + FileNamePart(id) + ".csv\"");
+  r.body = SessionsCsv(out.sessions, out.verdicts);
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"ves-sessions-" +
+                                                    FileNamePart(call.Param("id")) + ".csv\"");
   return r;
 }
 
@@ -220,6 +210,21 @@ HttpReply ReplaySessionRoute(WebCall& call) {
 }
 
 }  // namespace
+
+std::optional<HttpReply> ReadTraineeExport(WebCall& call, TraineeExport* out) {
+  const std::string& id = call.Param("id");
+  HttpReply bad;
+  if (!QueryTimeRange(call.query, &out->from_unix_ms, &out->to_unix_ms, &bad)) return bad;
+  v1::ListSessionsRequest req;  // the trainee id's bounds
+  req.set_trainee_id(id);
+  Status s = call.Admit(req);
+  if (s.ok()) {
+    s = ExportSessionsCall(call.deps, call.who, id, out->from_unix_ms, out->to_unix_ms,
+                           &out->sessions, &out->verdicts);
+  }
+  if (!s.ok()) return ErrorOf(s);
+  return std::nullopt;
+}
 
 std::vector<WebRoute> RecordRoutes() {
   const std::vector<patient_db::StoreRole> list_trainees = {

@@ -106,6 +106,18 @@ std::optional<HttpReply> AdmitAndCall(WebCall& call, const Request& request,
   return std::nullopt;
 }
 
+// A trainee's sessions and lesson verdicts in the query's time range
+// (from_unix_ms, to_unix_ms), read by the export's rules and audit row
+// (pipeline.h ExportSessionsCall) for trainees/{id}/sessions.csv and
+// trainees/{id}/report.
+struct TraineeExport {
+  int64_t from_unix_ms = 0, to_unix_ms = 0;
+  std::vector<patient_db::SessionRow> sessions;
+  std::vector<patient_db::LessonVerdictRow> verdicts;
+};
+// nullopt with *out read, else the refusal (web_records.cc).
+std::optional<HttpReply> ReadTraineeExport(WebCall& call, TraineeExport* out);
+
 // Whether `path` (without query) matches `pattern`; fills `params` with the
 // raw (still %-encoded) segments of its {name}s.
 bool MatchPattern(const std::string& pattern, const std::string& path,
