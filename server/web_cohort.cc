@@ -370,7 +370,7 @@ HttpReply GroupProgress(WebCall& call) {
 }  // namespace
 
 std::vector<WebRoute> CohortRoutes() {
-  return {{"GET", "/api/v1/groups/{group}/progress", kEveryRole, &GroupProgress},
+  return {{"GET", "/api/v1/groups/{group}/progress", kSupervisors, &GroupProgress},
           {"GET", "/api/v1/groups/{group}/cohort", kSupervisors, &GroupCohort},
           {"GET", "/api/v1/groups/{group}/sessions.csv", kSupervisors, &GroupSessionsCsv},
           {"GET", "/api/v1/trainees/{id}/report", kReaders, &TraineeReport}};
