@@ -88,6 +88,7 @@ HttpRequest ToRequest(const http::request<http::string_body>& r, const std::stri
   out.body = r.body();
   out.origin = std::string(r[http::field::origin]);
   out.host = std::string(r[http::field::host]);
+  out.websocket = beast::websocket::is_upgrade(r);
   return out;
 }
 
@@ -250,6 +251,137 @@ HttpServer::HttpServer(HttpOptions options, ServiceDeps deps)
 
 HttpServer::~HttpServer() { Stop(); }
 
+namespace {
+
+// The TLS context of the server's certificate and key; throws
+// std::invalid_argument when they cannot be used.
+std::unique_ptr<asio::ssl::context> TlsContext(const HttpOptions& options) {
+  if (options.tls_cert_file.empty() || options.tls_key_file.empty()) {
+    throw std::invalid_argument("HTTPS needs both --tls-cert and --tls-key");
+  }
+  auto ssl = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
+  ssl->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                   asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                   asio::ssl::context::no_tlsv1_1);
+  beast::error_code ec;
+  ssl->use_certificate_chain_file(options.tls_cert_file, ec);
+  if (!ec) ssl->use_private_key_file(options.tls_key_file, asio::ssl::context::pem, ec);
+  if (ec) {
+    throw std::invalid_argument("--http with --tls-cert " + options.tls_cert_file + " --tls-key " +
+                                options.tls_key_file + ": " + ec.message());
+  }
+  return ssl;
+}
+
+// The address of --http; throws std::invalid_argument when it is not one.
+tcp::endpoint ListenEndpoint(const std::string& listen) {
+  const auto [host, port_text] = SplitHostPort(listen);
+  beast::error_code ec;
+  const auto address = asio::ip::make_address(host, ec);
+  int port = -1;
+  try {
+    port = std::stoi(port_text);
+  } catch (const std::exception&) {
+  }
+  if (ec || port < 0 || port > 65535) {
+    throw std::invalid_argument("--http '" + listen + "': not a HOST:PORT address");
+  }
+  return tcp::endpoint(address, static_cast<unsigned short>(port));
+}
+
+// Shuts down every connection past its deadline (or all, once stopping), so
+// that its blocking read or write returns.
+void ReapConnections(HttpServer::Impl* impl) {
+  std::unique_lock lock(impl->mutex);
+  while (!impl->stopping) {
+    impl->cv.wait_for(lock, std::chrono::milliseconds(500));
+    const auto now = Clock::now();
+    for (auto& [fd, deadline] : impl->deadlines) {
+      if (impl->stopping || deadline <= now) {
+        ::shutdown(fd, SHUT_RDWR);
+        deadline = Clock::time_point::max();
+      }
+    }
+  }
+}
+
+// One connection's thread: owns the socket of `fd`, speaks TLS when the
+// server has it, serves requests until the connection ends.
+void ServeConnection(HttpServer::Impl* impl, WebApi* api, const HttpOptions& options, int fd,
+                     tcp protocol) {
+  {
+    tcp::socket s(impl->io);
+    beast::error_code assign_ec;
+    s.assign(protocol, fd, assign_ec);
+    // Destroyed before the socket: the reaper never shuts down a descriptor
+    // number that has been closed (and maybe reused).
+    ForgetDeadline forget_plain{impl, fd};
+    beast::error_code peer_ec;
+    const auto remote = s.remote_endpoint(peer_ec);
+    const std::string peer = peer_ec ? std::string("?")
+                                     : remote.address().to_string() + ":" +
+                                           std::to_string(remote.port());
+    SetDeadline(impl, fd, std::chrono::seconds(options.io_timeout_s));
+    try {
+      if (assign_ec) {
+        spdlog::warn("http connection: {}", assign_ec.message());
+      } else if (impl->ssl) {
+        beast::ssl_stream<tcp::socket> stream(std::move(s), *impl->ssl);
+        ForgetDeadline forget_tls{impl, fd};
+        beast::error_code ec;
+        stream.handshake(asio::ssl::stream_base::server, ec);
+        if (!ec) {
+          ServeStream(stream, fd, impl, api, options, true, peer);
+          stream.shutdown(ec);
+        }
+      } else {
+        ServeStream(s, fd, impl, api, options, false, peer);
+        beast::error_code ec;
+        s.shutdown(tcp::socket::shutdown_both, ec);
+      }
+    } catch (const std::exception& e) {
+      spdlog::warn("http connection from {}: {}", peer, e.what());
+    }
+  }
+  std::lock_guard lock(impl->mutex);
+  --impl->active;
+  impl->cv.notify_all();
+}
+
+// Accepts connections until Stop, each on a thread of its own, at most
+// max_connections at once (more are closed, not queued).
+void AcceptConnections(HttpServer::Impl* impl, WebApi* api, const HttpOptions& options,
+                       tcp protocol) {
+  while (true) {
+    tcp::socket socket(impl->io);
+    beast::error_code accept_ec;
+    impl->acceptor.accept(socket, accept_ec);
+    {
+      std::unique_lock lock(impl->mutex);
+      if (impl->stopping) return;
+      if (accept_ec) continue;
+      if (impl->active >= options.max_connections) {
+        lock.unlock();
+        socket.close(accept_ec);
+        continue;
+      }
+      ++impl->active;
+    }
+    // The thread gets the bare descriptor and owns its socket as a local,
+    // so every socket is closed before `active` drops and Stop may return.
+    beast::error_code release_ec;
+    const int fd = socket.release(release_ec);
+    if (release_ec) {
+      std::lock_guard lock(impl->mutex);
+      --impl->active;
+      continue;
+    }
+    std::thread(ServeConnection, impl, api, std::cref(options), fd, protocol).detach();
+  }
+}
+
+}  // namespace
+
 void HttpServer::Start() {
   const bool tls = !options_.tls_cert_file.empty() || !options_.tls_key_file.empty();
   if (!tls && !patient_db::IsLoopbackAddress(options_.listen)) {
@@ -260,35 +392,10 @@ void HttpServer::Start() {
   if (std::string why = CheckOidcConfig(options_.oidc); !why.empty()) {
     throw std::invalid_argument(why);
   }
-  if (tls) {
-    if (options_.tls_cert_file.empty() || options_.tls_key_file.empty()) {
-      throw std::invalid_argument("HTTPS needs both --tls-cert and --tls-key");
-    }
-    impl_->ssl = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_server);
-    impl_->ssl->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
-                            asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
-                            asio::ssl::context::no_tlsv1_1);
-    beast::error_code ec;
-    impl_->ssl->use_certificate_chain_file(options_.tls_cert_file, ec);
-    if (!ec) impl_->ssl->use_private_key_file(options_.tls_key_file, asio::ssl::context::pem, ec);
-    if (ec) {
-      throw std::invalid_argument("--http with --tls-cert " + options_.tls_cert_file +
-                                  " --tls-key " + options_.tls_key_file + ": " + ec.message());
-    }
-  }
-  const auto [host, port_text] = SplitHostPort(options_.listen);
-  beast::error_code ec;
-  const auto address = asio::ip::make_address(host, ec);
-  int port = -1;
-  try {
-    port = std::stoi(port_text);
-  } catch (const std::exception&) {
-  }
-  if (ec || port < 0 || port > 65535) {
-    throw std::invalid_argument("--http '" + options_.listen + "': not a HOST:PORT address");
-  }
-  const tcp::endpoint endpoint(address, static_cast<unsigned short>(port));
+  if (tls) impl_->ssl = TlsContext(options_);
+  const tcp::endpoint endpoint = ListenEndpoint(options_.listen);
   auto& acceptor = impl_->acceptor;
+  beast::error_code ec;
   acceptor.open(endpoint.protocol(), ec);
   if (!ec) acceptor.set_option(asio::socket_base::reuse_address(true), ec);
   if (!ec) acceptor.bind(endpoint, ec);
@@ -298,86 +405,9 @@ void HttpServer::Start() {
                              "': " + ec.message());
   }
   port_ = acceptor.local_endpoint().port();
-  impl_->reaper_thread = std::thread([impl = impl_.get()] {
-    std::unique_lock lock(impl->mutex);
-    while (!impl->stopping) {
-      impl->cv.wait_for(lock, std::chrono::milliseconds(500));
-      const auto now = Clock::now();
-      for (auto& [fd, deadline] : impl->deadlines) {
-        if (impl->stopping || deadline <= now) {
-          ::shutdown(fd, SHUT_RDWR);  // the connection's blocking read or write returns
-          deadline = Clock::time_point::max();
-        }
-      }
-    }
-  });
-  impl_->accept_thread = std::thread([this, protocol = endpoint.protocol()] {
-    Impl* impl = impl_.get();
-    while (true) {
-      tcp::socket socket(impl->io);
-      beast::error_code accept_ec;
-      impl->acceptor.accept(socket, accept_ec);
-      {
-        std::unique_lock lock(impl->mutex);
-        if (impl->stopping) return;
-        if (accept_ec) continue;
-        if (impl->active >= options_.max_connections) {
-          lock.unlock();
-          socket.close(accept_ec);  // over the bound: refused, not queued
-          continue;
-        }
-        ++impl->active;
-      }
-      // The thread gets the bare descriptor and owns its socket as a local,
-      // so every socket is closed before `active` drops and Stop may return.
-      beast::error_code release_ec;
-      const int fd = socket.release(release_ec);
-      if (release_ec) {
-        std::lock_guard lock(impl->mutex);
-        --impl->active;
-        continue;
-      }
-      std::thread([this, impl, fd, protocol] {
-        {
-          tcp::socket s(impl->io);
-          beast::error_code assign_ec;
-          s.assign(protocol, fd, assign_ec);
-          // Destroyed before the socket: the reaper never shuts down a
-          // descriptor number that has been closed (and maybe reused).
-          ForgetDeadline forget_plain{impl, fd};
-          beast::error_code peer_ec;
-          const auto remote = s.remote_endpoint(peer_ec);
-          const std::string peer =
-              peer_ec ? std::string("?")
-                      : remote.address().to_string() + ":" + std::to_string(remote.port());
-          SetDeadline(impl, fd, std::chrono::seconds(options_.io_timeout_s));
-          try {
-            if (assign_ec) {
-              spdlog::warn("http connection: {}", assign_ec.message());
-            } else if (impl->ssl) {
-              beast::ssl_stream<tcp::socket> stream(std::move(s), *impl->ssl);
-              ForgetDeadline forget_tls{impl, fd};
-              beast::error_code ec;
-              stream.handshake(asio::ssl::stream_base::server, ec);
-              if (!ec) {
-                ServeStream(stream, fd, impl, api_.get(), options_, true, peer);
-                stream.shutdown(ec);
-              }
-            } else {
-              ServeStream(s, fd, impl, api_.get(), options_, false, peer);
-              beast::error_code ec;
-              s.shutdown(tcp::socket::shutdown_both, ec);
-            }
-          } catch (const std::exception& e) {
-            spdlog::warn("http connection from {}: {}", peer, e.what());
-          }
-        }
-        std::lock_guard lock(impl->mutex);
-        --impl->active;
-        impl->cv.notify_all();
-      }).detach();
-    }
-  });
+  impl_->reaper_thread = std::thread(ReapConnections, impl_.get());
+  impl_->accept_thread = std::thread(AcceptConnections, impl_.get(), api_.get(),
+                                     std::cref(options_), endpoint.protocol());
 }
 
 void HttpServer::Stop() {

@@ -16,9 +16,10 @@
 #include "server/services.h"
 #include "server/session_replay.h"
 
-// The HTTP side of ves-server without the sockets (docs/web.md): routes,
-// browser sessions (cookie + CSRF token), JSON in and out. Every /api/v1/
-// call goes through the request pipeline (server/pipeline.h), as gRPC does.
+// The HTTP side of ves-server without the sockets (docs/web.md): the route
+// table's dispatch (server/web_routes.h), browser sessions (cookie + CSRF
+// token), JSON in and out. Every /api/v1/ call goes through the request
+// pipeline (server/pipeline.h), as gRPC does.
 namespace ves::server {
 
 class LiveViewer;
@@ -43,6 +44,7 @@ struct HttpRequest {
   std::string origin;  // the Origin header (WebSocket upgrades)
   std::string host;    // the Host header
   std::string peer;    // the client's "ADDRESS:PORT" (sign-in throttling)
+  bool websocket = false;  // a WebSocket upgrade (routes with method "WS")
 };
 
 struct HttpReply {
@@ -81,14 +83,21 @@ const std::vector<std::string>& SessionsCsvColumns();
 std::string SessionsCsv(const std::vector<patient_db::SessionRow>& sessions,
                         const std::vector<patient_db::LessonVerdictRow>& verdicts);
 
+struct LiveWatchSlot;
+struct WebCall;
+struct WebRoute;
+
 class WebApi {
  public:
   WebApi(ServiceDeps deps, WebOptions options);
+  // Bounds of the request (target, body), then its route in the table
+  // (server/web_routes.h) and the route's handler.
   HttpReply Handle(const HttpRequest& request);
 
-  // A WebSocket upgrade to /api/v1/live/ws?session=UUID (docs/web.md):
-  // admitted (cookie or Bearer), role supervisor or admin, the session's
-  // institution, audited; status 101 with `viewer` set, else the refusal.
+  // A WebSocket upgrade (docs/web.md): through the route table as Handle,
+  // to the routes of method "WS" (/api/v1/live/ws?session=UUID: admitted,
+  // role supervisor or admin, the session's institution, audited); status
+  // 101 with `viewer` set, else the refusal.
   HttpReply LiveWatch(const HttpRequest& request, std::string* session_uuid,
                       std::shared_ptr<LiveViewer>* viewer);
   void LiveUnwatch(const std::string& session_uuid, const std::shared_ptr<LiveViewer>& viewer);
@@ -97,34 +106,42 @@ class WebApi {
   // close a <script> or start a tag wherever the text lands.
   static std::string HtmlSafeJson(std::string json);
 
+  // What the route handlers (server/web_*.cc) reach of the browser sessions.
+  HttpReply SignIn(const HttpRequest& request);
+  HttpReply SignOut(WebCall& call);
+  bool oidc_enabled() const { return oidc_ != nullptr; }
+  // The identity provider's sign-in (web_oidc.cc): to the provider and back.
+  HttpReply OidcStart();
+  HttpReply OidcCallback(const HttpRequest& request,
+                         const std::map<std::string, std::string>& query);
+  // The CSRF token of browser session `session_id` ("" when none).
+  std::string CsrfTokenOf(const std::string& session_id);
+  // The authorization value for this request: the Bearer header, or the
+  // browser session's token. `csrf_ok` tells whether a state-changing
+  // request may go on (Bearer requests need no CSRF token).
+  std::string AuthorizationOf(const HttpRequest& request, bool* csrf_ok, std::string* session_id);
+  // The replay (cached or computed); nullptr when kMaxConcurrentReplays run.
+  std::shared_ptr<const SessionReplay> CachedReplay(const std::string& uuid,
+                                                    const v1::SessionRecord& record);
+
  private:
   struct WebSession {
     std::string token;  // the bearer token it stands for (memory only)
     std::string csrf_token;
     int64_t expires_unix_ms = 0;
   };
-  HttpReply SignIn(const HttpRequest& request);
+  // The route table's answer; `live` receives what a WebSocket route hands
+  // over (null for plain requests).
+  HttpReply Dispatch(const HttpRequest& request, LiveWatchSlot* live);
+  HttpReply Route(const WebRoute& route, const HttpRequest& request,
+                  const std::map<std::string, std::string>& raw_params,
+                  std::map<std::string, std::string> query, LiveWatchSlot* live);
   // An account sign-in's outcome as the reply (audited either way).
   HttpReply StartWebSession(const SignInOutcome& outcome, const std::string& peer);
   // A browser session for `token` (a bearer token or an account's secret).
   HttpReply NewWebSession(const std::string& token, const Principal& who,
                           const std::string& audit_target);
-  // The identity provider's sign-in (web_oidc.cc): to the provider and back.
-  HttpReply OidcStart();
-  HttpReply OidcCallback(const HttpRequest& request,
-                         const std::map<std::string, std::string>& query,
-                         const std::string& login_id);
   std::string OidcCookie(const std::string& login_id, int64_t max_age_s) const;
-  HttpReply SignOut(const HttpRequest& request);
-  // The authorization value for this request: the Bearer header, or the
-  // browser session's token. `csrf_ok` tells whether a state-changing
-  // request may go on (Bearer requests need no CSRF token).
-  std::string AuthorizationOf(const HttpRequest& request, bool* csrf_ok, std::string* session_id);
-  HttpReply Api(const HttpRequest& request, const std::string& path,
-                const std::map<std::string, std::string>& query);
-  // The replay (cached or computed); nullptr when kMaxConcurrentReplays run.
-  std::shared_ptr<const SessionReplay> CachedReplay(const std::string& uuid,
-                                                    const v1::SessionRecord& record);
 
   ServiceDeps deps_;
   WebOptions options_;

@@ -7,6 +7,7 @@
 #include "server/lesson_rules.h"
 #include "server/pipeline.h"
 #include "server/web_reply.h"
+#include "server/web_routes.h"
 #include "ves/v1/services.pb.h"
 
 namespace ves::server {
@@ -15,14 +16,14 @@ using grpc::Status;
 using grpc::StatusCode;
 using nlohmann::json;
 
-namespace {
-
 json MedianOf(std::vector<double> v) {
   if (v.empty()) return nullptr;
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
+
+namespace {
 
 json RangeOf(const std::vector<double>& v) {
   if (v.empty()) return nullptr;
@@ -196,155 +197,183 @@ json ExpertBandJson(patient_db::Store& store, const std::string& institution,
           {"loop_s", RangeOf(loop)}};
 }
 
-std::optional<HttpReply> CohortRoute(
-    const ServiceDeps& deps, const std::vector<std::string>& path,
-    const std::map<std::string, std::string>& query,
-    const std::function<grpc::Status(const google::protobuf::Message&)>& admit,
-    const Principal& who) {
-  const bool cohort = path.size() == 3 && path[0] == "groups" && path[2] == "cohort";
-  const bool group_csv = path.size() == 3 && path[0] == "groups" && path[2] == "sessions.csv";
-  const bool report = path.size() == 3 && path[0] == "trainees" && path[2] == "report";
-  if (!cohort && !group_csv && !report) return std::nullopt;
-  HttpReply bad;
-  int64_t from = 0, to = 0;
-  if (!QueryTimeRange(query, &from, &to, &bad)) return bad;
+namespace {
 
-  if (report) {
-    // The export's read rules and audit row: a printed report is an export.
-    v1::ListSessionsRequest req;  // the trainee id's bounds
-    req.set_trainee_id(path[1]);
-    Status s = admit(req);
-    if (!s.ok()) return ErrorOf(s);
-    std::vector<patient_db::SessionRow> sessions;
-    std::vector<patient_db::LessonVerdictRow> verdicts;
-    s = ExportSessionsCall(deps, who, path[1], from, to, &sessions, &verdicts);
-    if (!s.ok()) return ErrorOf(s);
-    auto trainee = deps.store->GetTrainee(path[1]);
-    auto group = deps.store->GetTraineeGroup(path[1]);
-    if (!trainee.ok()) return ErrorOf(ToGrpcStatus(trainee.status));
-    std::map<std::string, const patient_db::LessonVerdictRow*> verdict_of;
-    for (const auto& v : verdicts) verdict_of[v.session_uuid] = &v;
-    json rows = json::array();
-    for (const auto& r : sessions) {
-      auto v = verdict_of.find(r.uuid);
-      rows.push_back(
-          {{"uuid", r.uuid},
-           {"start_unix_ms", r.start_unix_ms},
-           {"case_id", r.case_id},
-           {"lesson_id", r.lesson_id},
-           {"verdict", r.lesson_id.empty()
-                           ? ""
-                           : VerdictText(v == verdict_of.end() ? nullptr : v->second)},
-           {"outcome", v1::Outcome_IsValid(r.outcome)
-                           ? v1::Outcome_Name(static_cast<v1::Outcome>(r.outcome))
-                           : "OUTCOME_UNSPECIFIED"},
-           {"score", r.score},
-           {"time_to_cecum_s", r.completed ? json(r.time_to_cecum_s) : json(nullptr)},
-           {"pain_s", r.pain_s},
-           {"loop_s", r.loop_s >= 0 ? json(r.loop_s) : json(nullptr)},
-           {"xray_s", r.xray_s >= 0 ? json(r.xray_s) : json(nullptr)}});
-    }
-    CurriculumCache curricula(deps.store);
-    json out = SplitFiguresJson(sessions);
-    out["trainee_id"] = trainee.value.trainee_id;
-    out["display_name"] = trainee.value.display_name;
-    out["institution"] = trainee.value.institution;
-    out["group"] = group.ok() ? group.value : "";
-    out["from_unix_ms"] = from;
-    out["to_unix_ms"] = to;
-    out["generated_unix_ms"] = NowUnixMs();
-    out["curricula"] = CurriculaProgressJson(*deps.store, curricula, path[1], /*detail=*/true);
-    out["sessions"] = std::move(rows);
-    return JsonReply(200, out);
+// GET trainees/{id}/report: the printable report. The export's read rules
+// and audit row: a printed report is an export.
+HttpReply TraineeReport(WebCall& call) {
+  const std::string& id = call.Param("id");
+  TraineeExport read;
+  if (auto refused = ReadTraineeExport(call, &read)) return *refused;
+  const std::vector<patient_db::SessionRow>& sessions = read.sessions;
+  const int64_t from = read.from_unix_ms, to = read.to_unix_ms;
+  patient_db::Store& store = *call.deps.store;
+  auto trainee = store.GetTrainee(id);
+  auto group = store.GetTraineeGroup(id);
+  if (!trainee.ok()) return ErrorOf(ToGrpcStatus(trainee.status));
+  std::map<std::string, const patient_db::LessonVerdictRow*> verdict_of;
+  for (const auto& v : read.verdicts) verdict_of[v.session_uuid] = &v;
+  json rows = json::array();
+  for (const auto& r : sessions) {
+    auto v = verdict_of.find(r.uuid);
+    rows.push_back(
+        {{"uuid", r.uuid},
+         {"start_unix_ms", r.start_unix_ms},
+         {"case_id", r.case_id},
+         {"lesson_id", r.lesson_id},
+         {"verdict", r.lesson_id.empty()
+                         ? ""
+                         : VerdictText(v == verdict_of.end() ? nullptr : v->second)},
+         {"outcome", v1::Outcome_IsValid(r.outcome)
+                         ? v1::Outcome_Name(static_cast<v1::Outcome>(r.outcome))
+                         : "OUTCOME_UNSPECIFIED"},
+         {"score", r.score},
+         {"time_to_cecum_s", r.completed ? json(r.time_to_cecum_s) : json(nullptr)},
+         {"pain_s", r.pain_s},
+         {"loop_s", r.loop_s >= 0 ? json(r.loop_s) : json(nullptr)},
+         {"xray_s", r.xray_s >= 0 ? json(r.xray_s) : json(nullptr)}});
   }
+  CurriculumCache curricula(&store);
+  json out = SplitFiguresJson(sessions);
+  out["trainee_id"] = trainee.value.trainee_id;
+  out["display_name"] = trainee.value.display_name;
+  out["institution"] = trainee.value.institution;
+  out["group"] = group.ok() ? group.value : "";
+  out["from_unix_ms"] = from;
+  out["to_unix_ms"] = to;
+  out["generated_unix_ms"] = NowUnixMs();
+  out["curricula"] = CurriculaProgressJson(store, curricula, id, /*detail=*/true);
+  out["sessions"] = std::move(rows);
+  return JsonReply(200, out);
+}
 
+// The time range and the admission of a group route; false with the refusal.
+bool AdmitGroupCall(WebCall& call, int64_t* from, int64_t* to, HttpReply* refusal) {
+  if (!QueryTimeRange(call.query, from, to, refusal)) return false;
   v1::GetProgressRequest req;  // the group's and institution's bounds
-  req.set_group(path[1]);
-  auto inst = query.find("institution");
-  if (inst != query.end()) req.set_institution(inst->second);
-  Status s = admit(req);
-  if (!s.ok()) return ErrorOf(s);
-  const std::string institution = GroupInstitution(query, who);
-  const std::string target = "group " + path[1] + "@" + institution;
+  req.set_group(call.Param("group"));
+  auto inst = call.query.find("institution");
+  if (inst != call.query.end()) req.set_institution(inst->second);
+  Status s = call.Admit(req);
+  if (!s.ok()) *refusal = ErrorOf(s);
+  return s.ok();
+}
 
-  if (group_csv) {
-    static const CallSpec spec{
-        "session.export", {StoreRole::kAdmin, StoreRole::kSupervisor}, "export a group's sessions"};
-    std::vector<patient_db::SessionRow> sessions;
-    std::vector<patient_db::LessonVerdictRow> verdicts;
-    s = RunCall(deps, who, spec, target, [&]() -> Status {
-      std::vector<std::string> members;
-      Status m = GroupMembers(deps, who, institution, path[1], &members);
-      if (!m.ok()) return m;
-      for (const std::string& id : members) {
-        auto rows = SessionsIn(*deps.store, id, from, to, kMaxExportSessions);
-        if (!rows.ok()) return ToGrpcStatus(rows.status);
-        if (sessions.size() + rows.value.size() > static_cast<size_t>(kMaxExportSessions)) {
-          return Status(StatusCode::OUT_OF_RANGE,
-                        "more than " + std::to_string(kMaxExportSessions) + " sessions of group " +
-                            path[1] + " in this range: export fewer days at a time");
-        }
-        std::move(rows.value.begin(), rows.value.end(), std::back_inserter(sessions));
-        auto judged = deps.store->ListLessonVerdicts(id);
-        if (!judged.ok()) return ToGrpcStatus(judged.status);
-        std::move(judged.value.begin(), judged.value.end(), std::back_inserter(verdicts));
-      }
-      std::sort(sessions.begin(), sessions.end(), [](const auto& a, const auto& b) {
-        return std::tie(a.start_unix_ms, a.uuid) < std::tie(b.start_unix_ms, b.uuid);
-      });
-      return Status::OK;
-    });
-    if (!s.ok()) return ErrorOf(s);
-    HttpReply r;
-    r.content_type = "text/csv; charset=utf-8";
-    r.body = SessionsCsv(sessions, verdicts);
-    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"ves-sessions-group-" +
-                                                      FileNamePart(path[1]) + ".csv\"");
-    return r;
-  }
-
-  static const CallSpec spec{
-      "group.cohort", {StoreRole::kAdmin, StoreRole::kSupervisor}, "read a group's figures"};
-  json trainees = json::array();
-  s = RunCall(deps, who, spec, target, [&]() -> Status {
+// GET groups/{group}/sessions.csv: the group's sessions in the range.
+HttpReply GroupSessionsCsv(WebCall& call) {
+  int64_t from = 0, to = 0;
+  HttpReply refusal;
+  if (!AdmitGroupCall(call, &from, &to, &refusal)) return refusal;
+  const std::string& group = call.Param("group");
+  const std::string institution = GroupInstitution(call.query, call.who);
+  static const CallSpec spec{"session.export", kSupervisors, "export a group's sessions"};
+  std::vector<patient_db::SessionRow> sessions;
+  std::vector<patient_db::LessonVerdictRow> verdicts;
+  const Status s = RunCall(call.deps, call.who, spec, "group " + group + "@" + institution,
+                           [&]() -> Status {
     std::vector<std::string> members;
-    Status m = GroupMembers(deps, who, institution, path[1], &members);
+    Status m = GroupMembers(call.deps, call.who, institution, group, &members);
     if (!m.ok()) return m;
-    // Progress comes from the members' assignments and verdicts, read for
-    // the whole group at once.
-    auto assignments = deps.store->ListAssignmentsOf(members);
-    if (!assignments.ok()) return ToGrpcStatus(assignments.status);
-    auto verdicts = deps.store->ListLessonVerdictsOf(members);
-    if (!verdicts.ok()) return ToGrpcStatus(verdicts.status);
-    // And their sessions in the range, also in one read: one read per
-    // trainee made a 200-trainee group's page take ~230 ms.
-    auto sessions = deps.store->ListSessionsOf(members, from, to, kMaxExportSessions);
-    if (!sessions.ok()) return ToGrpcStatus(sessions.status);
-    CurriculumCache curricula(deps.store);
-    for (size_t i = 0; i < members.size(); ++i) {
-      const std::string& id = members[i];
-      auto trainee = deps.store->GetTrainee(id);
-      if (!trainee.ok()) return ToGrpcStatus(trainee.status);
-      const std::vector<patient_db::SessionRow>& rows = sessions.value[i];
-      if (rows.size() > static_cast<size_t>(kMaxExportSessions)) {
-        return Status(StatusCode::OUT_OF_RANGE, "more than " +
-                                                    std::to_string(kMaxExportSessions) +
-                                                    " sessions of " + id + " in this range");
+    for (const std::string& id : members) {
+      auto rows = SessionsIn(*call.deps.store, id, from, to, kMaxExportSessions);
+      if (!rows.ok()) return ToGrpcStatus(rows.status);
+      if (sessions.size() + rows.value.size() > static_cast<size_t>(kMaxExportSessions)) {
+        return Status(StatusCode::OUT_OF_RANGE,
+                      "more than " + std::to_string(kMaxExportSessions) + " sessions of group " +
+                          group + " in this range: export fewer days at a time");
       }
-      json row = SplitFiguresJson(rows);
-      row["trainee_id"] = id;
-      row["display_name"] = trainee.value.display_name;
-      row["curricula"] = CurriculaProgressJson(curricula, assignments.value[i], verdicts.value[i]);
-      trainees.push_back(std::move(row));
+      std::move(rows.value.begin(), rows.value.end(), std::back_inserter(sessions));
+      auto judged = call.deps.store->ListLessonVerdicts(id);
+      if (!judged.ok()) return ToGrpcStatus(judged.status);
+      std::move(judged.value.begin(), judged.value.end(), std::back_inserter(verdicts));
     }
+    std::sort(sessions.begin(), sessions.end(), [](const auto& a, const auto& b) {
+      return std::tie(a.start_unix_ms, a.uuid) < std::tie(b.start_unix_ms, b.uuid);
+    });
     return Status::OK;
   });
   if (!s.ok()) return ErrorOf(s);
-  return JsonReply(200, {{"group", path[1]},
+  HttpReply r;
+  r.content_type = "text/csv; charset=utf-8";
+  r.body = SessionsCsv(sessions, verdicts);
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"ves-sessions-group-" +
+                                                    FileNamePart(group) + ".csv\"");
+  return r;
+}
+
+// The cohort page's rows: each member's figures and curricula progress.
+Status CohortRows(const ServiceDeps& deps, const Principal& who, const std::string& institution,
+                  const std::string& group, int64_t from, int64_t to, json* trainees) {
+  std::vector<std::string> members;
+  Status m = GroupMembers(deps, who, institution, group, &members);
+  if (!m.ok()) return m;
+  // Progress comes from the members' assignments and verdicts, read for
+  // the whole group at once.
+  auto assignments = deps.store->ListAssignmentsOf(members);
+  if (!assignments.ok()) return ToGrpcStatus(assignments.status);
+  auto verdicts = deps.store->ListLessonVerdictsOf(members);
+  if (!verdicts.ok()) return ToGrpcStatus(verdicts.status);
+  // And their sessions in the range, also in one read: one read per
+  // trainee made a 200-trainee group's page take ~230 ms.
+  auto sessions = deps.store->ListSessionsOf(members, from, to, kMaxExportSessions);
+  if (!sessions.ok()) return ToGrpcStatus(sessions.status);
+  CurriculumCache curricula(deps.store);
+  for (size_t i = 0; i < members.size(); ++i) {
+    const std::string& id = members[i];
+    auto trainee = deps.store->GetTrainee(id);
+    if (!trainee.ok()) return ToGrpcStatus(trainee.status);
+    const std::vector<patient_db::SessionRow>& rows = sessions.value[i];
+    if (rows.size() > static_cast<size_t>(kMaxExportSessions)) {
+      return Status(StatusCode::OUT_OF_RANGE, "more than " + std::to_string(kMaxExportSessions) +
+                                                  " sessions of " + id + " in this range");
+    }
+    json row = SplitFiguresJson(rows);
+    row["trainee_id"] = id;
+    row["display_name"] = trainee.value.display_name;
+    row["curricula"] = CurriculaProgressJson(curricula, assignments.value[i], verdicts.value[i]);
+    trainees->push_back(std::move(row));
+  }
+  return Status::OK;
+}
+
+// GET groups/{group}/cohort: the group page.
+HttpReply GroupCohort(WebCall& call) {
+  int64_t from = 0, to = 0;
+  HttpReply refusal;
+  if (!AdmitGroupCall(call, &from, &to, &refusal)) return refusal;
+  const std::string& group = call.Param("group");
+  const std::string institution = GroupInstitution(call.query, call.who);
+  static const CallSpec spec{"group.cohort", kSupervisors, "read a group's figures"};
+  json trainees = json::array();
+  const Status s =
+      RunCall(call.deps, call.who, spec, "group " + group + "@" + institution, [&]() -> Status {
+        return CohortRows(call.deps, call.who, institution, group, from, to, &trainees);
+      });
+  if (!s.ok()) return ErrorOf(s);
+  return JsonReply(200, {{"group", group},
                          {"institution", institution},
                          {"from_unix_ms", from},
                          {"to_unix_ms", to},
                          {"trainees", trainees}});
+}
+
+// GET groups/{group}/progress: Lessons.GetProgress.
+HttpReply GroupProgress(WebCall& call) {
+  v1::GetProgressRequest req;
+  req.set_group(call.Param("group"));
+  req.set_institution(call.Query("institution"));
+  v1::GetProgressResponse resp;
+  if (auto refused = AdmitAndCall(call, req, &GetProgressCall, &resp)) return *refused;
+  return JsonReply(200, ProtoJson(resp));
+}
+
+}  // namespace
+
+std::vector<WebRoute> CohortRoutes() {
+  return {{"GET", "/api/v1/groups/{group}/progress", kSupervisors, &GroupProgress},
+          {"GET", "/api/v1/groups/{group}/cohort", kSupervisors, &GroupCohort},
+          {"GET", "/api/v1/groups/{group}/sessions.csv", kSupervisors, &GroupSessionsCsv},
+          {"GET", "/api/v1/trainees/{id}/report", kReaders, &TraineeReport}};
 }
 
 }  // namespace ves::server

@@ -1,9 +1,5 @@
 #pragma once
 
-#include <google/protobuf/message.h>
-#include <grpcpp/grpcpp.h>
-
-#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -17,7 +13,8 @@
 
 // Proficiency, cohorts and reports for supervisors (docs/web.md,
 // "Proficiency", "Cohorts", "Export"): what the trainee list, the group page
-// and the printable report show, read after the call that admits them.
+// and the printable report show, read after the call that admits them. The
+// routes are CohortRoutes() (server/web_routes.h).
 namespace ves::server {
 
 // Curricula read once per request (a group's trainees share theirs).
@@ -62,13 +59,7 @@ inline constexpr int kMaxExpertBandRuns = 50;
 nlohmann::json ExpertBandJson(patient_db::Store& store, const std::string& institution,
                               const std::string& case_id);
 
-// Serves groups/{group}/cohort, groups/{group}/sessions.csv and
-// trainees/{id}/report (GET). `admit` admits a request message (bounds,
-// token, CSRF) and fills `who`. nullopt: not one of these routes.
-std::optional<HttpReply> CohortRoute(
-    const ServiceDeps& deps, const std::vector<std::string>& path,
-    const std::map<std::string, std::string>& query,
-    const std::function<grpc::Status(const google::protobuf::Message&)>& admit,
-    const Principal& who);
+// The median of `v`; null when empty.
+nlohmann::json MedianOf(std::vector<double> v);
 
 }  // namespace ves::server

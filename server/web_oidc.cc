@@ -6,6 +6,7 @@
 
 #include "patient_db/limits.h"
 #include "server/web_api.h"
+#include "server/web_reply.h"
 
 namespace ves::server {
 namespace {
@@ -42,8 +43,8 @@ HttpReply WebApi::OidcStart() {
 }
 
 HttpReply WebApi::OidcCallback(const HttpRequest& request,
-                               const std::map<std::string, std::string>& query,
-                               const std::string& login_id) {
+                               const std::map<std::string, std::string>& query) {
+  const std::string login_id = CookieValue(request.cookie, kOidcCookieName);
   const std::string source = SourceAddress(request.peer);
   // Every refusal: one log line saying why (never a code or token), the
   // sign-in page with a short reason, the spent login's cookie cleared.

@@ -12,7 +12,7 @@
 // session of --session-seconds (600: ten minutes) stored as an upload is,
 // its series computed by the server's background worker (timed), then
 // --page-loads loads of everything session.html asks for, one after another
-// on new connections: the page, app.js, style.css, chart.js, the session and
+// on new connections: the page, its scripts and style, chart.js, the session and
 // its series.
 // Usage: web_bench [--sessions N] [--requests R] [--session-seconds S] [--page-loads P]
 #include <sys/resource.h>
@@ -259,7 +259,8 @@ int main(int argc, char** argv) {
   const Stats ar = Measure(audit_rare, port, admin, std::max(10, requests / 10));
   const std::string uuid = long_session.uuid();
   size_t page_bytes = 0;
-  const Stats sp = MeasurePage({"/session.html?uuid=" + uuid, "/app.js", "/style.css", "/chart.js",
+  const Stats sp = MeasurePage({"/session.html?uuid=" + uuid, "/common.js", "/style.css",
+                                "/chart.js", "/stations.js", "/session.js", "/workflow.js",
                                 "/api/v1/sessions/" + uuid, "/api/v1/sessions/" + uuid + "/series"},
                                port, token, page_loads, &page_bytes);
   size_t series_bytes = 0;

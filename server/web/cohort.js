@@ -1,10 +1,7 @@
 // Proficiency, the group (cohort) page and the printable trainee report
-// (docs/web.md, "Proficiency", "Cohorts", "Export"). Loaded after app.js,
-// whose helpers ($, el, row, link, api, when, signedIn, param) and page
-// table it uses; data goes in as text only.
+// (docs/web.md, "Proficiency", "Cohorts", "Export"). Loaded after common.js,
+// whose helpers and page table it uses; data goes in as text only.
 'use strict';
-
-const DAY_MS = 24 * 3600 * 1000;
 
 // "Title: 2/3" per assigned curriculum, "proficient" when all are passed.
 function curriculaCell(curricula) {
@@ -31,17 +28,6 @@ function expertBandText(band) {
   return 'Expert band: the scripted expert\'s ' + band.runs + ' run(s) of this case: score ' +
          range('score', '') + ', time to cecum ' + range('time_to_cecum_s', ' s') + ', pain ' +
          range('pain_s', ' s') + ', loop ' + range('loop_s', ' s') + '.';
-}
-
-function fixed(v, digits) { return v === null || v === undefined ? '—' : Number(v).toFixed(digits); }
-
-// [from, to) in ms of the chosen UTC days (both included); NaN when empty.
-function dayRange(fromInput, toInput) {
-  const from = utcDayMs(fromInput.value), to = utcDayMs(toInput.value);
-  let q = '';
-  if (!Number.isNaN(from)) q += '&from_unix_ms=' + from;
-  if (!Number.isNaN(to)) q += '&to_unix_ms=' + (to + DAY_MS);
-  return q;
 }
 
 // The cohort table's columns: header, value of a trainee row (for sorting),
@@ -108,7 +94,7 @@ async function groupPage() {
     const sorted = state.trainees.slice().sort(
         (a, b) => compareValues(sorter(a), sorter(b), state.direction) ||
                   a.trainee_id.localeCompare(b.trainee_id));
-    const body = $('cohort').querySelector('tbody');
+    const body = tableBody('cohort');
     body.textContent = '';
     for (const t of sorted) body.appendChild(row(columns.map(([, , show]) => show(t))));
     $('runs-note').textContent = runs === 'lesson'
@@ -116,7 +102,7 @@ async function groupPage() {
         : 'Practice runs only (free runs, no lesson); lesson attempts are apart.';
   };
   const load = async () => {
-    const range = dayRange($('cohort-from'), $('cohort-to'));
+    const range = dayRangeQuery($('cohort-from').value, $('cohort-to').value);
     $('cohort-csv').href = '/api/v1/groups/' + encodeURIComponent(group) + '/sessions.csv' +
                            range.replace('&', '?');
     const reply = await api('groups/' + encodeURIComponent(group) + '/cohort' + range.replace('&', '?'));
@@ -143,10 +129,7 @@ function summaryRow(label, f) {
 async function reportPage() {
   await signedIn();
   const id = param('id');
-  const from = utcDayMs(param('from')), to = utcDayMs(param('to'));
-  let range = '';
-  if (!Number.isNaN(from)) range += '&from_unix_ms=' + from;
-  if (!Number.isNaN(to)) range += '&to_unix_ms=' + (to + DAY_MS);
+  const range = dayRangeQuery(param('from'), param('to'));
   const r = await api('trainees/' + encodeURIComponent(id) + '/report' + range.replace('&', '?'));
   // The title names the trainee (a saved PDF's title), once the data is in.
   document.title = 'VES · Report of ' + r.trainee_id;
@@ -157,7 +140,7 @@ async function reportPage() {
   $('report-period').textContent = (r.from_unix_ms ? when(r.from_unix_ms).slice(0, 10) : 'first session') +
       ' to ' + (r.to_unix_ms ? when(r.to_unix_ms - DAY_MS).slice(0, 10) : 'last session');
   $('report-generated').textContent = when(r.generated_unix_ms);
-  const summary = $('report-summary').querySelector('tbody');
+  const summary = tableBody('report-summary');
   summary.appendChild(summaryRow('Lesson attempts', r.lesson));
   summary.appendChild(summaryRow('Practice runs', r.practice));
   const curricula = $('report-curricula');
@@ -174,7 +157,7 @@ async function reportPage() {
                             l.attempts ? Number(l.best_score).toFixed(1) : '—', l.completed ? 'yes' : 'no']));
     }
   }
-  const sessions = $('report-sessions').querySelector('tbody');
+  const sessions = tableBody('report-sessions');
   for (const s of r.sessions) {
     sessions.appendChild(row([when(s.start_unix_ms), s.case_id, s.lesson_id || 'practice',
                               s.verdict || '—', outcomeText(s.outcome), fixed(s.score, 1),

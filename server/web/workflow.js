@@ -1,6 +1,6 @@
 // The supervisors' workflow (docs/web.md, "Workflow"): adding trainees,
 // groups and assignments on the trainees and group pages, notes and the
-// sign-off on the session page. Loaded after app.js (and cohort.js), whose
+// sign-off on the session page. Loaded after common.js (and cohort.js), whose
 // helpers and page table it uses; it runs after each page's own loading.
 // Data goes in as text only. The forms show to supervisors and admins; the
 // server decides (403 for anyone else), and every refusal is shown in words.

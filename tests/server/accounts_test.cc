@@ -15,6 +15,7 @@
 #include "patient_db/store_factory.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/log_capture.h"
+#include "tests/server/web_fixture.h"
 #include "tests/server/web_client.h"
 
 namespace ves::server::testing {
@@ -58,13 +59,9 @@ TEST(PasswordHash, NewPasswordsAndUsernamesAreChecked) {
   EXPECT_NE(CheckUsername(std::string(65, 'a')), "");
 }
 
-class AccountsTest : public ::testing::Test {
+class AccountsTest : public WebServerTest {
  protected:
-  static ServerOptions WithHttp() {
-    ServerOptions o;
-    o.http_listen = "127.0.0.1:0";
-    return o;
-  }
+  AccountsTest() : WebServerTest(/*log_calls=*/true) {}
 
   void SetUp() override {
     admin_token_ = server_.MakeToken(StoreRole::kAdmin, "north");
@@ -81,14 +78,9 @@ class AccountsTest : public ::testing::Test {
     ASSERT_TRUE(server_.store().AddAccount(a).ok());
   }
 
-  int port() { return server_.server().http_port(); }
   HttpResult SignIn(const std::string& username, const std::string& password) {
     return HttpCall(port(), "POST", "/api/v1/sign-in", {{"Content-Type", "application/json"}},
                     json{{"username", username}, {"password", password}}.dump());
-  }
-  static std::string CookieOf(const HttpResult& r) {
-    const std::string set_cookie = r.Header("set-cookie");
-    return set_cookie.substr(0, set_cookie.find(';'));
   }
   HttpResult Me(const std::string& cookie) {
     return HttpCall(port(), "GET", "/api/v1/me", {{"Cookie", cookie}});
@@ -106,7 +98,6 @@ class AccountsTest : public ::testing::Test {
     return rows;
   }
 
-  TestServer server_{WithHttp(), /*log_calls=*/true};
   std::string admin_token_;
   std::atomic<int64_t> now_ms_{WallMs()};
 };

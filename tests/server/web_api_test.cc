@@ -21,6 +21,7 @@
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
+#include "tests/server/web_fixture.h"
 
 namespace ves::server::testing {
 namespace {
@@ -31,14 +32,8 @@ using patient_db::StoreRole;
 const char kXss[] = "<img src=x onerror=alert(1)>";
 const char kXssPath[] = "%3Cimg%20src%3Dx%20onerror%3Dalert(1)%3E";
 
-class WebApiTest : public ::testing::Test {
+class WebApiTest : public WebServerTest {
  protected:
-  static ServerOptions WithHttp() {
-    ServerOptions o;
-    o.http_listen = "127.0.0.1:0";
-    return o;
-  }
-
   void SetUp() override {
     server_.AddTrainee("t1", "north");
     server_.AddTrainee("t2", "north");
@@ -62,24 +57,6 @@ class WebApiTest : public ::testing::Test {
         UploadSession(server_.Client(south_station_), MakeRecord(south_uuid_, "s1", 2), &r).ok());
   }
 
-  int port() { return server_.server().http_port(); }
-  HttpResult Get(const std::string& target, const std::string& token = "") {
-    Headers h;
-    if (!token.empty()) h.emplace_back("Authorization", "Bearer " + token);
-    return HttpCall(port(), "GET", target, h);
-  }
-  // Signs in with `token`; returns the cookie pair and the CSRF token.
-  std::pair<std::string, std::string> SignIn(const std::string& token,
-                                             HttpResult* reply = nullptr) {
-    HttpResult r = HttpCall(port(), "POST", "/api/v1/sign-in",
-                            {{"Content-Type", "application/json"}}, json{{"token", token}}.dump());
-    EXPECT_EQ(r.status, 200) << r.body;
-    if (reply) *reply = r;
-    const std::string set_cookie = r.Header("set-cookie");
-    return {set_cookie.substr(0, set_cookie.find(';')), json::parse(r.body)["csrf_token"]};
-  }
-
-  TestServer server_{WithHttp()};
   std::string admin_, supervisor_, south_supervisor_, station_, south_station_, trainee_t2_;
   std::string north_uuid_, south_uuid_;
 };
@@ -460,7 +437,7 @@ TEST_F(WebApiTest, BadInputGetsAClearJsonError) {
 TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
   for (const std::string page :
        {"/", "/index.html", "/trainees.html", "/trainee.html", "/session.html", "/progress.html",
-        "/audit.html", "/live.html", "/stations.html"}) {
+        "/audit.html", "/live.html", "/stations.html", "/group.html", "/report.html"}) {
     const HttpResult r = Get(page);
     EXPECT_EQ(r.status, 200) << page;
     EXPECT_EQ(r.Header("content-type"), "text/html; charset=utf-8") << page;
@@ -471,9 +448,13 @@ TEST_F(WebApiTest, PagesAreServedFromTheBinaryWithAStrictPolicy) {
   const HttpResult chart = Get("/chart.js");
   EXPECT_EQ(chart.status, 200);
   EXPECT_NE(chart.body.find("Chart.js"), std::string::npos);
-  const HttpResult app = Get("/app.js");
-  EXPECT_EQ(app.status, 200);
-  EXPECT_EQ(app.body.find("innerHTML"), std::string::npos) << "data must go in as text";
+  for (const char* script : {"/common.js", "/sign_in.js", "/trainees.js", "/curves.js",
+                             "/session.js", "/audit.js", "/stations.js", "/live.js", "/cohort.js",
+                             "/workflow.js"}) {
+    const HttpResult js = Get(script);
+    EXPECT_EQ(js.status, 200) << script;
+    EXPECT_EQ(js.body.find("innerHTML"), std::string::npos) << script << ": data must go in as text";
+  }
   EXPECT_EQ(Get("/../etc/passwd").status, 404);
 }
 

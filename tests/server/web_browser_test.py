@@ -14,45 +14,13 @@ import csv
 import io
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
 import time
 
-SKIP = 77
+from browser_harness import BrowserRun, documented_csv_columns
+
 XSS = '<img src=x onerror=alert(1)>'
-
-
-def skip(why):
-    print('SKIP: ' + why, flush=True)
-    sys.exit(SKIP)
-
-
-def wait_file(path, proc, seconds=30):
-    end = time.time() + seconds
-    while time.time() < end:
-        if os.path.exists(path):
-            return open(path).read().strip()
-        if proc.poll() is not None:
-            raise RuntimeError('ves-server exited with %d' % proc.returncode)
-        time.sleep(0.05)
-    raise RuntimeError('ves-server did not write ' + path)
-
-
-def documented_csv_columns():
-    """The column names of docs/web.md's "Export" table, in order."""
-    docs = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'docs', 'web.md')
-    with open(docs) as f:
-        text = f.read()
-    section = text.split('\n## Export\n', 1)[1].split('\n## ', 1)[0]
-    columns = []
-    for line in section.splitlines():
-        if not line.startswith('| `'):
-            continue
-        first_cell = line.split('|')[1]
-        columns += [c for c in first_cell.split('`')[1::2]]
-    return columns
 
 
 def main():
@@ -63,33 +31,15 @@ def main():
     ap.add_argument('--out', required=True)
     args = ap.parse_args()
 
-    try:
-        from selenium import webdriver
-        from selenium.common.exceptions import NoAlertPresentException, WebDriverException
+    with BrowserRun('ves-web-', args.out) as run:
+        from selenium.common.exceptions import NoAlertPresentException
         from selenium.webdriver.common.by import By
         from selenium.webdriver.support.ui import WebDriverWait
-    except ImportError as e:
-        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
-    chromium = shutil.which('chromium')
-    driver_path = shutil.which('chromedriver')
-    if not chromium or not driver_path:
-        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
-
-    os.makedirs(args.out, exist_ok=True)
-    work = tempfile.mkdtemp(prefix='ves-web-')
-    server = None
-    driver = None
-    try:
-        db = 'sqlite:' + os.path.join(work, 'ves.db')
-        tokens = json.loads(subprocess.check_output([args.seed, 'setup', db], text=True))
-        server = subprocess.Popen(
-            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
-             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:0',
-             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1'],
-            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
-        grpc_port = wait_file(os.path.join(work, 'grpc.port'), server)
-        http_port = wait_file(os.path.join(work, 'http.port'), server)
-        base = 'http://127.0.0.1:%s' % http_port
+        tokens = run.seed(args.seed)
+        run.start_server(args.server)
+        grpc_port = run.grpc.split(':')[1]
+        base = run.base
+        work = run.work
 
         # Three sessions of t1 on the sample case, uploaded as a station does.
         sessions = []
@@ -98,27 +48,9 @@ def main():
                 [args.seed, 'upload', '127.0.0.1:' + grpc_port, tokens['station'], 't1',
                  operator, seconds], text=True)))
 
-        options = webdriver.ChromeOptions()
-        options.binary_location = chromium
-        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-                     '--window-size=1280,1400', '--no-first-run', '--disable-extensions'):
-            options.add_argument(flag)
-        try:
-            from selenium.webdriver.chrome.service import Service
-            driver = webdriver.Chrome(service=Service(driver_path), options=options)
-        except WebDriverException as e:
-            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
-        driver.set_page_load_timeout(60)
-
-        def ready(page):
-            WebDriverWait(driver, 60).until(
-                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready'))
-            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-            error = driver.find_element(By.ID, 'error').text
-            assert state == 'true', '%s page failed: %s' % (page, error)
-
-        def shot(name):
-            driver.save_screenshot(os.path.join(args.out, name + '.png'))
+        driver = run.start_browser('1280,1400')
+        ready = run.ready
+        shot = run.shot
 
         def no_alert():
             try:
@@ -462,16 +394,6 @@ def main():
         WebDriverWait(driver, 30).until(lambda d: d.current_url.endswith('/index.html'))
         print('web_browser_test: all pages checked; screenshots in ' + args.out)
         return 0
-    finally:
-        if driver is not None:
-            driver.quit()
-        if server is not None:
-            server.terminate()
-            try:
-                server.wait(20)
-            except subprocess.TimeoutExpired:
-                server.kill()
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == '__main__':

@@ -15,14 +15,11 @@ import csv
 import io
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from web_browser_test import documented_csv_columns, skip, wait_file  # noqa: E402
+from browser_harness import BrowserRun, documented_csv_columns  # noqa: E402
 
 
 def main():
@@ -32,33 +29,15 @@ def main():
     ap.add_argument('--out', required=True)
     args = ap.parse_args()
 
-    try:
-        from selenium import webdriver
-        from selenium.common.exceptions import WebDriverException
+    with BrowserRun('ves-web-cohort-', args.out) as run:
         from selenium.webdriver.common.by import By
         from selenium.webdriver.support.ui import Select, WebDriverWait
-    except ImportError as e:
-        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
-    chromium = shutil.which('chromium')
-    driver_path = shutil.which('chromedriver')
-    if not chromium or not driver_path:
-        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
-
-    os.makedirs(args.out, exist_ok=True)
-    work = tempfile.mkdtemp(prefix='ves-web-cohort-')
-    profile = os.path.join(work, 'profile')
-    server = None
-    driver = None
-    try:
-        db = 'sqlite:' + os.path.join(work, 'ves.db')
-        tokens = json.loads(subprocess.check_output([args.seed, 'setup', db], text=True))
-        server = subprocess.Popen(
-            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
-             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:0',
-             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1'],
-            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
-        grpc = '127.0.0.1:' + wait_file(os.path.join(work, 'grpc.port'), server)
-        base = 'http://127.0.0.1:%s' % wait_file(os.path.join(work, 'http.port'), server)
+        chromium = run.chromium
+        profile = run.path('profile')
+        tokens = run.seed(args.seed)
+        run.start_server(args.server)
+        grpc = run.grpc
+        base = run.base
 
         # Practice runs (no lesson): t1 a novice's and an expert's, t2 an
         # expert's; then t2 passes the one lesson of "web-lessons", which is
@@ -77,36 +56,12 @@ def main():
                                'g1'])
         expert_scores = [r['score'] for r in runs if r['operator'] == 'expert']
 
-        options = webdriver.ChromeOptions()
-        options.binary_location = chromium
-        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-                     '--window-size=1366,768', '--no-first-run', '--disable-extensions',
-                     '--password-store=basic', '--user-data-dir=' + profile):
-            options.add_argument(flag)
-        try:
-            from selenium.webdriver.chrome.service import Service
-            driver = webdriver.Chrome(service=Service(driver_path), options=options)
-        except WebDriverException as e:
-            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
-        driver.set_page_load_timeout(60)
+        driver = run.start_browser('1366,768', ('--password-store=basic',
+                                                '--user-data-dir=' + profile))
+        ready = run.ready
+        shot = run.shot
+        table_rows = run.table_rows
 
-        def ready(page):
-            WebDriverWait(driver, 60).until(
-                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-                in ('true', 'error'))
-            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-            error = driver.find_element(By.ID, 'error').text
-            assert state == 'true', '%s page failed: %s' % (page, error)
-
-        def shot(name):
-            driver.save_screenshot(os.path.join(args.out, name + '.png'))
-
-        def table_rows(table_id):
-            table = driver.find_element(By.ID, table_id)
-            head = [th.text.replace(' ▲', '').replace(' ▼', '')
-                    for th in table.find_elements(By.CSS_SELECTOR, 'thead th')]
-            return [dict(zip(head, [td.text for td in tr.find_elements(By.TAG_NAME, 'td')]))
-                    for tr in table.find_elements(By.CSS_SELECTOR, 'tbody tr')]
 
         driver.get(base + '/')
         ready('sign-in')
@@ -225,7 +180,7 @@ def main():
         assert not driver.find_element(By.ID, 'print').is_displayed()
         assert driver.find_element(By.ID, 'report-sessions').is_displayed()
         shot('c07-report-print-media')
-        driver.quit()  # writes the session cookie to the profile for the CLI run
+        run.quit_browser()  # writes the session cookie to the profile for the CLI run
         driver = None
 
         pdf = os.path.join(args.out, 'report-t2.pdf')
@@ -252,16 +207,6 @@ def main():
         print('ok: trainee list, expert band, group page, CSV (%d rows), report, PDF %d bytes'
               % (len(exported), len(data)))
         return 0
-    finally:
-        if driver is not None:
-            driver.quit()
-        if server is not None:
-            server.terminate()
-            try:
-                server.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                server.kill()
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == '__main__':

@@ -17,6 +17,7 @@
 #include "server/web_cohort.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
+#include "tests/server/web_fixture.h"
 
 namespace ves::server::testing {
 namespace {
@@ -36,14 +37,8 @@ struct StoredRun {
   std::string institution = "north";
 };
 
-class WebCohortTest : public ::testing::Test {
+class WebCohortTest : public WebServerTest {
  protected:
-  static ServerOptions WithHttp() {
-    ServerOptions o;
-    o.http_listen = "127.0.0.1:0";
-    return o;
-  }
-
   void SetUp() override {
     for (const char* id : {"t1", "t2", "t3", "x1"}) server_.AddTrainee(id, "north");
     server_.AddTrainee("s1", "south");
@@ -145,12 +140,6 @@ class WebCohortTest : public ::testing::Test {
     return "00000000-0000-4000-8000-" + hex;
   }
 
-  HttpResult Get(const std::string& target, const std::string& token = "") {
-    Headers h;
-    if (!token.empty()) h.emplace_back("Authorization", "Bearer " + token);
-    return HttpCall(server_.server().http_port(), "GET", target, h);
-  }
-
   static const json& Trainee(const json& cohort, const std::string& id) {
     for (const json& t : cohort["trainees"]) {
       if (t["trainee_id"] == id) return t;
@@ -160,21 +149,6 @@ class WebCohortTest : public ::testing::Test {
     return none;
   }
 
-  // Whether an audit row of `action` on `target` with `result` appears.
-  bool Audited(const std::string& action, const std::string& target, const std::string& result) {
-    for (int i = 0; i < 100; ++i) {
-      const json audit = json::parse(Get("/api/v1/audit?action=" + action, admin_).body);
-      for (const auto& e : audit["entries"]) {
-        if (e["target"] == target && e["result"].get<std::string>().rfind(result, 0) == 0) {
-          return true;
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    return false;
-  }
-
-  TestServer server_{WithHttp()};
   std::vector<StoredRun> runs_;
   std::string admin_, supervisor_, south_supervisor_, station_, trainee_t1_;
 };

@@ -16,36 +16,18 @@ with a reason when Chromium, Selenium or python3-cryptography is missing.
 import argparse
 import json
 import os
-import shutil
 import socket
 import subprocess
 import sys
-import tempfile
-import time
 import urllib.parse
 import urllib.request
 
-SKIP = 77
+from browser_harness import BrowserRun, skip, wait_file
+
 CLIENT_ID = 'ves-web'
 SUBJECT = 'idp-user-1'
 ACCOUNT = 'dr.hospital'
-IDP_REFUSED = 'The hospital sign-in did not complete. Try again.'  # app.js, kSignInErrors.idp
-
-
-def skip(why):
-    print('SKIP: ' + why, flush=True)
-    sys.exit(SKIP)
-
-
-def wait_file(path, proc, what, seconds=30):
-    end = time.time() + seconds
-    while time.time() < end:
-        if os.path.exists(path):
-            return open(path).read().strip()
-        if proc.poll() is not None:
-            raise RuntimeError('%s exited with %d' % (what, proc.returncode))
-        time.sleep(0.05)
-    raise RuntimeError('%s did not write %s' % (what, path))
+IDP_REFUSED = 'The hospital sign-in did not complete. Try again.'  # sign_in.js, kSignInErrors.idp
 
 
 def free_loopback_port():
@@ -65,29 +47,14 @@ def main():
     args = ap.parse_args()
 
     try:
-        from selenium import webdriver
-        from selenium.common.exceptions import WebDriverException
-        from selenium.webdriver.common.by import By
-        from selenium.webdriver.support.ui import WebDriverWait
-    except ImportError as e:
-        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
-    try:
         import cryptography  # noqa: F401  (the provider signs its ID tokens with it)
     except ImportError as e:
         skip('python3-cryptography is not installed (deploy/install-deps.sh): %s' % e)
-    chromium = shutil.which('chromium')
-    driver_path = shutil.which('chromedriver')
-    if not chromium or not driver_path:
-        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
-
-    os.makedirs(args.out, exist_ok=True)
-    work = tempfile.mkdtemp(prefix='ves-web-oidc-')
-    procs = []
-    driver = None
-    try:
-        db = 'sqlite:' + os.path.join(work, 'ves.db')
-        subprocess.check_output([args.seed, 'setup', db], text=True)
-        subprocess.run([args.admin, 'account', 'create', '--db', db, '--username', ACCOUNT,
+    with BrowserRun('ves-web-oidc-', args.out) as run:
+        from selenium.webdriver.common.by import By
+        from selenium.webdriver.support.ui import WebDriverWait
+        run.seed(args.seed)
+        subprocess.run([args.admin, 'account', 'create', '--db', run.db, '--username', ACCOUNT,
                         '--role', 'supervisor', '--institution', 'north',
                         '--idp-identity', SUBJECT, '--no-password'],
                        check=True, stdin=subprocess.DEVNULL, capture_output=True, text=True)
@@ -96,7 +63,7 @@ def main():
         base = 'http://127.0.0.1:%d' % http_port
         redirect_uri = base + '/api/v1/oidc/callback'
         secret = 'client secret ' + os.urandom(8).hex()
-        secret_file = os.path.join(work, 'client-secret')
+        secret_file = run.path('client-secret')
         with open(secret_file, 'w') as f:
             f.write(secret + '\n')
         idp_log = os.path.join(args.out, 'idp.log')  # the provider appends: this run's only
@@ -104,11 +71,11 @@ def main():
             os.remove(idp_log)
         idp_script = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'oidc_test_idp.py')
         idp = subprocess.Popen(
-            [sys.executable, idp_script, '--port-file', os.path.join(work, 'idp.port'),
+            [sys.executable, idp_script, '--port-file', run.path('idp.port'),
              '--log', idp_log, '--client-id', CLIENT_ID,
              '--client-secret', secret, '--redirect-uri', redirect_uri])
-        procs.append(idp)
-        idp_base = 'http://127.0.0.1:%s' % wait_file(os.path.join(work, 'idp.port'), idp, 'the IdP')
+        run.add_process(idp)
+        idp_base = 'http://127.0.0.1:%s' % wait_file(run.path('idp.port'), idp, 'the IdP')
 
         def control(settings):
             request = urllib.request.Request(idp_base + '/control',
@@ -119,37 +86,14 @@ def main():
 
         # The provider shows its own page, as Keycloak or Entra ID do.
         control({'mode': 'good', 'page': True, 'user': {'sub': SUBJECT, 'name': 'Dr Hospital'}})
-        server = subprocess.Popen(
-            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
-             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:%d' % http_port,
-             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1',
-             '--oidc-issuer', idp_base, '--oidc-client-id', CLIENT_ID,
-             '--oidc-client-secret-file', secret_file, '--oidc-redirect-uri', redirect_uri],
-            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
-        procs.append(server)
-        assert wait_file(os.path.join(work, 'http.port'), server, 'ves-server') == str(http_port)
+        run.start_server(args.server, http_listen='127.0.0.1:%d' % http_port, extra_args=[
+            '--oidc-issuer', idp_base, '--oidc-client-id', CLIENT_ID,
+            '--oidc-client-secret-file', secret_file, '--oidc-redirect-uri', redirect_uri])
+        assert run.base == base, (run.base, base)
 
-        options = webdriver.ChromeOptions()
-        options.binary_location = chromium
-        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-                     '--window-size=1366,768', '--no-first-run', '--disable-extensions'):
-            options.add_argument(flag)
-        try:
-            from selenium.webdriver.chrome.service import Service
-            driver = webdriver.Chrome(service=Service(driver_path), options=options)
-        except WebDriverException as e:
-            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
-        driver.set_page_load_timeout(60)
-
-        def ready(page):
-            WebDriverWait(driver, 60).until(
-                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready'))
-            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-            error = driver.find_element(By.ID, 'error').text
-            assert state == 'true', '%s page failed: %s' % (page, error)
-
-        def shot(name):
-            driver.save_screenshot(os.path.join(args.out, name + '.png'))
+        driver = run.start_browser('1366,768')
+        ready = run.ready
+        shot = run.shot
 
         def signed_in():
             # What the pages ask first: 200 with the account, or 401.
@@ -232,16 +176,6 @@ def main():
         print('web_oidc_browser_test: hospital sign-in and its refusals checked; screenshots in ' +
               args.out)
         return 0
-    finally:
-        if driver is not None:
-            driver.quit()
-        for proc in reversed(procs):
-            proc.terminate()
-            try:
-                proc.wait(20)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == '__main__':

@@ -17,6 +17,7 @@
 #include "station/training/case_run.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
+#include "tests/server/web_fixture.h"
 
 namespace ves::server::testing {
 namespace {
@@ -24,14 +25,8 @@ namespace {
 using nlohmann::json;
 using patient_db::StoreRole;
 
-class WebSeriesTest : public ::testing::Test {
+class WebSeriesTest : public WebServerTest {
  protected:
-  static ServerOptions WithHttp() {
-    ServerOptions o;
-    o.http_listen = "127.0.0.1:0";
-    return o;
-  }
-
   void SetUp() override {
     server_.AddTrainee("t1", "north");
     server_.AddTrainee("s1", "south");
@@ -77,12 +72,6 @@ class WebSeriesTest : public ::testing::Test {
     ASSERT_TRUE(server_.store().CommitBatch(batch).ok());
   }
 
-  HttpResult Get(const std::string& target, const std::string& token) {
-    return HttpCall(server_.server().http_port(), "GET", target,
-                    {{"Authorization", "Bearer " + token}});
-  }
-
-  TestServer server_{WithHttp()};
   std::string supervisor_, south_supervisor_, station_;
 };
 

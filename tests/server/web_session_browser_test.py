@@ -12,31 +12,12 @@ Chromium cannot run here.
 """
 import argparse
 import json
-import os
-import shutil
 import sqlite3
 import subprocess
 import sys
-import tempfile
 import time
 
-SKIP = 77
-
-
-def skip(why):
-    print('SKIP: ' + why, flush=True)
-    sys.exit(SKIP)
-
-
-def wait_file(path, proc, seconds=30):
-    end = time.time() + seconds
-    while time.time() < end:
-        if os.path.exists(path):
-            return open(path).read().strip()
-        if proc.poll() is not None:
-            raise RuntimeError('ves-server exited with %d' % proc.returncode)
-        time.sleep(0.05)
-    raise RuntimeError('ves-server did not write ' + path)
+from browser_harness import BrowserRun
 
 
 def main():
@@ -46,37 +27,19 @@ def main():
     ap.add_argument('--out', required=True)
     args = ap.parse_args()
 
-    try:
-        from selenium import webdriver
-        from selenium.common.exceptions import TimeoutException, WebDriverException
+    with BrowserRun('ves-web-session-', args.out) as run:
+        from selenium.common.exceptions import TimeoutException
         from selenium.webdriver.common.by import By
         from selenium.webdriver.support.ui import Select, WebDriverWait
-    except ImportError as e:
-        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
-    chromium = shutil.which('chromium')
-    driver_path = shutil.which('chromedriver')
-    if not chromium or not driver_path:
-        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
-
-    os.makedirs(args.out, exist_ok=True)
-    work = tempfile.mkdtemp(prefix='ves-web-session-')
-    server = None
-    driver = None
-    try:
-        db_path = os.path.join(work, 'ves.db')
-        db = 'sqlite:' + db_path
-        tokens = json.loads(subprocess.check_output([args.seed, 'setup', db], text=True))
+        db_path = run.path('ves.db')
+        db = run.db
+        tokens = run.seed(args.seed)
         # Three sessions stored before series existed (none computed).
         old = [json.loads(subprocess.check_output(
             [args.seed, 'store', db, 't1', 'expert', '30'], text=True)) for _ in range(3)]
-        server = subprocess.Popen(
-            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
-             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:0',
-             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1'],
-            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
-        grpc_port = wait_file(os.path.join(work, 'grpc.port'), server)
-        http_port = wait_file(os.path.join(work, 'http.port'), server)
-        base = 'http://127.0.0.1:%s' % http_port
+        run.start_server(args.server)
+        grpc_port = run.grpc.split(':')[1]
+        base = run.base
 
         # A session uploaded now: its series is computed in the background.
         fresh = json.loads(subprocess.check_output(
@@ -98,27 +61,9 @@ def main():
             time.sleep(0.2)
         assert not any(stored_series(o['uuid']) for o in old)
 
-        options = webdriver.ChromeOptions()
-        options.binary_location = chromium
-        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-                     '--window-size=1366,768', '--no-first-run', '--disable-extensions'):
-            options.add_argument(flag)
-        try:
-            from selenium.webdriver.chrome.service import Service
-            driver = webdriver.Chrome(service=Service(driver_path), options=options)
-        except WebDriverException as e:
-            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
-        driver.set_page_load_timeout(60)
-
-        def ready(page, seconds=60):
-            WebDriverWait(driver, seconds).until(
-                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready'))
-            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-            error = driver.find_element(By.ID, 'error').text
-            assert state == 'true', '%s page failed: %s' % (page, error)
-
-        def shot(name):
-            driver.save_screenshot(os.path.join(args.out, name + '.png'))
+        driver = run.start_browser('1366,768')
+        ready = run.ready
+        shot = run.shot
 
         def scroll_to(element_id):
             driver.execute_script("document.getElementById(arguments[0]).scrollIntoView()",
@@ -273,16 +218,6 @@ def main():
         assert all(stored_series(o['uuid']) for o in old), 'computed on view, then stored'
         print('OK: session page (first load, play, cursor, verdict, busy retry)', flush=True)
         return 0
-    finally:
-        if driver is not None:
-            driver.quit()
-        if server is not None:
-            server.terminate()
-            try:
-                server.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                server.kill()
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == '__main__':

@@ -12,14 +12,12 @@ to --out. Exits 77 (CTest SKIP) with a reason when Chromium cannot run here.
 import argparse
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from web_browser_test import skip, wait_file  # noqa: E402
+from browser_harness import BrowserRun  # noqa: E402
 
 
 def main():
@@ -29,68 +27,23 @@ def main():
     ap.add_argument('--out', required=True)
     args = ap.parse_args()
 
-    try:
-        from selenium import webdriver
-        from selenium.common.exceptions import WebDriverException
+    with BrowserRun('ves-web-workflow-', args.out) as run:
         from selenium.webdriver.common.by import By
         from selenium.webdriver.support.ui import Select, WebDriverWait
-    except ImportError as e:
-        skip('python3-selenium is not installed (deploy/install-deps.sh): %s' % e)
-    chromium = shutil.which('chromium')
-    driver_path = shutil.which('chromedriver')
-    if not chromium or not driver_path:
-        skip('chromium and chromium-driver are not installed (deploy/install-deps.sh)')
-
-    os.makedirs(args.out, exist_ok=True)
-    work = tempfile.mkdtemp(prefix='ves-web-workflow-')
-    profile = os.path.join(work, 'profile')
-    server = None
-    driver = None
-    try:
-        db = 'sqlite:' + os.path.join(work, 'ves.db')
-        tokens = json.loads(subprocess.check_output([args.seed, 'setup', db], text=True))
-        server = subprocess.Popen(
-            [args.server, '--db', db, '--insecure-loopback', '--listen', '127.0.0.1:0',
-             '--port-file', os.path.join(work, 'grpc.port'), '--http', '127.0.0.1:0',
-             '--http-port-file', os.path.join(work, 'http.port'), '--drain-s', '1'],
-            stdout=open(os.path.join(args.out, 'ves-server.log'), 'w'), stderr=subprocess.STDOUT)
-        grpc = '127.0.0.1:' + wait_file(os.path.join(work, 'grpc.port'), server)
-        base = 'http://127.0.0.1:%s' % wait_file(os.path.join(work, 'http.port'), server)
+        tokens = run.seed(args.seed)
+        run.start_server(args.server)
+        grpc = run.grpc
+        base = run.base
         # A curriculum to assign ("web-lessons") and t2's session of its lesson.
         lesson = json.loads(subprocess.check_output(
             [args.seed, 'lesson', grpc, tokens['supervisor'], tokens['station'], 't2'], text=True))
         session_uuid = lesson['uuid']
 
-        options = webdriver.ChromeOptions()
-        options.binary_location = chromium
-        for flag in ('--headless=new', '--no-sandbox', '--disable-gpu', '--disable-dev-shm-usage',
-                     '--window-size=1366,768', '--no-first-run', '--disable-extensions',
-                     '--password-store=basic', '--user-data-dir=' + profile):
-            options.add_argument(flag)
-        try:
-            from selenium.webdriver.chrome.service import Service
-            driver = webdriver.Chrome(service=Service(driver_path), options=options)
-        except WebDriverException as e:
-            skip('headless Chromium cannot start on this machine: %s' % str(e).splitlines()[0])
-        driver.set_page_load_timeout(60)
-
-        def ready(page):
-            WebDriverWait(driver, 60).until(
-                lambda d: d.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-                in ('true', 'error'))
-            state = driver.find_element(By.TAG_NAME, 'body').get_attribute('data-ready')
-            error = driver.find_element(By.ID, 'error').text
-            assert state == 'true', '%s page failed: %s' % (page, error)
-
-        def shot(name):
-            driver.save_screenshot(os.path.join(args.out, name + '.png'))
-
-        def table_rows(table_id):
-            table = driver.find_element(By.ID, table_id)
-            head = [th.text.replace(' ▲', '').replace(' ▼', '')
-                    for th in table.find_elements(By.CSS_SELECTOR, 'thead th')]
-            return [dict(zip(head, [td.text for td in tr.find_elements(By.TAG_NAME, 'td')]))
-                    for tr in table.find_elements(By.CSS_SELECTOR, 'tbody tr')]
+        driver = run.start_browser('1366,768', ('--password-store=basic',
+                                                '--user-data-dir=' + run.path('profile')))
+        ready = run.ready
+        shot = run.shot
+        table_rows = run.table_rows
 
         def submit_and_reload(form_id):
             """Submits a reloading form; waits for the page read again."""
@@ -289,16 +242,6 @@ def main():
         assert driver.find_element(By.ID, 'audit-page').text == 'No entries.'
         print('workflow browser test: trainee, group, assignment, note, sign-off and audit read '
               'back at 1366x768; screenshots in ' + args.out, flush=True)
-    finally:
-        if driver is not None:
-            driver.quit()
-        if server is not None:
-            server.terminate()
-            try:
-                server.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                server.kill()
-        shutil.rmtree(work, ignore_errors=True)
 
 
 if __name__ == '__main__':

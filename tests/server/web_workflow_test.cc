@@ -13,6 +13,7 @@
 #include "server/web_api.h"
 #include "tests/integration/test_server.h"
 #include "tests/server/web_client.h"
+#include "tests/server/web_fixture.h"
 
 namespace ves::server::testing {
 namespace {
@@ -23,14 +24,8 @@ using patient_db::StoreRole;
 constexpr char kSession[] = "00000000-0000-4000-8000-000000000001";
 constexpr char kSouthSession[] = "00000000-0000-4000-8000-000000000002";
 
-class WebWorkflowTest : public ::testing::Test {
+class WebWorkflowTest : public WebServerTest {
  protected:
-  static ServerOptions WithHttp() {
-    ServerOptions o;
-    o.http_listen = "127.0.0.1:0";
-    return o;
-  }
-
   void SetUp() override {
     server_.AddTrainee("t1", "north");
     server_.AddTrainee("s1", "south");
@@ -80,27 +75,7 @@ class WebWorkflowTest : public ::testing::Test {
     trainee_t1_ = server_.MakeToken(StoreRole::kTrainee, "north", "t1");
   }
 
-  int port() { return server_.server().http_port(); }
-  HttpResult Get(const std::string& target, const std::string& token) {
-    return HttpCall(port(), "GET", target, {{"Authorization", "Bearer " + token}});
-  }
-  HttpResult Post(const std::string& target, const std::string& token, const json& body) {
-    return HttpCall(port(), "POST", target,
-                    {{"Authorization", "Bearer " + token}, {"Content-Type", "application/json"}},
-                    body.dump());
-  }
-  // A browser session: the cookie pair and the CSRF token.
-  std::pair<std::string, std::string> SignIn(const std::string& token) {
-    HttpResult r = HttpCall(port(), "POST", "/api/v1/sign-in",
-                            {{"Content-Type", "application/json"}}, json{{"token", token}}.dump());
-    EXPECT_EQ(r.status, 200) << r.body;
-    const std::string set_cookie = r.Header("set-cookie");
-    return {set_cookie.substr(0, set_cookie.find(';')), json::parse(r.body)["csrf_token"]};
-  }
-  static std::string ErrorOf(const HttpResult& r) {
-    const json j = json::parse(r.body, nullptr, false);
-    return j.is_object() && j.contains("error") ? j["error"]["message"].get<std::string>() : "";
-  }
+  static std::string ErrorOf(const HttpResult& r) { return ErrorMessageOf(r); }
 
   // The audit rows of `action` as the API lists them (newest first), once
   // the group commit has written at least `at_least`.
@@ -115,19 +90,6 @@ class WebWorkflowTest : public ::testing::Test {
     }
     return entries;
   }
-  bool Audited(const std::string& action, const std::string& target, const std::string& result) {
-    for (int i = 0; i < 100; ++i) {
-      for (const auto& e : AuditOf(action, 0)) {
-        if (e["target"] == target && e["result"].get<std::string>().rfind(result, 0) == 0) {
-          return true;
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    return false;
-  }
-
-  TestServer server_{WithHttp()};
   std::string admin_, supervisor_, south_supervisor_, station_, trainee_t1_;
 };
 
