@@ -31,6 +31,7 @@ namespace ves::server {
 using patient_db::NowUnixMs;
 
 class AsyncCall;  // server/pipeline.h
+class CheckedRecord;  // server/checked_record.h
 class LiveHub;
 class SessionSeries;
 
@@ -194,9 +195,8 @@ grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
 // A message's bytes with deterministic map order: stored bodies hash the same.
 std::string DeterministicBytes(const google::protobuf::Message& m);
 // What an accepted upload tells of its station (table stations): seen now,
-// the record's version, and its StationHealth when it has one. The record
-// has passed CheckSessionRecord.
-patient_db::StationRow StationReportOf(const ves::v1::SessionRecord& record,
+// the record's version, and its StationHealth when it has one.
+patient_db::StationRow StationReportOf(const CheckedRecord& record,
                                        const std::string& institution, int64_t now_unix_ms);
 
 }  // namespace ves::server

@@ -5,6 +5,7 @@
 #include "patient_db/limits.h"
 #include "server/pipeline.h"
 #include "server/services.h"
+#include "server/checked_record.h"
 #include "server/session_check.h"
 #include "server/session_series.h"
 
@@ -15,8 +16,9 @@ using grpc::StatusCode;
 using patient_db::StoreCode;
 using patient_db::StoreRole;
 
-patient_db::StationRow StationReportOf(const ves::v1::SessionRecord& rec,
+patient_db::StationRow StationReportOf(const CheckedRecord& checked,
                                        const std::string& institution, int64_t now_unix_ms) {
+  const ves::v1::SessionRecord& rec = checked.record();
   patient_db::StationRow r;
   r.institution = institution;
   r.station_id = rec.station_id();
@@ -40,8 +42,9 @@ namespace {
 
 // The stored row of a checked record: its columns, its deterministic bytes
 // and their hash, and the station's report merged in the same transaction.
-patient_db::SessionRow SessionRowOf(const ves::v1::SessionRecord& rec,
+patient_db::SessionRow SessionRowOf(const CheckedRecord& checked,
                                     const std::string& institution) {
+  const ves::v1::SessionRecord& rec = checked.record();
   patient_db::SessionRow row;
   row.uuid = rec.uuid();
   row.trainee_id = rec.trainee_id();
@@ -64,7 +67,7 @@ patient_db::SessionRow SessionRowOf(const ves::v1::SessionRecord& rec,
   row.body_sha256_hex = Sha256Hex(row.body);
   row.stored_unix_ms = NowUnixMs();
   row.lesson_id = rec.lesson_id();  // queued for the lesson judge in the same transaction
-  row.station = StationReportOf(rec, institution, row.stored_unix_ms);
+  row.station = StationReportOf(checked, institution, row.stored_unix_ms);
   return row;
 }
 
@@ -133,10 +136,13 @@ void SessionsService::Store(std::shared_ptr<AsyncCall> call,
                             const ves::v1::UploadSessionRequest& request,
                             ves::v1::UploadSessionResponse* response) {
   const Principal& who = call->who();
-  const ves::v1::SessionRecord& rec = request.record();
   if (!request.has_record()) return call->Finish(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
-  const std::string problem = CheckSessionRecord(rec, NowUnixMs());
-  if (!problem.empty()) return call->Finish(Status(StatusCode::INVALID_ARGUMENT, problem));
+  // Checked once, here; the row, the judge and the series worker share it.
+  std::string problem;
+  std::shared_ptr<const CheckedRecord> checked =
+      CheckedRecord::Check(request.record(), NowUnixMs(), &problem);
+  if (checked == nullptr) return call->Finish(Status(StatusCode::INVALID_ARGUMENT, problem));
+  const ves::v1::SessionRecord& rec = checked->record();
   auto institution = TraineeInstitution(rec.trainee_id());
   // Absent, or of another institution: the same answer (no existence leak).
   if (institution.status.code == StoreCode::kNotFound ||
@@ -151,14 +157,14 @@ void SessionsService::Store(std::shared_ptr<AsyncCall> call,
   const Status case_status = CheckRecordCase(rec, institution.value);
   if (!case_status.ok()) return call->Finish(case_status);
 
-  patient_db::SessionRow row = SessionRowOf(rec, institution.value);
+  patient_db::SessionRow row = SessionRowOf(*checked, institution.value);
   const std::string body_sha = row.body_sha256_hex;
   LessonJudge* judge = rec.lesson_id().empty() ? nullptr : deps_.judge;
   SessionSeries* series = deps_.series;
   // Acknowledged from the writer thread once the batch holding it is durable.
   deps_.writer->Submit(
       std::move(row), call->TakeAuditRow(),
-      [call, response, body_sha, judge, series, institution = institution.value](
+      [call, checked, response, body_sha, judge, series, institution = institution.value](
           const patient_db::StoreStatus& status, const patient_db::SessionPutResult& result) {
         if (!status.ok()) return call->Finish(ToGrpcStatus(status));
         if (result.outcome == patient_db::SessionPut::kConflict &&
@@ -176,12 +182,12 @@ void SessionsService::Store(std::shared_ptr<AsyncCall> call,
                                          body_sha + "); a changed record needs a new uuid"));
         }
         if (judge && result.outcome == patient_db::SessionPut::kStored) {
-          judge->Enqueue(result.first.uuid);  // durable now; judged off the gRPC threads
+          judge->Enqueue(result.first.uuid, checked);  // durable now; judged off the gRPC threads
         }
         // The session page's plots, computed once: a lesson session's by the
         // judge's replay, a free run's by the series worker.
         if (series && !judge && result.outcome == patient_db::SessionPut::kStored) {
-          series->Enqueue(result.first.uuid);
+          series->Enqueue(result.first.uuid, checked);
         }
         response->set_uuid(result.first.uuid);
         response->set_body_sha256_hex(result.first.body_sha256_hex);
