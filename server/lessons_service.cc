@@ -159,7 +159,7 @@ Status CreateCurriculumCall(const ServiceDeps& deps, const Principal& who,
     for (const auto& l : c.lessons()) row.lesson_ids.push_back(l.lesson_id());
     row.created_by = who.token_id;
     row.created_unix_ms = NowUnixMs();
-    row.body = DeterministicBytes(c);
+    row.body = patient_db::SerializeDeterministic(c);
     row.body_sha256_hex = Sha256Hex(row.body);
     auto put = deps.store->PutCurriculum(row);
     if (!put.ok()) return ToGrpcStatus(put.status);

@@ -1,8 +1,5 @@
-// Replies' pages and tokens, deterministic message bytes and the proto role:
+// Replies' pages and tokens and the proto role:
 // the small helpers the handlers of every service share (server/services.h).
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
-
 #include <algorithm>
 #include <charconv>
 
@@ -16,17 +13,6 @@ using grpc::StatusCode;
 using patient_db::StoreRole;
 
 ves::v1::Role ToProtoRole(StoreRole role) { return static_cast<ves::v1::Role>(role); }
-
-std::string DeterministicBytes(const google::protobuf::Message& m) {
-  std::string out;
-  {
-    google::protobuf::io::StringOutputStream stream(&out);
-    google::protobuf::io::CodedOutputStream coded(&stream);
-    coded.SetSerializationDeterministic(true);
-    m.SerializeToCodedStream(&coded);
-  }
-  return out;
-}
 
 int PageSizeOf(uint32_t requested, int default_size) {
   if (requested == 0) return default_size;

@@ -192,8 +192,6 @@ int PageSizeOf(uint32_t requested, int default_size = patient_db::kDefaultPageSi
 std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text);
 grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
                            patient_db::ListPage* page);
-// A message's bytes with deterministic map order: stored bodies hash the same.
-std::string DeterministicBytes(const google::protobuf::Message& m);
 // What an accepted upload tells of its station (table stations): seen now,
 // the record's version, and its StationHealth when it has one.
 patient_db::StationRow StationReportOf(const CheckedRecord& record,

@@ -63,7 +63,7 @@ patient_db::SessionRow SessionRowOf(const CheckedRecord& checked,
   row.max_tip_arc_m = rec.metrics().max_tip_arc_m();
   row.loop_s = rec.metrics().loop_s();
   row.xray_s = rec.metrics().xray_s();
-  row.body = DeterministicBytes(rec);
+  row.body = patient_db::SerializeDeterministic(rec);
   row.body_sha256_hex = Sha256Hex(row.body);
   row.stored_unix_ms = NowUnixMs();
   row.lesson_id = rec.lesson_id();  // queued for the lesson judge in the same transaction
