@@ -25,7 +25,6 @@ void ToStationHealth(const patient_db::StationHealthRow& h, ves::v1::StationHeal
   out->set_can_malformed_frames(h.can_malformed_frames);
 }
 
-
 }  // namespace
 
 Status CreateTokenCall(const ServiceDeps& deps, const Principal& who,

@@ -30,11 +30,13 @@ struct Flags {
 // The flags, read into `f`.
 void Describe(Flags* f, po::options_description* desc) {
   desc->add_options()("help,h", "show this help")(
-      "listen", po::value(&f->options.listen)->default_value(f->options.listen), "host:port to serve")(
+      "listen", po::value(&f->options.listen)->default_value(f->options.listen),
+      "host:port to serve")(
       "http", po::value(&f->options.http_listen),
       "host:port of the web front end and JSON API (HTTPS with the TLS flags; plain HTTP "
       "only on loopback)")(
-      "http-port-file", po::value(&f->http_port_file), "write the bound HTTP port here (for --http ...:0)")(
+      "http-port-file", po::value(&f->http_port_file),
+      "write the bound HTTP port here (for --http ...:0)")(
       "db", po::value(&f->db_url)->required(),
       "database URL: sqlite:/var/lib/ves/ves.db or postgresql://USER@HOST/DB")(
       "tls-cert", po::value(&f->options.tls_cert_file), "server certificate chain (PEM)")(

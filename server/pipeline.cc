@@ -136,7 +136,8 @@ void AsyncCall::Audit(const Status& status) {
   std::lock_guard lock(mutex_);
   if (audited_) return;
   audited_ = true;
-  if (spec_.audit_every_call || !status.ok()) {
+  // As RunCall: past the role stage, only calls audited on every call.
+  if (spec_.audit_every_call) {
     deps_.writer->SubmitAudit(MakeAudit(who_, spec_.action, target_, status));
   }
 }

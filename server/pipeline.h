@@ -181,8 +181,8 @@ Reactor* ServeAsync(grpc::CallbackServerContext* ctx, const ServiceDeps& deps, c
   grpc::Status admitted = AuthenticateCall(deps, AuthorizationOf(ctx), &who);
   if (!admitted.ok()) return refuse(admitted);
   Reactor* reactor = nullptr;
-  admitted = RunCallAsync(deps, who, spec, target,
-                          [&](std::shared_ptr<AsyncCall> call) { reactor = start(std::move(call)); });
+  const auto body = [&](std::shared_ptr<AsyncCall> call) { reactor = start(std::move(call)); };
+  admitted = RunCallAsync(deps, who, spec, target, body);
   return admitted.ok() ? reactor : refuse(admitted);
 }
 

@@ -123,11 +123,11 @@ grpc::ServerUnaryReactor* SessionsService::UploadSession(
   // group-commit transaction.
   static const CallSpec spec{
       "session.upload", {StoreRole::kAdmin, StoreRole::kStation}, "upload sessions"};
-  const Status refused =
-      RunCallAsync(deps_, who, spec, request->record().uuid(), [&](std::shared_ptr<AsyncCall> call) {
-        call->set_finisher([reactor](const Status& s) { reactor->Finish(s); });
-        Store(std::move(call), *request, response);
-      });
+  const auto body = [&](std::shared_ptr<AsyncCall> call) {
+    call->set_finisher([reactor](const Status& s) { reactor->Finish(s); });
+    Store(std::move(call), *request, response);
+  };
+  const Status refused = RunCallAsync(deps_, who, spec, request->record().uuid(), body);
   if (!refused.ok()) reactor->Finish(refused);
   return reactor;
 }
@@ -136,7 +136,9 @@ void SessionsService::Store(std::shared_ptr<AsyncCall> call,
                             const ves::v1::UploadSessionRequest& request,
                             ves::v1::UploadSessionResponse* response) {
   const Principal& who = call->who();
-  if (!request.has_record()) return call->Finish(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
+  if (!request.has_record()) {
+    return call->Finish(Status(StatusCode::INVALID_ARGUMENT, "record missing"));
+  }
   // Checked once, here; the row, the judge and the series worker share it.
   std::string problem;
   std::shared_ptr<const CheckedRecord> checked =

@@ -203,7 +203,8 @@ TEST_F(GrpcRoutesPipeline, EveryMethodIsBoundedAuthenticatedAndAudited) {
     // A field over its bound, with a valid token.
     auto oversized = NewRequest(*method);
     const std::string field = Oversize(oversized.get(), 0);
-    ASSERT_FALSE(field.empty()) << "no string field to oversize in " << method->input_type()->name();
+    ASSERT_FALSE(field.empty()) << "no string field to oversize in "
+                                << method->input_type()->name();
     std::string bytes;
     oversized->SerializeToString(&bytes);
     const grpc::Status bounded = CallRaw(channel_, path, admin_, {bytes});
@@ -216,7 +217,8 @@ TEST_F(GrpcRoutesPipeline, EveryMethodIsBoundedAuthenticatedAndAudited) {
     if (client_stream) {
       // Admitted at the stream's start: its ending is its one audit row.
       ASSERT_EQ(bounded_rows.size(), 1u) << Describe(bounded_rows);
-      EXPECT_EQ(bounded_rows[0].result.rfind("INVALID_ARGUMENT: ", 0), 0u) << Describe(bounded_rows);
+      EXPECT_EQ(bounded_rows[0].result.rfind("INVALID_ARGUMENT: ", 0), 0u)
+          << Describe(bounded_rows);
       EXPECT_EQ(bounded_rows[0].role, "admin");
     } else {
       EXPECT_TRUE(bounded_rows.empty()) << Describe(bounded_rows);
