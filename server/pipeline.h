@@ -18,9 +18,12 @@
 // call, over gRPC or over the HTTP API (docs/web.md), goes
 //   admit (bounds, then authentication) -> role -> body (institution rules,
 //   store) -> audit
-// through the functions below, so that a rule cannot be forgotten in one
-// transport. Transports only translate: gRPC metadata or an HTTP header /
-// cookie in, grpc::Status and the response message out.
+// through the functions below (server/pipeline.cc), so that a rule cannot be
+// forgotten in one transport. Transports only translate: gRPC metadata or an
+// HTTP header / cookie in, grpc::Status and the response message out. A
+// unary call is AdmitRequest then RunCall (ServeUnary); a call that ends
+// after its handler returns (a stream, an upload acknowledged once durable)
+// is admitted the same way and runs RunCallAsync (ServeAsync for streams).
 namespace ves::server {
 
 struct CallSpec {
