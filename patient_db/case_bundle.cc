@@ -48,15 +48,19 @@ uint64_t GetLittleEndian(std::string_view in, size_t offset, int bytes) {
 
 }  // namespace
 
-std::string SerializeCaseDeterministic(const ves::v1::ColonCase& colon_case) {
+std::string SerializeDeterministic(const google::protobuf::Message& message) {
   std::string bytes;
   {
     google::protobuf::io::StringOutputStream stream(&bytes);
     google::protobuf::io::CodedOutputStream coded(&stream);
     coded.SetSerializationDeterministic(true);
-    colon_case.SerializeToCodedStream(&coded);
+    message.SerializeToCodedStream(&coded);
   }
   return bytes;
+}
+
+std::string SerializeCaseDeterministic(const ves::v1::ColonCase& colon_case) {
+  return SerializeDeterministic(colon_case);
 }
 
 std::string Sha256Hex(std::string_view bytes) {

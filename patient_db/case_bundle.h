@@ -4,6 +4,8 @@
 #include <string>
 #include <string_view>
 
+#include <google/protobuf/message.h>
+
 #include "ves/v1/case.pb.h"
 
 // The distribution format (*.vescase), the file a hospital carries on removable
@@ -22,7 +24,10 @@ inline constexpr size_t kCaseBundleHeaderSize = 20;
 inline constexpr size_t kCaseBundleHashSize = 32;
 inline constexpr uint64_t kMaxCaseBundlePayloadSize = 256ull << 20;  // 256 MiB
 
-// Deterministic binary serialization: the same case gives the same bytes.
+// Deterministic binary serialization (map entries in key order): the same
+// message gives the same bytes, so stored bodies (cases, sessions,
+// curricula) hash the same.
+std::string SerializeDeterministic(const google::protobuf::Message& message);
 std::string SerializeCaseDeterministic(const ves::v1::ColonCase& colon_case);
 
 // Lowercase hex SHA-256 of `bytes`.

@@ -21,6 +21,7 @@ const std::map<std::string, FieldLimit, std::less<>>& NamedLimits() {
       {"ves.v1.MucosaTexture.image", {FieldKind::kBytes, kMaxTextureBytes}},
       {"ves.v1.CaseChunk.data", {FieldKind::kBytes, kMaxChunkBytes}},
       {"ves.v1.UploadCaseRequest.chunk", {FieldKind::kBytes, kMaxChunkBytes}},
+      {"ves.v1.LiveFrame.endoscope_jpeg", {FieldKind::kBytes, kMaxLiveJpegBytes}},
       {"ves.v1.CreateTokenResponse.token", {FieldKind::kHex, kMaxHexBytes}},
       {"ves.v1.CreateTokenResponse.token_id", {FieldKind::kHex, kMaxHexBytes}},
   };

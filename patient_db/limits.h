@@ -39,6 +39,7 @@ inline constexpr std::size_t kMaxDescriptionBytes = 16384;
 inline constexpr std::size_t kMaxInputLogBytes = std::size_t{12} << 20;  // below the 16 MiB message
 inline constexpr std::size_t kMaxTextureBytes = std::size_t{64} << 20;
 inline constexpr std::size_t kMaxChunkBytes = std::size_t{1} << 20;  // case bundle chunks
+inline constexpr std::size_t kMaxLiveJpegBytes = std::size_t{64} << 10;  // a live frame's image
 // Repeated fields: this many items unless LimitItemsOf names another bound.
 inline constexpr int kMaxRepeatedItems = 1000;
 // Control points and radius samples of a case (also checked by ValidateCase).

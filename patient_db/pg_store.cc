@@ -6,6 +6,7 @@
 
 #include <pqxx/pqxx>
 
+#include "patient_db/clock.h"
 #include "patient_db/migrations/postgres/pg_migrations.h"
 
 namespace ves::patient_db {
@@ -13,12 +14,6 @@ namespace {
 
 // Any constant works: it only has to be the same in every replica.
 constexpr int64_t kMigrationLockKey = 0x7665735f6d6967;  // "ves_mig"
-
-int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 StoreStatus Internal(const std::string& what, const std::string& error) {
   return StoreStatus::Error(StoreCode::kInternal, what + ": " + error);

@@ -1,18 +1,12 @@
 #include "patient_db/sqlite_store.h"
 
-#include <chrono>
 #include <stdexcept>
 
+#include "patient_db/clock.h"
 #include "patient_db/migrations/migrations.h"
 
 namespace ves::patient_db {
 namespace {
-
-int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 StoreStatus Internal(SqliteDb& db, const std::string& what) {
   return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());

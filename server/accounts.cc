@@ -154,7 +154,7 @@ bool Accounts::AddSession(const std::string& secret, const std::string& username
     it = it->second.expires_unix_ms <= now ? sessions_.erase(it) : std::next(it);
   }
   if (sessions_.size() >= kMaxAccountSessions) return false;
-  sessions_[Sha256HexOf(secret)] = {username, expires};
+  sessions_[Sha256Hex(secret)] = {username, expires};
   return true;
 }
 
@@ -343,7 +343,7 @@ bool Accounts::Resolve(const std::string& secret_sha256_hex, Principal* principa
 
 void Accounts::EndSession(const std::string& secret) {
   std::lock_guard lock(mutex_);
-  sessions_.erase(Sha256HexOf(secret));
+  sessions_.erase(Sha256Hex(secret));
 }
 
 }  // namespace ves::server

@@ -1,7 +1,6 @@
 #include "server/auth.h"
 
 #include <openssl/rand.h>
-#include <openssl/sha.h>
 
 #include <stdexcept>
 
@@ -34,12 +33,6 @@ std::string NewToken() {
   return Hex(bytes, sizeof bytes);
 }
 
-std::string Sha256HexOf(std::string_view bytes) {
-  unsigned char digest[SHA256_DIGEST_LENGTH];
-  SHA256(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), digest);
-  return Hex(digest, sizeof digest);
-}
-
 std::string TokenIdOf(const std::string& token_sha256_hex) {
   return token_sha256_hex.substr(0, 12);
 }
@@ -57,7 +50,7 @@ AuthStatus Authenticator::Authenticate(std::string_view authorization, Principal
   if (authorization.substr(0, kBearer.size()) != kBearer) {
     return {AuthCode::kUnauthenticated, "authorization metadata is not 'Bearer <token>'"};
   }
-  const std::string hash = Sha256HexOf(authorization.substr(kBearer.size()));
+  const std::string hash = Sha256Hex(authorization.substr(kBearer.size()));
   {
     std::lock_guard lock(mutex_);
     auto it = cache_.find(hash);

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "patient_db/case_bundle.h"
 #include "patient_db/store.h"
 
 // Bearer tokens and the access rules of docs/server.md. Tokens are 256 random
@@ -36,7 +37,9 @@ struct AuthStatus {
 // A new random token (OpenSSL RAND_bytes); throws std::runtime_error if the
 // generator fails.
 std::string NewToken();
-std::string Sha256HexOf(std::string_view bytes);
+// SHA-256 as lower-case hex: the one implementation is the case bundles'
+// (patient_db/case_bundle.h); tokens are stored by it.
+using patient_db::Sha256Hex;
 std::string TokenIdOf(const std::string& token_sha256_hex);
 
 // Resolves `authorization` metadata ("Bearer <token>") to a principal. Hashes

@@ -111,11 +111,15 @@ class ErrorReactor final : public Base {
 };
 
 // Collects the header and the chunks, then checks size, hash and the case
-// itself (the case validator names the field) before storing.
+// itself (the case validator names the field) before storing. Each message
+// passes the pipeline's bounds stage; the call's audit row names the case
+// once decoded and is written when the stream ends.
 class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRequest> {
  public:
-  UploadReactor(ServiceDeps deps, Principal who, ves::v1::UploadCaseResponse* response)
-      : deps_(deps), who_(std::move(who)), response_(response) {
+  UploadReactor(ServiceDeps deps, std::shared_ptr<AsyncCall> call,
+                ves::v1::UploadCaseResponse* response)
+      : deps_(deps), call_(std::move(call)), who_(call_->who()), response_(response) {
+    call_->set_finisher([this](const Status& status) { Finish(status); });
     StartRead(&request_);
   }
   void OnReadDone(bool ok) override {
@@ -134,7 +138,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
 
  private:
   Status Take() {
-    const Status limits = CheckRequestLimits(request_);
+    const Status limits = call_->AdmitMessage(request_);
     if (!limits.ok()) return limits;
     if (request_.has_header()) {
       if (has_header_) return Status(StatusCode::INVALID_ARGUMENT, "a second header");
@@ -180,7 +184,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
                     label + ": received " + std::to_string(bytes_.size()) +
                         " bytes, header.total_bytes = " + std::to_string(header_.total_bytes()));
     }
-    const std::string sha = Sha256HexOf(bytes_);
+    const std::string sha = Sha256Hex(bytes_);
     if (sha != header_.sha256_hex()) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     label + ": header.sha256_hex = " + header_.sha256_hex() +
@@ -192,7 +196,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
     } catch (const patient_db::CaseError& e) {
       return Status(StatusCode::INVALID_ARGUMENT, patient_db::JoinProblems(e.problems()));
     }
-    target_ = CaseTarget(colon_case.id(), colon_case.version());
+    call_->set_target(CaseTarget(colon_case.id(), colon_case.version()));
     // Stored canonical: the same case always has the same bytes and address.
     const std::string canonical = patient_db::EncodeCaseBundle(colon_case);
     patient_db::CaseRow row;
@@ -204,7 +208,7 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
       if (span.region() > 0 && span.region() < 64) row.region_mask |= uint64_t{1} << span.region();
     }
     row.institution = header_.institution().empty() ? who_.institution : header_.institution();
-    row.sha256_hex = Sha256HexOf(canonical);
+    row.sha256_hex = Sha256Hex(canonical);
     row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
     row.uploaded_by = who_.token_id;
     row.stored_unix_ms = NowUnixMs();
@@ -218,20 +222,17 @@ class UploadReactor final : public grpc::ServerReadReactor<ves::v1::UploadCaseRe
     return Status::OK;
   }
 
-  void Done(const Status& status) {
-    deps_.writer->SubmitAudit(MakeAudit(who_, "case.upload", target_, status));
-    Finish(status);
-  }
+  void Done(const Status& status) { call_->Finish(status); }
 
   ServiceDeps deps_;
-  Principal who_;
+  std::shared_ptr<AsyncCall> call_;
+  const Principal& who_;
   ves::v1::UploadCaseResponse* response_;
   ves::v1::UploadCaseRequest request_;
   ves::v1::UploadCaseHeader header_;
   bool has_header_ = false;
   bool head_checked_ = false;
   std::string bytes_;
-  std::string target_ = "?";
 };
 
 }  // namespace
@@ -319,18 +320,14 @@ grpc::ServerWriteReactor<ves::v1::CaseChunk>* CasesService::DownloadCase(
 
 grpc::ServerReadReactor<ves::v1::UploadCaseRequest>* CasesService::UploadCase(
     grpc::CallbackServerContext* ctx, ves::v1::UploadCaseResponse* response) {
-  using Error = ErrorReactor<grpc::ServerReadReactor<ves::v1::UploadCaseRequest>>;
-  // Admitted here; its audit row is written when the stream ends (UploadReactor).
-  Principal who;
-  const Status admitted =
-      AdmitRequest(deps_, AuthorizationOf(ctx), ves::v1::UploadCaseRequest(), &who);
-  if (!admitted.ok()) return new Error(admitted);
-  AuthStatus a = RequireRole(who, {StoreRole::kAdmin}, "upload cases");
-  if (!a.ok()) {
-    deps_.writer->SubmitAudit(MakeAudit(who, "case.upload", "?", ToGrpcStatus(a)));
-    return new Error(ToGrpcStatus(a));
-  }
-  return new UploadReactor(deps_, std::move(who), response);
+  using Reactor = grpc::ServerReadReactor<ves::v1::UploadCaseRequest>;
+  static const CallSpec spec{"case.upload", {StoreRole::kAdmin}, "upload cases"};
+  return ServeAsync<Reactor>(
+      ctx, deps_, spec, "?",
+      [&](std::shared_ptr<AsyncCall> call) {
+        return new UploadReactor(deps_, std::move(call), response);
+      },
+      [](const Status& status) { return new ErrorReactor<Reactor>(status); });
 }
 
 }  // namespace ves::server

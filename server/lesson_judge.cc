@@ -46,11 +46,13 @@ void LessonJudge::Start() {
   thread_ = std::thread([this] { Loop(); });
 }
 
-void LessonJudge::Enqueue(const std::string& session_uuid) {
+void LessonJudge::Enqueue(const std::string& session_uuid,
+                          std::shared_ptr<const CheckedRecord> record) {
   {
     std::lock_guard lock(mutex_);
     if (!queued_.insert(session_uuid).second) return;
     queue_.push_back(session_uuid);
+    held_.Hold(session_uuid, std::move(record));
   }
   wake_.notify_one();
 }
@@ -75,6 +77,7 @@ uint64_t LessonJudge::series_recorded() const { return series_recorded_.load(); 
 void LessonJudge::Loop() {
   for (;;) {
     std::string uuid;
+    std::shared_ptr<const CheckedRecord> held;
     {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
@@ -83,9 +86,10 @@ void LessonJudge::Loop() {
       if (stopping_) return;
       uuid = queue_.front();
       queue_.pop_front();
+      held = held_.Take(uuid);
     }
     const auto start = std::chrono::steady_clock::now();
-    auto verdict = JudgeStored(uuid);
+    auto verdict = held ? Judge(uuid, held->record(), held) : JudgeStored(uuid);
     const double ms = std::chrono::duration<double, std::milli>(
                           std::chrono::steady_clock::now() - start).count();
     if (verdict.ok()) {
@@ -138,6 +142,12 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
   if (!record.ParseFromString(stored.value.body)) {
     return StoreStatus::Error(StoreCode::kInternal, "stored session is corrupt");
   }
+  return Judge(session_uuid, record, nullptr);
+}
+
+patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::Judge(
+    const std::string& session_uuid, const ves::v1::SessionRecord& record,
+    std::shared_ptr<const CheckedRecord> held) {
   patient_db::LessonVerdictRow v;
   v.session_uuid = session_uuid;
   v.trainee_id = record.trainee_id();
@@ -220,7 +230,7 @@ patient_db::StoreResult<patient_db::LessonVerdictRow> LessonJudge::JudgeStored(
       series_json.clear();
     }
   }
-  if (series_json.empty() && series_ != nullptr) series_->Enqueue(session_uuid);
+  if (series_json.empty() && series_ != nullptr) series_->Enqueue(session_uuid, std::move(held));
   auto put = store_->PutLessonVerdict(v);
   if (!put.ok()) return put.status;
   if (!put.value) return store_->GetLessonVerdict(session_uuid);  // judged before: that one stands

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "patient_db/store.h"
+#include "server/checked_record.h"
 #include "station/training/lesson_gate.h"
 #include "ves/v1/case.pb.h"
 #include "ves/v1/lesson.pb.h"
@@ -46,8 +47,10 @@ class LessonJudge {
 
   // Queues every stored lesson session without a verdict, then serves Enqueue.
   void Start();
-  // A lesson session was stored: judge it soon.
-  void Enqueue(const std::string& session_uuid);
+  // A lesson session was stored: judge it soon. `record`, when given, is the
+  // upload's checked record, judged without reading it back from the store.
+  void Enqueue(const std::string& session_uuid,
+               std::shared_ptr<const CheckedRecord> record = nullptr);
   // Cancels the replay under way and stops; what was not judged keeps no
   // verdict and is judged on the next start. Idempotent.
   void Stop();
@@ -55,6 +58,11 @@ class LessonJudge {
   // Judges one stored session now and records the verdict (also used by tests).
   patient_db::StoreResult<patient_db::LessonVerdictRow> JudgeStored(
       const std::string& session_uuid);
+  // The same for a record the caller holds (`held` when it is checked and
+  // shared: handed on to the series worker as it is).
+  patient_db::StoreResult<patient_db::LessonVerdictRow> Judge(
+      const std::string& session_uuid, const ves::v1::SessionRecord& record,
+      std::shared_ptr<const CheckedRecord> held);
 
   uint64_t judged() const;
   // Series stored from the judge's own replays.
@@ -72,6 +80,7 @@ class LessonJudge {
   std::condition_variable wake_;
   std::deque<std::string> queue_;  // guarded by mutex_
   std::set<std::string> queued_;   // guarded by mutex_
+  HeldRecords held_{kHeldRecordBytes};  // guarded by mutex_
   bool stopping_ = false;          // guarded by mutex_
   std::atomic<bool> cancel_{false};  // read by the replay under way
   uint64_t judged_ = 0;            // guarded by mutex_

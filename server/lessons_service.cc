@@ -159,8 +159,8 @@ Status CreateCurriculumCall(const ServiceDeps& deps, const Principal& who,
     for (const auto& l : c.lessons()) row.lesson_ids.push_back(l.lesson_id());
     row.created_by = who.token_id;
     row.created_unix_ms = NowUnixMs();
-    row.body = DeterministicBytes(c);
-    row.body_sha256_hex = Sha256HexOf(row.body);
+    row.body = patient_db::SerializeDeterministic(c);
+    row.body_sha256_hex = Sha256Hex(row.body);
     auto put = deps.store->PutCurriculum(row);
     if (!put.ok()) return ToGrpcStatus(put.status);
     *response->mutable_curriculum() = c;
@@ -237,7 +237,7 @@ Status AssignCurriculumCall(const ServiceDeps& deps, const Principal& who,
     if (!RequireInstitution(who, institution, "assign").ok()) {
       return Status(StatusCode::NOT_FOUND, "no curriculum '" + request->curriculum_id() + "'");
     }
-    if (!IsName(assignee)) {
+    if (!patient_db::IsPrintableId(assignee)) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     std::string(to_group ? "group" : "trainee_id") + " = '" + assignee +
                         "': give a trainee or a group (1..128 printable characters)");
@@ -284,7 +284,7 @@ Status SetTraineeGroupCall(const ServiceDeps& deps, const Principal& who,
     if (!RequireInstitution(who, trainee.value.institution, "group").ok()) {
       return Status(StatusCode::NOT_FOUND, "no trainee '" + request->trainee_id() + "'");
     }
-    if (!request->group().empty() && !IsName(request->group())) {
+    if (!request->group().empty() && !patient_db::IsPrintableId(request->group())) {
       return Status(StatusCode::INVALID_ARGUMENT,
                     "group = '" + request->group() + "': must be 1..128 printable characters");
     }

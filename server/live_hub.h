@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "patient_db/limits.h"
 #include "ves/v1/live.pb.h"
 
 // Live proctoring on the server (docs/web.md, "Live proctoring"): stations
@@ -22,7 +23,7 @@ namespace ves::server {
 
 // Bounds on a LiveFrame (docs/web.md, "Live proctoring" and "Limits").
 inline constexpr int kMaxLivePolylinePoints = 200;  // per polyline (x,y,z each)
-inline constexpr size_t kMaxLiveJpegBytes = 64 << 10;
+inline constexpr size_t kMaxLiveJpegBytes = patient_db::kMaxLiveJpegBytes;
 inline constexpr int kMaxLiveSessions = 1000;  // streams at once on one server
 inline constexpr int kMaxLiveViewersPerSession = 32;
 

@@ -57,7 +57,7 @@ class Receiver final : public pqxx::notification_receiver {
 
 std::string LiveChannelFor(const std::string& schema) {
   if (schema == "public") return "ves_live";
-  return "ves_live_" + Sha256HexOf(schema).substr(0, 16);
+  return "ves_live_" + Sha256Hex(schema).substr(0, 16);
 }
 
 std::string LivePgRelay::Prepare(pqxx::connection_base& conn, const char* role) const {

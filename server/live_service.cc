@@ -1,8 +1,9 @@
-// Live.StreamSession (docs/web.md, "Live proctoring"): admitted like an
-// upload (bounds, token, role station or admin), then the first frame names
-// the session, whose trainee must be of the caller's institution; one audit
-// row per stream start. Frames go to the LiveHub; a bad frame ends the
-// stream with INVALID_ARGUMENT naming the field.
+// Live.StreamSession (docs/web.md, "Live proctoring"): through the pipeline's
+// async form (token, role station or admin; each frame bounded by the bounds
+// stage), then the first frame names the session, whose trainee must be of
+// the caller's institution; one audit row per stream, written at its first
+// frame (or at its end when no frame began it). Frames go to the LiveHub; a
+// bad frame ends the stream with INVALID_ARGUMENT naming the field.
 #include "server/live_service.h"
 
 #include <utility>
@@ -26,8 +27,9 @@ class ErrorReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
 
 class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
  public:
-  LiveReactor(ServiceDeps deps, Principal who, v1::LiveStreamSummary* summary)
-      : deps_(deps), who_(std::move(who)), summary_(summary) {
+  LiveReactor(ServiceDeps deps, std::shared_ptr<AsyncCall> call, v1::LiveStreamSummary* summary)
+      : deps_(deps), call_(std::move(call)), who_(call_->who()), summary_(summary) {
+    call_->set_finisher([this](const Status& status) { Finish(status); });
     StartRead(&frame_);
   }
   void OnReadDone(bool ok) override {
@@ -36,15 +38,16 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
       Close(Status::OK);
       return;
     }
-    const std::string why = CheckLiveFrame(frame_, !begun_);
+    const Status bounds = call_->AdmitMessage(frame_, "frame");
+    const std::string why = bounds.ok() ? CheckLiveFrame(frame_, !begun_) : bounds.error_message();
     if (!why.empty()) {
-      if (!begun_) Audit("?", Status(StatusCode::INVALID_ARGUMENT, why));
       Close(Status(StatusCode::INVALID_ARGUMENT, why));
       return;
     }
     if (!begun_) {
       const Status s = Begin();
-      Audit(frame_.session_uuid(), s);
+      call_->set_target(frame_.session_uuid());
+      call_->Audit(s);
       if (!s.ok()) {
         Close(s);
         return;
@@ -73,7 +76,7 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
       deps_.live->End(uuid_);
       begun_ = false;
     }
-    Finish(status);
+    call_->Finish(status);
   }
   Status Begin() {
     auto trainee = deps_.store->GetTrainee(frame_.trainee_id());
@@ -99,12 +102,9 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
     begun_ = true;
     return Status::OK;
   }
-  void Audit(const std::string& target, const Status& s) {
-    deps_.writer->SubmitAudit(MakeAudit(who_, "live.stream", target, s));
-  }
-
   ServiceDeps deps_;
-  Principal who_;
+  std::shared_ptr<AsyncCall> call_;
+  const Principal& who_;
   v1::LiveStreamSummary* summary_;
   v1::LiveFrame frame_;
   bool begun_ = false;
@@ -116,18 +116,19 @@ class LiveReactor final : public grpc::ServerReadReactor<v1::LiveFrame> {
 
 grpc::ServerReadReactor<v1::LiveFrame>* LiveService::StreamSession(grpc::CallbackServerContext* ctx,
                                                                    v1::LiveStreamSummary* summary) {
-  Principal who;
-  const Status admitted = AdmitRequest(deps_, AuthorizationOf(ctx), v1::LiveFrame(), &who);
-  if (!admitted.ok()) return new ErrorReactor(admitted);
-  const AuthStatus a =
-      RequireRole(who, {StoreRole::kAdmin, StoreRole::kStation}, "stream live sessions");
-  if (!a.ok()) {
-    deps_.writer->SubmitAudit(MakeAudit(who, "live.stream", "?", ToGrpcStatus(a)));
-    return new ErrorReactor(ToGrpcStatus(a));
-  }
-  if (deps_.live == nullptr)
-    return new ErrorReactor(Status(StatusCode::UNIMPLEMENTED, "no live hub"));
-  return new LiveReactor(deps_, std::move(who), summary);
+  static const CallSpec spec{
+      "live.stream", {StoreRole::kAdmin, StoreRole::kStation}, "stream live sessions"};
+  return ServeAsync<grpc::ServerReadReactor<v1::LiveFrame>>(
+      ctx, deps_, spec, "?",
+      [&](std::shared_ptr<AsyncCall> call) -> grpc::ServerReadReactor<v1::LiveFrame>* {
+        if (deps_.live == nullptr) {
+          const Status none(StatusCode::UNIMPLEMENTED, "no live hub");
+          call->Finish(none);
+          return new ErrorReactor(none);
+        }
+        return new LiveReactor(deps_, std::move(call), summary);
+      },
+      [](const Status& status) { return new ErrorReactor(status); });
 }
 
 }  // namespace ves::server

@@ -10,6 +10,7 @@
 
 #include <google/protobuf/message.h>
 
+#include "patient_db/clock.h"
 #include "patient_db/limits.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
@@ -17,13 +18,20 @@
 #include "server/session_writer.h"
 #include "ves/v1/services.grpc.pb.h"
 
-// The gRPC services (callback API). Handlers are thin: they run the request
-// pipeline of server/pipeline.h (admit, role, institution and store, audit),
-// which the HTTP API (docs/web.md) runs too. Uploads, whose audit row is
-// written when their stream or group commit ends, admit through the same
-// AdmitRequest. docs/server.md lists who may call what.
+// The gRPC services (callback API), one file each: cases_service.cc,
+// sessions_service.cc, trainees_service.cc, admin_service.cc,
+// lessons_service.cc, live_service.cc. Handlers are thin: they run the
+// request pipeline of server/pipeline.h (admit, role, institution and store,
+// audit), which the HTTP API (docs/web.md) runs too; streams and uploads
+// acknowledged once durable run its async form (RunCallAsync), whose audit
+// row is written when the call ends. docs/server.md lists who may call what.
 namespace ves::server {
 
+// The handlers' clock is the stores' (patient_db/clock.h).
+using patient_db::NowUnixMs;
+
+class AsyncCall;  // server/pipeline.h
+class CheckedRecord;  // server/checked_record.h
 class LiveHub;
 class SessionSeries;
 
@@ -88,6 +96,10 @@ class SessionsService final : public ves::v1::Sessions::CallbackService {
   // (when the record names one) has its payload hash.
   grpc::Status CheckRecordCase(const ves::v1::SessionRecord& record,
                                const std::string& institution);
+  // After admission and the role: checks the record, then hands it to the
+  // group commit; `call` ends when the batch holding it is durable.
+  void Store(std::shared_ptr<AsyncCall> call, const ves::v1::UploadSessionRequest& request,
+             ves::v1::UploadSessionResponse* response);
 
   ServiceDeps deps_;
   std::mutex mutex_;
@@ -169,20 +181,8 @@ grpc::Status ToGrpcStatus(const patient_db::StoreStatus& status);
 grpc::Status ToGrpcStatus(const AuthStatus& status);
 patient_db::AuditRow MakeAudit(const Principal& who, const std::string& action,
                                const std::string& target, const grpc::Status& result);
-int64_t NowUnixMs();
 const char* StatusCodeName(grpc::StatusCode code);
 ves::v1::Role ToProtoRole(StoreRole role);
-// Writes the audit row (through the group commit) and finishes the call.
-void FinishAudited(grpc::ServerUnaryReactor* reactor, const ServiceDeps& deps,
-                   const Principal& who, const std::string& action, const std::string& target,
-                   const grpc::Status& status);
-// INVALID_ARGUMENT naming the first field of `request` over its limit
-// (patient_db::CheckMessageLimits), else OK.
-grpc::Status CheckRequestLimits(const google::protobuf::Message& request);
-// Checks the request's limits (INVALID_ARGUMENT), then authenticates the call
-// (UNAUTHENTICATED); on failure finishes it and returns false.
-bool Admit(grpc::CallbackServerContext* ctx, grpc::ServerUnaryReactor* reactor,
-           const ServiceDeps& deps, const google::protobuf::Message& request, Principal* who);
 // List replies are pages (docs/server.md, "Limits"): the size asked for, 0
 // meaning `default_size`, cut to patient_db::kMaxPageSize.
 int PageSizeOf(uint32_t requested, int default_size = patient_db::kDefaultPageSize);
@@ -192,14 +192,9 @@ int PageSizeOf(uint32_t requested, int default_size = patient_db::kDefaultPageSi
 std::string MakePageToken(const std::string& listing, int64_t number, const std::string& text);
 grpc::Status ReadPageToken(const std::string& token, const std::string& listing,
                            patient_db::ListPage* page);
-// A message's bytes with deterministic map order: stored bodies hash the same.
-std::string DeterministicBytes(const google::protobuf::Message& m);
-// An id: 1-128 bytes of printable UTF-8 (patient_db::IsPrintableId).
-bool IsName(const std::string& s);
 // What an accepted upload tells of its station (table stations): seen now,
-// the record's version, and its StationHealth when it has one. The record
-// has passed CheckSessionRecord.
-patient_db::StationRow StationReportOf(const ves::v1::SessionRecord& record,
+// the record's version, and its StationHealth when it has one.
+patient_db::StationRow StationReportOf(const CheckedRecord& record,
                                        const std::string& institution, int64_t now_unix_ms);
 
 }  // namespace ves::server

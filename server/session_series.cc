@@ -177,11 +177,13 @@ void SessionSeries::Stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-void SessionSeries::Enqueue(const std::string& session_uuid) {
+void SessionSeries::Enqueue(const std::string& session_uuid,
+                            std::shared_ptr<const CheckedRecord> record) {
   {
     std::lock_guard lock(mutex_);
     if (stopping_ || queue_.size() >= kSeriesQueueLimit) return;  // computed on first view
     queue_.push_back(session_uuid);
+    held_.Hold(session_uuid, std::move(record));
   }
   wake_.notify_one();
 }
@@ -207,22 +209,28 @@ void SessionSeries::Loop() {
   setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 10);
   for (;;) {
     std::string uuid;
+    std::shared_ptr<const CheckedRecord> held;
     {
       std::unique_lock lock(mutex_);
       wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
       if (stopping_) return;
       uuid = std::move(queue_.front());
       queue_.pop_front();
+      held = held_.Take(uuid);
     }
     auto stored = store_->GetSessionSeries(uuid);
     if (stored.ok() && stored.value.format_version == kSeriesFormatVersion) continue;
     if (!Claim(uuid)) continue;  // a page view is computing it
-    auto row = store_->GetSession(uuid);
-    v1::SessionRecord record;
-    if (!row.ok() || !record.ParseFromString(row.value.body)) {
-      Release(uuid);
-      continue;
+    // The upload's checked record, or (not held) the stored one, parsed here.
+    v1::SessionRecord read_back;
+    if (held == nullptr) {
+      auto row = store_->GetSession(uuid);
+      if (!row.ok() || !read_back.ParseFromString(row.value.body)) {
+        Release(uuid);
+        continue;
+      }
     }
+    const v1::SessionRecord& record = held ? held->record() : read_back;
     try {
       const std::string json = ComputeSeriesJson(record, &cancel_);
       {

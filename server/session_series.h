@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "patient_db/store.h"
+#include "server/checked_record.h"
 #include "server/session_replay.h"
 #include "ves/v1/services.pb.h"
 #include "ves/v1/session.pb.h"
@@ -93,7 +94,10 @@ class SessionSeries {
   void Stop();
   // A session was stored: compute its series in the background (dropped,
   // hence computed on first view, when kSeriesQueueLimit wait already).
-  void Enqueue(const std::string& session_uuid);
+  // `record`, when given, is the upload's checked record, replayed without
+  // reading it back from the store.
+  void Enqueue(const std::string& session_uuid,
+               std::shared_ptr<const CheckedRecord> record = nullptr);
 
   // The series of `record` (already read under the caller's access rules):
   // the stored one, or computed now and stored. RESOURCE_EXHAUSTED when it
@@ -117,6 +121,7 @@ class SessionSeries {
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::string> queue_;        // guarded by mutex_
+  HeldRecords held_{kHeldRecordBytes};   // guarded by mutex_
   std::set<std::string> computing_;      // guarded by mutex_
   int lazy_running_ = 0;                 // guarded by mutex_
   bool stopping_ = false;                // guarded by mutex_

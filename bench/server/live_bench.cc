@@ -83,9 +83,9 @@ int main(int argc, char** argv) {
   store.AddInstitution("north", 1);
   const std::string station_token = ves::server::NewToken();
   const std::string supervisor_token = ves::server::NewToken();
-  store.AddToken({ves::server::Sha256HexOf(station_token), ves::patient_db::StoreRole::kStation,
+  store.AddToken({ves::server::Sha256Hex(station_token), ves::patient_db::StoreRole::kStation,
                   "north", "", "bench station", 1});
-  store.AddToken({ves::server::Sha256HexOf(supervisor_token),
+  store.AddToken({ves::server::Sha256Hex(supervisor_token),
                   ves::patient_db::StoreRole::kSupervisor, "north", "", "bench supervisor", 1});
   for (int s = 0; s < stations; ++s) {
     store.AddTrainee({"t" + std::to_string(s), "north", "Trainee", 1});

@@ -288,10 +288,10 @@ int main(int argc, char** argv) {
       row.case_id = colon_case.id();
       row.version = colon_case.version();
       row.institution = "bench";
-      row.sha256_hex = ves::server::Sha256HexOf(bundle);
+      row.sha256_hex = ves::server::Sha256Hex(bundle);
       row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
       store.PutCase(row, bundle);
-      store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kStation,
+      store.AddToken({ves::server::Sha256Hex(token), ves::patient_db::StoreRole::kStation,
                       "bench", "", "bench", 1});
     }
     std::printf("%-9s %-8s %12s %9s %9s %7s\n", "replicas", "clients", "uploads/s", "p50 ms",

@@ -241,12 +241,12 @@ int main(int argc, char** argv) {
     row.case_id = plain.id();
     row.version = plain.version();
     row.institution = "bench";
-    row.sha256_hex = ves::server::Sha256HexOf(plain_bundle);
+    row.sha256_hex = ves::server::Sha256Hex(plain_bundle);
     row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(plain);
     store.PutCase(row, plain_bundle);
   }
   const std::string token = ves::server::NewToken();
-  store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kAdmin, "bench",
+  store.AddToken({ves::server::Sha256Hex(token), ves::patient_db::StoreRole::kAdmin, "bench",
                   "", "bench", 1});
   ClientOptions client;
   client.address = "127.0.0.1:" + std::to_string(server.port());
@@ -282,7 +282,7 @@ int main(int argc, char** argv) {
   row.case_id = colon_case.id();
   row.version = colon_case.version();
   row.institution = "bench";
-  row.sha256_hex = ves::server::Sha256HexOf(bundle);
+  row.sha256_hex = ves::server::Sha256Hex(bundle);
   row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
   store.PutCase(row, bundle);
   const double grpc_mbps = DownloadMBps(client, colon_case.id(), bundle.size());

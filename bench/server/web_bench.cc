@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
       row.score = rec.score();
       row.pain_s = rec.metrics().pain_s();
       row.body = rec.SerializeAsString();
-      row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+      row.body_sha256_hex = ves::server::Sha256Hex(row.body);
       row.stored_unix_ms = 1;
       batch.sessions.push_back(std::move(row));
     }
@@ -174,10 +174,10 @@ int main(int argc, char** argv) {
     }
   }
   const std::string token = ves::server::NewToken();
-  store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kSupervisor, "north",
+  store.AddToken({ves::server::Sha256Hex(token), ves::patient_db::StoreRole::kSupervisor, "north",
                   "", "bench supervisor", 1});
   const std::string admin = ves::server::NewToken();
-  store.AddToken({ves::server::Sha256HexOf(admin), ves::patient_db::StoreRole::kAdmin, "north", "",
+  store.AddToken({ves::server::Sha256Hex(admin), ves::patient_db::StoreRole::kAdmin, "north", "",
                   "bench admin", 1});
   const double seed_s = std::chrono::duration<double>(Clock::now() - t_seed).count();
 
@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
     row.start_unix_ms = long_session.start_unix_ms();
     row.end_unix_ms = long_session.end_unix_ms();
     row.body = long_session.SerializeAsString();
-    row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+    row.body_sha256_hex = ves::server::Sha256Hex(row.body);
     row.stored_unix_ms = 1;
     ves::patient_db::WriteBatch batch;
     batch.sessions.push_back(std::move(row));

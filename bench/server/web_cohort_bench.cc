@@ -47,7 +47,7 @@ bool Seed(ves::patient_db::Store& store, int trainees, int per_trainee, int grou
     curriculum.lesson_ids.push_back(lesson->lesson_id());
   }
   curriculum.body = c.SerializeAsString();
-  curriculum.body_sha256_hex = ves::server::Sha256HexOf(curriculum.body);
+  curriculum.body_sha256_hex = ves::server::Sha256Hex(curriculum.body);
   if (!store.PutCurriculum(curriculum).ok()) return false;
   std::mt19937_64 rng(11);
   for (int t = 0; t < trainees; ++t) {
@@ -83,7 +83,7 @@ bool Seed(ves::patient_db::Store& store, int trainees, int per_trainee, int grou
       row.operator_kind = "human";
       if (s % 4 == 3) row.lesson_id = "lesson-" + std::to_string((s / 4) % 5);
       row.body = "bench session " + row.uuid;  // the pages timed here never read bodies
-      row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+      row.body_sha256_hex = ves::server::Sha256Hex(row.body);
       row.stored_unix_ms = row.end_unix_ms;
       if (!row.lesson_id.empty()) {
         verdicts.push_back({row.uuid, id, "basics", row.lesson_id, row.score >= 40, row.score,
@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const std::string token = ves::server::NewToken();
-  server->store().AddToken({ves::server::Sha256HexOf(token),
+  server->store().AddToken({ves::server::Sha256Hex(token),
                             ves::patient_db::StoreRole::kSupervisor, "north", "", "bench", 1});
   const double seed_s = std::chrono::duration<double>(Clock::now() - t_seed).count();
   server->Start();

@@ -47,7 +47,7 @@ int RunCaseUpload(const CommandArgs& args) {
   auto* header = part.mutable_header();
   header->set_file_label(std::filesystem::path(file).filename().string());
   header->set_total_bytes(bundle.size());
-  header->set_sha256_hex(ves::server::Sha256HexOf(bundle));
+  header->set_sha256_hex(ves::server::Sha256Hex(bundle));
   header->set_institution(institution);
   for (const auto& i : share_with) header->add_share_with(i);
   bool ok = writer->Write(part);
@@ -159,7 +159,7 @@ int RunCaseDownload(const CommandArgs& args) {
   if (!status.ok()) {
     return ReportRpcError("case download", status.error_code(), status.error_message());
   }
-  if (bytes.size() != total || ves::server::Sha256HexOf(bytes) != sha) {
+  if (bytes.size() != total || ves::server::Sha256Hex(bytes) != sha) {
     std::filesystem::remove(partial);
     std::cerr << "ves-admin case download: " << id << ": received bytes do not match the "
               << "announced size " << total << " and sha256 " << sha << "; start again\n";

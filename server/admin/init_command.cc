@@ -48,7 +48,7 @@ int RunInitCommand(const CommandArgs& args) {
                             .count();
     auto st = store->AddInstitution(institution, now);
     const std::string token = ves::server::NewToken();
-    const std::string hash = ves::server::Sha256HexOf(token);
+    const std::string hash = ves::server::Sha256Hex(token);
     if (st.ok()) {
       st = store->AddToken({hash, patient_db::StoreRole::kAdmin, institution, "", label, now});
     }

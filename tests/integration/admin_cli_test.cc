@@ -52,7 +52,7 @@ TEST(AdminCli, InitPrintsTheFirstAdminTokenOnce) {
   ASSERT_EQ(first.exit_status, 0) << first.err;
   ASSERT_EQ(first.out.size(), 65u);  // 64 hex digits and a newline
   auto store = patient_db::OpenStore(db);
-  auto token = store->FindToken(Sha256HexOf(first.out.substr(0, 64)));
+  auto token = store->FindToken(Sha256Hex(first.out.substr(0, 64)));
   ASSERT_TRUE(token.ok());
   EXPECT_EQ(token.value.role, StoreRole::kAdmin);
   AdminRun second = Admin(dir, "init --db " + db + " --institution north");
@@ -278,7 +278,7 @@ TEST(AdminCli, ScoresListsEverySessionAcrossPages) {
     row.case_id = "standard-adult";
     row.start_unix_ms = 1'700'000'000'000 + i;
     row.body = "x";
-    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    row.body_sha256_hex = Sha256Hex(row.uuid);
     batch.sessions.push_back(row);
   }
   ASSERT_TRUE(server.store().CommitBatch(batch).ok());

@@ -32,7 +32,7 @@ TEST_F(CaseTransfer, UploadListDownloadWithResumeGivesIdenticalBytes) {
   ves::v1::UploadCaseResponse up;
   ASSERT_TRUE(UploadCase(admin_, bundle, "big.vescase", &up).ok());
   EXPECT_FALSE(up.already_stored());
-  EXPECT_EQ(up.summary().sha256_hex(), Sha256HexOf(bundle));
+  EXPECT_EQ(up.summary().sha256_hex(), Sha256Hex(bundle));
   EXPECT_EQ(up.summary().payload_sha256_hex(), patient_db::CasePayloadSha256Hex(colon_case));
 
   ves::v1::ListCasesRequest q;
@@ -54,14 +54,14 @@ TEST_F(CaseTransfer, UploadListDownloadWithResumeGivesIdenticalBytes) {
   EXPECT_EQ(first.status.error_code(), grpc::StatusCode::CANCELLED);
   EXPECT_EQ(first.bytes.size(), 2u << 20);
   EXPECT_EQ(first.total_bytes, bundle.size());
-  EXPECT_EQ(first.sha256_hex, Sha256HexOf(bundle));
+  EXPECT_EQ(first.sha256_hex, Sha256Hex(bundle));
   Download rest = DownloadCase(station_, colon_case.id(), 0, first.bytes.size());
   ASSERT_TRUE(rest.status.ok()) << rest.status.error_message();
   EXPECT_TRUE(rest.offsets_contiguous);
   EXPECT_LE(rest.largest_chunk, 1u << 20);
   const std::string joined = first.bytes + rest.bytes;
   EXPECT_EQ(joined, bundle);
-  EXPECT_EQ(Sha256HexOf(joined), rest.sha256_hex);
+  EXPECT_EQ(Sha256Hex(joined), rest.sha256_hex);
   EXPECT_EQ(patient_db::DecodeCaseBundle(joined, "downloaded").SerializeAsString(),
             colon_case.SerializeAsString());
 }

@@ -53,7 +53,7 @@ TEST(Durability, SigkillMidLoopLosesNoAcknowledgedRecordAndSigtermDrains) {
     store->AddTrainee({"t1", "north", "One", 1});
     PutSampleCase(*store, "north");
     token = NewToken();
-    store->AddToken({Sha256HexOf(token), StoreRole::kStation, "north", "", "station", 1});
+    store->AddToken({Sha256Hex(token), StoreRole::kStation, "north", "", "station", 1});
   }
   const std::string db = "sqlite:" + (dir / "ves.db").string();
   ServerProcess server = StartServerProcess(db, dir, "");

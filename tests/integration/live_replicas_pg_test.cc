@@ -150,11 +150,11 @@ class LiveReplicas : public ::testing::Test {
     north_ = NewToken();
     south_ = NewToken();
     ASSERT_TRUE(
-        store.AddToken({Sha256HexOf(station_), StoreRole::kStation, "north", "", "st", 1}).ok());
+        store.AddToken({Sha256Hex(station_), StoreRole::kStation, "north", "", "st", 1}).ok());
     ASSERT_TRUE(
-        store.AddToken({Sha256HexOf(north_), StoreRole::kSupervisor, "north", "", "sn", 1}).ok());
+        store.AddToken({Sha256Hex(north_), StoreRole::kSupervisor, "north", "", "sn", 1}).ok());
     ASSERT_TRUE(
-        store.AddToken({Sha256HexOf(south_), StoreRole::kSupervisor, "south", "", "ss", 1}).ok());
+        store.AddToken({Sha256Hex(south_), StoreRole::kSupervisor, "south", "", "ss", 1}).ok());
     std::mt19937_64 rng(23);
     uuid_ = NewUuid(rng);
   }

@@ -59,8 +59,8 @@ class Replicas : public ::testing::Test {
     PutSampleCase(*store_, "north");
     station_ = NewToken();
     admin_ = NewToken();
-    ASSERT_TRUE(store_->AddToken({Sha256HexOf(station_), StoreRole::kStation, "north", "", "st", 1}).ok());
-    ASSERT_TRUE(store_->AddToken({Sha256HexOf(admin_), StoreRole::kAdmin, "north", "", "ad", 1}).ok());
+    ASSERT_TRUE(store_->AddToken({Sha256Hex(station_), StoreRole::kStation, "north", "", "st", 1}).ok());
+    ASSERT_TRUE(store_->AddToken({Sha256Hex(admin_), StoreRole::kAdmin, "north", "", "ad", 1}).ok());
   }
   void TearDown() override {
     for (Replica& r : replicas_) Stop(&r, SIGKILL);
@@ -261,7 +261,7 @@ TEST_F(Replicas, CaseUploadRacesResolveToOneStoredVersion) {
   EXPECT_EQ((sx.ok() ? sy : sx).error_code(), grpc::StatusCode::ALREADY_EXISTS);
   auto stored = store_->GetCase(x.id(), 10);
   ASSERT_TRUE(stored.ok());
-  EXPECT_EQ(stored.value.sha256_hex, Sha256HexOf(sx.ok() ? bx : by));
+  EXPECT_EQ(stored.value.sha256_hex, Sha256Hex(sx.ok() ? bx : by));
 }
 
 struct UploadRun {
@@ -391,7 +391,7 @@ TEST_F(Replicas, BackupTakenDuringUploadsRestoresToAConsistentDatabase) {
     pqxx::nontransaction q(conn);
     int bad_hash = 0;
     for (const auto& row : q.exec("SELECT uuid, body, body_sha256_hex FROM sessions")) {
-      if (Sha256HexOf(pqxx::binarystring(row[1]).str()) != row[2].as<std::string>()) ++bad_hash;
+      if (Sha256Hex(pqxx::binarystring(row[1]).str()) != row[2].as<std::string>()) ++bad_hash;
       if (!run.attempted.count(row[0].as<std::string>())) ++bad_hash;
     }
     EXPECT_EQ(bad_hash, 0);
@@ -401,7 +401,7 @@ TEST_F(Replicas, BackupTakenDuringUploadsRestoresToAConsistentDatabase) {
     EXPECT_EQ(audit[0][0].as<int>(), 0);
     auto blob = restored->GetBlob(up.summary().sha256_hex());
     ASSERT_TRUE(blob.ok());
-    EXPECT_EQ(Sha256HexOf(blob.value), up.summary().sha256_hex());
+    EXPECT_EQ(Sha256Hex(blob.value), up.summary().sha256_hex());
     // The restored database takes new writes (sequences restored with it).
     patient_db::WriteBatch more;
     more.audit = {{0, 1, "x", "x", "admin", "north", "check", "", "OK"}};

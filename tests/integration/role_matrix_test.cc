@@ -30,7 +30,7 @@ class RoleMatrix : public ::testing::Test {
     row.case_id = colon_case.id();
     row.version = colon_case.version();
     row.institution = "north";
-    row.sha256_hex = Sha256HexOf(bundle_);
+    row.sha256_hex = Sha256Hex(bundle_);
     row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
     ASSERT_TRUE(server_.store().PutCase(row, bundle_).ok());
     case_id_ = colon_case.id();
@@ -171,7 +171,7 @@ TEST_F(RoleMatrix, SouthStationSeesNorthCaseOnlyOnceShared) {
   auto writer = stub->UploadCase(&ctx, &response);
   ves::v1::UploadCaseRequest part;
   part.mutable_header()->set_total_bytes(bundle.size());
-  part.mutable_header()->set_sha256_hex(Sha256HexOf(bundle));
+  part.mutable_header()->set_sha256_hex(Sha256Hex(bundle));
   part.mutable_header()->add_share_with("south");
   ASSERT_TRUE(writer->Write(part));
   part.set_chunk(bundle);

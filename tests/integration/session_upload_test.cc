@@ -315,7 +315,7 @@ TEST_F(SessionUpload, ListSessionsComesInPages) {
     row.case_id = "standard-adult";
     row.start_unix_ms = 1'700'000'000'000 + i / 3;  // ties broken by uuid
     row.body = "x";
-    row.body_sha256_hex = Sha256HexOf(row.uuid);
+    row.body_sha256_hex = Sha256Hex(row.uuid);
     batch.sessions.push_back(row);
   }
   ASSERT_TRUE(server_.store().CommitBatch(batch).ok());

@@ -38,7 +38,7 @@ std::string TestServer::MakeToken(patient_db::StoreRole role, const std::string&
                                   const std::string& trainee_id) {
   const std::string token = NewToken();
   store().AddInstitution(institution, 1);
-  patient_db::TokenRow row{Sha256HexOf(token), role, institution, trainee_id,
+  patient_db::TokenRow row{Sha256Hex(token), role, institution, trainee_id,
                            std::string(patient_db::RoleName(role)) + "@" + institution, 1};
   auto st = store().AddToken(row);
   if (!st.ok()) throw std::runtime_error(st.message);
@@ -121,7 +121,7 @@ void PutTestCase(patient_db::Store& store, const ves::v1::ColonCase& colon_case,
   row.version = colon_case.version();
   row.title = colon_case.title();
   row.institution = owner;
-  row.sha256_hex = Sha256HexOf(bundle);
+  row.sha256_hex = Sha256Hex(bundle);
   row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
   row.shared_with = share_with;
   std::sort(row.shared_with.begin(), row.shared_with.end());
@@ -190,7 +190,7 @@ grpc::Status UploadCase(const ClientOptions& client, const std::string& bundle,
   auto* header = part.mutable_header();
   header->set_file_label(label);
   header->set_total_bytes(bundle.size());
-  header->set_sha256_hex(declared_sha.empty() ? Sha256HexOf(bundle) : declared_sha);
+  header->set_sha256_hex(declared_sha.empty() ? Sha256Hex(bundle) : declared_sha);
   bool ok = writer->Write(part);
   for (size_t off = 0; ok && off < bundle.size(); off += chunk_bytes) {
     part.set_chunk(bundle.substr(off, chunk_bytes));

@@ -422,7 +422,7 @@ TEST_P(StoreContract, SessionForUnknownTraineeFailsWholeBatch) {
   EXPECT_EQ(store_->CountSessions().value, 0);  // nothing half-written
 }
 
-// What a station reports with an upload (records_service.cc builds it).
+// What a station reports with an upload (sessions_service.cc builds it).
 StationRow Report(const std::string& station, int64_t seen, const std::string& version,
                   int64_t session_end, std::optional<uint64_t> safe_states) {
   StationRow r;

@@ -27,9 +27,9 @@ TEST(Token, Is256RandomBitsInHex) {
 
 TEST(Token, HashIsSha256) {
   // SHA-256("abc"), FIPS 180-2 appendix B.1.
-  EXPECT_EQ(Sha256HexOf("abc"),
+  EXPECT_EQ(Sha256Hex("abc"),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
-  EXPECT_EQ(TokenIdOf(Sha256HexOf("abc")), "ba7816bf8f01");
+  EXPECT_EQ(TokenIdOf(Sha256Hex("abc")), "ba7816bf8f01");
 }
 
 class AuthenticatorTest : public ::testing::Test {
@@ -42,7 +42,7 @@ class AuthenticatorTest : public ::testing::Test {
     store_->AddInstitution("north", 1);
     token_ = NewToken();
     ASSERT_TRUE(
-        store_->AddToken({Sha256HexOf(token_), StoreRole::kSupervisor, "north", "", "dr", 1}).ok());
+        store_->AddToken({Sha256Hex(token_), StoreRole::kSupervisor, "north", "", "dr", 1}).ok());
   }
   void TearDown() override {
     store_.reset();
@@ -61,7 +61,7 @@ TEST_F(AuthenticatorTest, BearerTokenResolvesToItsPrincipal) {
   ASSERT_TRUE(auth.Authenticate("Bearer " + token_, &p).ok());
   EXPECT_EQ(p.role, StoreRole::kSupervisor);
   EXPECT_EQ(p.institution, "north");
-  EXPECT_EQ(p.token_id, TokenIdOf(Sha256HexOf(token_)));
+  EXPECT_EQ(p.token_id, TokenIdOf(Sha256Hex(token_)));
   ASSERT_TRUE(auth.Authenticate("Bearer " + token_, &p).ok());  // from the cache
 }
 
@@ -72,7 +72,7 @@ TEST_F(AuthenticatorTest, MissingMalformedOrUnknownTokenIsUnauthenticated) {
   EXPECT_EQ(auth.Authenticate(token_, &p).code, AuthCode::kUnauthenticated);  // no "Bearer "
   EXPECT_EQ(auth.Authenticate("Bearer " + NewToken(), &p).code, AuthCode::kUnauthenticated);
   // The stored hash itself is not a token.
-  EXPECT_EQ(auth.Authenticate("Bearer " + Sha256HexOf(token_), &p).code,
+  EXPECT_EQ(auth.Authenticate("Bearer " + Sha256Hex(token_), &p).code,
             AuthCode::kUnauthenticated);
 }
 

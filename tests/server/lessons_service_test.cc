@@ -56,7 +56,7 @@ void PutShippedCase(patient_db::Store& store, const std::string& id,
   row.version = colon_case.version();
   row.title = colon_case.title();
   row.institution = institution;
-  row.sha256_hex = Sha256HexOf(bundle);
+  row.sha256_hex = Sha256Hex(bundle);
   row.payload_sha256_hex = patient_db::CasePayloadSha256Hex(colon_case);
   ASSERT_TRUE(store.PutCase(row, bundle).ok());
 }
@@ -162,7 +162,7 @@ class Lessons : public ::testing::Test {
     row.start_unix_ms = r.start_unix_ms();
     row.end_unix_ms = r.end_unix_ms();
     row.body = r.SerializeAsString();
-    row.body_sha256_hex = Sha256HexOf(row.body);
+    row.body_sha256_hex = Sha256Hex(row.body);
     row.lesson_id = r.lesson_id();
     patient_db::WriteBatch batch;
     batch.sessions.push_back(row);

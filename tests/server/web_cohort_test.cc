@@ -64,7 +64,7 @@ class WebCohortTest : public WebServerTest {
     row.created_by = "tok";
     row.created_unix_ms = 1;
     row.body = c.SerializeAsString();
-    row.body_sha256_hex = Sha256HexOf(row.body);
+    row.body_sha256_hex = Sha256Hex(row.body);
     ASSERT_TRUE(store.PutCurriculum(row).ok());
     ASSERT_TRUE(store.AddAssignment({"c1", true, "g1", "north", "tok", 1}).ok());
 
@@ -107,7 +107,7 @@ class WebCohortTest : public WebServerTest {
       s.xray_s = r.xray_s;
       s.lesson_id = r.lesson_id;
       s.body = "body of " + r.uuid;
-      s.body_sha256_hex = Sha256HexOf(s.body);
+      s.body_sha256_hex = Sha256Hex(s.body);
       s.stored_unix_ms = r.start;
       batch.sessions.push_back(s);
     }

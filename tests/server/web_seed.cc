@@ -41,7 +41,7 @@ namespace {
 
 std::string Token(ves::patient_db::Store& store, StoreRole role, const std::string& trainee = "") {
   const std::string token = ves::server::NewToken();
-  ves::patient_db::TokenRow row{ves::server::Sha256HexOf(token),
+  ves::patient_db::TokenRow row{ves::server::Sha256Hex(token),
                                 role,
                                 "north",
                                 trainee,
@@ -240,7 +240,7 @@ int main(int argc, char** argv) {
       row.completed = record.metrics().completed();
       row.score = record.score();
       row.body = record.SerializeAsString();
-      row.body_sha256_hex = ves::server::Sha256HexOf(row.body);
+      row.body_sha256_hex = ves::server::Sha256Hex(row.body);
       row.stored_unix_ms = ves::server::NowUnixMs();
       ves::patient_db::WriteBatch batch;
       batch.sessions.push_back(std::move(row));

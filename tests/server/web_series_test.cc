@@ -65,7 +65,7 @@ class WebSeriesTest : public WebServerTest {
     row.start_unix_ms = record.start_unix_ms();
     row.end_unix_ms = record.end_unix_ms();
     row.body = record.SerializeAsString();
-    row.body_sha256_hex = Sha256HexOf(row.body);
+    row.body_sha256_hex = Sha256Hex(row.body);
     row.stored_unix_ms = 1;
     patient_db::WriteBatch batch;
     batch.sessions.push_back(row);

@@ -47,7 +47,7 @@ class WebWorkflowTest : public WebServerTest {
       row.created_by = "tok";
       row.created_unix_ms = 1;
       row.body = c.SerializeAsString();
-      row.body_sha256_hex = Sha256HexOf(row.body);
+      row.body_sha256_hex = Sha256Hex(row.body);
       ASSERT_TRUE(store.PutCurriculum(row).ok());
     }
     patient_db::WriteBatch batch;
@@ -63,7 +63,7 @@ class WebWorkflowTest : public WebServerTest {
       s.start_unix_ms = 1'700'000'000'000;
       s.end_unix_ms = s.start_unix_ms + 300'000;
       s.body = std::string("body of ") + uuid;
-      s.body_sha256_hex = Sha256HexOf(s.body);
+      s.body_sha256_hex = Sha256Hex(s.body);
       s.stored_unix_ms = s.end_unix_ms;
       batch.sessions.push_back(s);
     }
