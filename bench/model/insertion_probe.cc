@@ -178,7 +178,7 @@ int main(int argc, char** argv) {
   ves::bench::ApplyModelOverrides(flags.Getter(), &params);
   auto state = ves::model::MakeInitialState(params);
   auto scratch =
-      ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(ves::bench::ProbeEnv));
+      ves::model::MakeScratch(params, ves::bench::ExperimentsWithOverrides(flags.Getter()));
   auto out = ves::model::MakeStepOutput(params);
 
   std::unique_ptr<ves::training::ScriptedOperator> scripted;
