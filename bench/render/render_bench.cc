@@ -123,7 +123,6 @@ int main(int argc, char** argv) {
       report(std::string("endoscope_") + ves::render::EndoscopeModeName(mode),
              Measure(seconds, [&] { endoscope.Render(scene, &frame); }));
     }
-    report("mucosa_seen_pass", Measure(seconds, [&] { endoscope.AccumulateMucosaSeen(); }));
 
     ves::render::FluoroscopyOptions fluoroscopy_options;
     fluoroscopy_options.width = width;

@@ -14,19 +14,15 @@ SessionModelSource::SessionModelSource(training::SessionRunner* runner,
                                        double coupling_stiffness_N_per_m)
     : runner_(runner),
       controls_(controls),
-      coupling_stiffness_N_per_m_(coupling_stiffness_N_per_m) {
+      coupling_("SessionModelSource", coupling_stiffness_N_per_m) {
   if (runner_ == nullptr || controls_ == nullptr) {
     throw std::invalid_argument("SessionModelSource needs a runner and a controls hand-over");
-  }
-  if (!(coupling_stiffness_N_per_m_ > 0.0)) {
-    throw std::invalid_argument("SessionModelSource coupling stiffness must be > 0 N/m, got " +
-                                std::to_string(coupling_stiffness_N_per_m_));
   }
 }
 
 void SessionModelSource::Start(std::int64_t start_unix_ms, double device_insertion_m,
                                double device_roll_rad) {
-  insertion_offset_m_ = runner_->state().inserted_m - device_insertion_m;
+  coupling_.MapOnto(runner_->state().inserted_m, device_insertion_m);
   roll_offset_rad_ = runner_->state().roll_rad - device_roll_rad;
   have_previous_ = false;
   armed_ = false;
@@ -37,7 +33,7 @@ void SessionModelSource::Arm(double device_insertion_m, double device_roll_rad) 
   if (runner_->session().state() != training::SessionState::kReady) {
     throw std::logic_error("SessionModelSource::Arm: the session is not ready");
   }
-  insertion_offset_m_ = runner_->state().inserted_m - device_insertion_m;
+  coupling_.MapOnto(runner_->state().inserted_m, device_insertion_m);
   roll_offset_rad_ = runner_->state().roll_rad - device_roll_rad;
   have_previous_ = false;
   armed_ = true;
@@ -50,7 +46,7 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   response.update_count = ++updates_;
   stepped_ = false;
   if (armed_ &&
-      insertion_m + insertion_offset_m_ - runner_->state().inserted_m >= kStartInsertion_m) {
+      coupling_.ModelInsertion_m(insertion_m) - runner_->state().inserted_m >= kStartInsertion_m) {
     // The first insertion past the anus: the session's clock starts now.
     armed_ = false;
     const std::int64_t start_unix_ms =
@@ -74,10 +70,8 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   controls_->Load(&controls);
   training::InputSample sample;
   sample.thrust_mode = training::ThrustMode::kForce;
-  sample.insertion_m = insertion_m + insertion_offset_m_;
-  sample.push_force_N = haptics::CalcCouplingForce_N(coupling_stiffness_N_per_m_, insertion_m,
-                                                     insertion_offset_m_,
-                                                     runner_->state().inserted_m);
+  sample.insertion_m = coupling_.ModelInsertion_m(insertion_m);
+  sample.push_force_N = coupling_.CalcPushForce_N(insertion_m, runner_->state().inserted_m);
   sample.roll_rad = roll_rad + roll_offset_rad_;
   sample.knob_up_rad = controls.knob_up_rad;
   sample.knob_right_rad = controls.knob_right_rad;
@@ -92,11 +86,10 @@ haptics::BaseResponse SessionModelSource::Update(double insertion_m, double roll
   }
   stepped_ = true;
   ++model_steps_;
-  // What the model got (quantized): the coupling pulls the device back by F_c;
-  // the model's roll reaction is + when it resists +roll.
+  // The reaction to what the model got (quantized).
   const training::InputSample& logged = runner_->session().inputs().back();
-  response.thrust_force_N = -logged.push_force_N;
-  response.roll_torque_Nm = -runner_->output().roll_torque_Nm;
+  response = haptics::VirtualCoupling::CalcReaction(
+      logged.push_force_N, runner_->output().roll_torque_Nm, response.update_count);
   if (after_step_) after_step_(*runner_);
   return response;
 }

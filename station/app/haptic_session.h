@@ -6,12 +6,9 @@
 // session's model (SessionRunner, so the session logs exactly what the model
 // was given) and returns the force and torque the motors render to the hand.
 //
-// Thrust goes through the virtual coupling of haptics::ModelBaseResponse:
+// Thrust goes through the virtual coupling (haptics::VirtualCoupling):
 // F_c = k_c·(x_device + offset − x_model) pushes the model's base
-// (ThrustMode::kForce) and the hand feels −F_c. A model position-driven by
-// the encoder renders the closed end of the tube as a wall of tens of kN/m,
-// which a 1 kHz loop with one period of delay cannot render stably; the
-// coupling caps the rendered stiffness at k_c. Roll is prescribed by the roll
+// (ThrustMode::kForce) and the hand feels −F_c. Roll is prescribed by the roll
 // encoder. The logged InputSample holds F_c as push_force_N (what the model
 // used), the encoder insertion mapped into the model (insertion_m, for the
 // record) and the encoder roll, plus the knobs, view mode and fluoroscopy that
@@ -24,9 +21,9 @@
 #include "station/haptics/device.h"
 #include "station/haptics/hand_profile.h"
 #include "station/haptics/haptic_loop.h"
-#include "station/haptics/model_base_response.h"
 #include "station/haptics/safety_monitor.h"
 #include "station/haptics/seqlock.h"
+#include "station/haptics/virtual_coupling.h"
 #include "station/training/input_log.h"
 #include "station/training/session_runner.h"
 #include "ves/v1/session.pb.h"
@@ -48,7 +45,7 @@ struct ModelControls {
 class SessionModelSource final : public haptics::BaseResponseSource {
  public:
   static constexpr double kCouplingStiffness_N_per_m =
-      haptics::ModelBaseResponse::kDefaultCouplingStiffness_N_per_m;
+      haptics::VirtualCoupling::kDefaultStiffness_N_per_m;
 
   // Neither pointer may be null; both must outlive the source.
   SessionModelSource(training::SessionRunner* runner,
@@ -97,7 +94,7 @@ class SessionModelSource final : public haptics::BaseResponseSource {
     after_step_ = std::move(hook);
   }
 
-  double insertion_offset_m() const { return insertion_offset_m_; }  // model − device
+  double insertion_offset_m() const { return coupling_.insertion_offset_m(); }  // model − device
   bool stepped() const { return stepped_; }  // whether the last Update stepped the model
   std::uint64_t model_steps() const { return model_steps_; }
   // Distance the insertion encoder moved while a session ran (sum of |Δx|).
@@ -107,8 +104,7 @@ class SessionModelSource final : public haptics::BaseResponseSource {
  private:
   training::SessionRunner* runner_;
   const haptics::SeqLock<ModelControls>* controls_;
-  double coupling_stiffness_N_per_m_;
-  double insertion_offset_m_{0.0};
+  haptics::VirtualCoupling coupling_;
   double roll_offset_rad_{0.0};
   std::function<void(double, double)> before_update_;
   std::function<void(const training::SessionRunner&)> after_step_;

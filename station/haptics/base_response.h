@@ -17,17 +17,6 @@ struct BaseResponse {
   bool operator==(const BaseResponse&) const = default;
 };
 
-// The virtual coupling between the device and the model (the one place the
-// law is written): a spring of stiffness k_c from the model's base to the
-// device's insertion (mapped into the model by the offset), so
-// F_c = k_c·(x_device + offset − x_model) pushes the model's base in
-// (ThrustMode::kForce) and the hand feels −F_c. It caps the stiffness the
-// 1 kHz loop has to render at k_c (ModelBaseResponse, SessionModelSource).
-inline double CalcCouplingForce_N(double coupling_stiffness_N_per_m, double device_insertion_m,
-                                  double insertion_offset_m, double model_insertion_m) {
-  return coupling_stiffness_N_per_m * (device_insertion_m + insertion_offset_m - model_insertion_m);
-}
-
 class BaseResponseSource {
  public:
   virtual ~BaseResponseSource() = default;

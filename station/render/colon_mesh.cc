@@ -130,7 +130,7 @@ constexpr int kCecalPoleRings = 16;
 // Appends the dome on the mesh's last ring: each vertex of that ring is
 // carried toward the pole along a quarter ellipse (its folds and dents
 // fading with it), so the dome meets the tube without a step. The dome's
-// vertices take the last ring's model index (damage, mucosa seen) and the
+// vertices take the last ring's model index and the
 // texture runs on along the dome's meridians.
 void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
   const int sectors = mesh->sectors;
@@ -199,13 +199,13 @@ void AddCecalPole(const ColonMeshOptions& options, ColonMesh* mesh) {
   }
 }
 
-}  // namespace
-
-void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m, double tip_arc_m,
-                    const ColonMeshOptions& options, ColonMesh* mesh) {
+// The mesh's rings (ring_* of `mesh`): samples of material arc length in
+// the window around the tip, on the LOD grid, each interpolated between the
+// two model rings around it. Returns the window [start, end] drawn.
+std::pair<double, double> PlaceMeshRings(const SceneGeometry& scene,
+                                         const std::vector<double>& arc_m, double tip_arc_m,
+                                         const ColonMeshOptions& options, ColonMesh* mesh) {
   const size_t n = scene.colon_centers_m.size();
-  const int sectors = std::max(3, options.sectors);
-  mesh->sectors = sectors;
   mesh->ring_centers_m.clear();
   mesh->ring_radius_m.clear();
   mesh->ring_tangents.clear();
@@ -216,9 +216,6 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
     return std::max(scene.colon_radius_m[k] - deformation,
                     options.min_radius_fraction * scene.colon_radius_m[k]);
   };
-
-  // 1. Mesh rings: samples of material arc length in the window, on the
-  // LOD grid, each interpolated between the two model rings around it.
   const double first_arc = arc_m.front();
   const double last_arc = arc_m.back();
   const bool windowed = options.ahead_m > 0.0;
@@ -260,9 +257,18 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
     add_ring(start);
     add_ring(std::min(last_arc, start + finest));
   }
-  const std::vector<double>& arc = mesh->ring_arc_m;
+  return {start, end};
+}
 
-  // 2. Vertices: parallel-transported frame, folds, dents, texture coordinates.
+// The vertices on the mesh's rings: a parallel-transported frame, folds,
+// dents, the cecum's valve, texture coordinates. `last_arc` is the colon's
+// last point (the cecal pole). Marks in `on_valve` the vertices on the
+// ileocaecal valve (the wireframe's dense patch).
+void PlaceVertices(const SceneGeometry& scene, const ColonMeshOptions& options, double last_arc,
+                   ColonMesh* mesh, std::vector<bool>* on_valve) {
+  const size_t n = scene.colon_centers_m.size();
+  const int sectors = mesh->sectors;
+  const std::vector<double>& arc = mesh->ring_arc_m;
   std::vector<std::pair<Eigen::Vector3d, double>> dents;
   const size_t rings = mesh->ring_centers_m.size();
   const int columns = sectors + 1;
@@ -273,7 +279,7 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
   Eigen::Vector3d colon_middle = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& c : scene.colon_centers_m) colon_middle += c;
   colon_middle /= static_cast<double>(n);
-  std::vector<bool> on_valve(rings * columns, false);  // the wireframe's dense patch
+  on_valve->assign(rings * columns, false);
   for (size_t k = 0; k < rings; ++k) {
     const Eigen::Vector3d& t = mesh->ring_tangents[k];
     normal_axis -= normal_axis.dot(t) * t;
@@ -299,7 +305,7 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       double radius = mesh->ring_radius_m[k] * HaustralFoldFactor(options, arc[k], angle);
       if (at_valve) {
         radius *= IleocaecalValveFactor(from_pole_m, angle - medial_angle);
-        on_valve[k * columns + j] = OnIleocaecalValve(from_pole_m, angle - medial_angle);
+        (*on_valve)[k * columns + j] = OnIleocaecalValve(from_pole_m, angle - medial_angle);
       }
       for (const auto& [direction, depth_m] : dents) {
         const double c = std::max(0.0, radial.dot(direction));
@@ -314,9 +320,14 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       v.ring = static_cast<float>(mesh->ring_index[k]);
     }
   }
+}
 
-  // 3. Normals by central differences over the grid (sign is irrelevant:
-  // the shaders turn them toward the light at the tip).
+// Normals by central differences over the grid (sign is irrelevant:
+// the shaders turn them toward the light at the tip).
+void CalcGridNormals(ColonMesh* mesh) {
+  const int sectors = mesh->sectors;
+  const size_t rings = mesh->ring_centers_m.size();
+  const int columns = sectors + 1;
   for (size_t k = 0; k < rings; ++k) {
     const size_t k0 = k == 0 ? 0 : k - 1;
     const size_t k1 = std::min(k + 1, rings - 1);
@@ -332,11 +343,18 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       Store(normal, mesh->vertices[k * columns + j].normal);
     }
   }
+}
 
-  // 4. Topology: two triangles per quad; wireframe loops and lengthwise lines.
+// Topology: two triangles per quad; wireframe loops and lengthwise lines,
+// every ring and sector on the ileocaecal valve.
+void BuildTopology(const ColonMeshOptions& options, const std::vector<bool>& on_valve,
+                   bool closes_cecum, ColonMesh* mesh) {
+  const int sectors = mesh->sectors;
+  const size_t rings = mesh->ring_centers_m.size();
+  const int columns = sectors + 1;
+  const std::vector<double>& arc = mesh->ring_arc_m;
   mesh->triangles.clear();
   mesh->lines.clear();
-  const bool closes_cecum = end >= last_arc - 1e-9 && end > start;
   mesh->triangles.reserve((rings - 1 + (closes_cecum ? kCecalPoleRings : 0)) * sectors * 6);
   for (size_t k = 0; k + 1 < rings; ++k) {
     const auto row = static_cast<std::uint32_t>(k * columns);
@@ -366,8 +384,20 @@ void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m
       }
     }
   }
+}
 
-  // 5. The cecum's closed end, when the window reaches it.
+}  // namespace
+
+void BuildColonMesh(const SceneGeometry& scene, const std::vector<double>& arc_m, double tip_arc_m,
+                    const ColonMeshOptions& options, ColonMesh* mesh) {
+  mesh->sectors = std::max(3, options.sectors);
+  const auto [start, end] = PlaceMeshRings(scene, arc_m, tip_arc_m, options, mesh);
+  std::vector<bool> on_valve;
+  PlaceVertices(scene, options, arc_m.back(), mesh, &on_valve);
+  CalcGridNormals(mesh);
+  // The cecum's closed end, when the window reaches it.
+  const bool closes_cecum = end >= arc_m.back() - 1e-9 && end > start;
+  BuildTopology(options, on_valve, closes_cecum, mesh);
   if (closes_cecum) AddCecalPole(options, mesh);
 }
 

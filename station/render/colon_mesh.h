@@ -46,7 +46,7 @@ struct ColonVertex {
   float position_m[3];
   float normal[3];
   float uv[2];  // u around the wall [0, 1], v = arc length / texture_length_m
-  float ring;   // continuous index of the model ring (for damage, mucosa seen)
+  float ring;   // continuous index of the model ring the vertex lies on
 };
 
 struct ColonMesh {

@@ -113,24 +113,6 @@ void main() {
 }
 )";
 
-// Mucosa-seen ID pass: model ring index (16 bits) and sector per pixel.
-constexpr char kIdShader[] = R"(#version 300 es
-precision highp float;
-in vec3 v_p_C;
-in vec3 v_n_C;
-in vec2 v_uv;
-in float v_ring;
-uniform float u_seen_m;
-uniform int u_sectors;
-out vec4 o_color;
-void main() {
-  if (length(v_p_C) > u_seen_m) discard;
-  int ring = int(floor(v_ring + 0.5));
-  int sector = min(int(floor(v_uv.x * float(u_sectors))), u_sectors - 1);
-  o_color = vec4(float(ring & 255), float((ring >> 8) & 255), float(sector), 255.0) / 255.0;
-}
-)";
-
 constexpr double kFarPlane_m = 4.0;
 constexpr double kMaxDrawAngle_rad = 1.9;  // ~109°: beyond any image corner
 const cv::Vec3f kRedOutBgr(0.04f, 0.06f, 0.75f);
@@ -164,20 +146,14 @@ EndoscopeView::EndoscopeView(GlContext* context, EndoscopeViewOptions options)
     throw std::invalid_argument("endoscope field_of_view_rad must be in (0.1, 3.1), not " +
                                 std::to_string(options_.field_of_view_rad));
   }
-  if (options_.seen_sectors < 1 || options_.seen_sectors > 255) {
-    throw std::invalid_argument("seen_sectors must be 1..255, not " +
-                                std::to_string(options_.seen_sectors));
-  }
   context_->MakeCurrent();
   target_ = std::make_unique<OffscreenTarget>(options_.width, options_.height);
-  seen_target_ = std::make_unique<OffscreenTarget>(options_.seen_width, options_.seen_height);
   polygon_program_ = std::make_unique<GlProgram>(
       kVertexShader, (std::string("#version 300 es\n") + kSurfaceShader).c_str());
   texture_program_ = std::make_unique<GlProgram>(
       kVertexShader,
       (std::string("#version 300 es\n#define TEXTURED 1\n") + kSurfaceShader).c_str());
   wire_program_ = std::make_unique<GlProgram>(kVertexShader, kWireShader);
-  id_program_ = std::make_unique<GlProgram>(kVertexShader, kIdShader);
   vertices_ = std::make_unique<GlStreamBuffer>(GL_ARRAY_BUFFER);
   triangles_ = std::make_unique<GlStreamBuffer>(GL_ELEMENT_ARRAY_BUFFER);
   lines_ = std::make_unique<GlStreamBuffer>(GL_ELEMENT_ARRAY_BUFFER);
@@ -287,9 +263,6 @@ void EndoscopeView::Render(const SceneGeometry& scene, EndoscopeFrame* frame) {
   CalcMaterialArcs(scene, &arc_m_);
   BuildColonMesh(scene, arc_m_, CalcArcNear(scene, arc_m_, scene.X_WTip.translation()),
                  options_.mesh, &mesh_);
-  model_rings_ = static_cast<int>(scene.colon_centers_m.size());
-  last_X_WTip_ = scene.X_WTip;
-  has_frame_ = true;
 
   frame->lens_in_wall = LensInWall(scene.X_WTip.translation());
   target_->Bind();
@@ -345,38 +318,6 @@ void EndoscopeView::Render(const SceneGeometry& scene, EndoscopeFrame* frame) {
         1.0 - static_cast<double>(cv::countNonZero(alpha)) / static_cast<double>(alpha.total());
   }
   cv::cvtColor(rgba_, frame->image, cv::COLOR_RGBA2BGR);
-}
-
-double EndoscopeView::AccumulateMucosaSeen() {
-  if (!has_frame_) return seen_.SeenShare();
-  if (seen_.rings() != model_rings_ || seen_.sectors() != options_.seen_sectors) {
-    seen_.Reset(model_rings_, options_.seen_sectors);
-  }
-  context_->MakeCurrent();
-  seen_target_->Bind();
-  glDisable(GL_BLEND);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  UploadMesh();
-  glUseProgram(id_program_->id());
-  SetCommonUniforms(*id_program_, last_X_WTip_, options_.seen_width, options_.seen_height);
-  glUniform1f(id_program_->Uniform("u_seen_m"), static_cast<float>(options_.seen_distance_m));
-  glUniform1i(id_program_->Uniform("u_sectors"), options_.seen_sectors);
-  BindTriangles();
-  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(mesh_.triangles.size()), GL_UNSIGNED_INT,
-                 nullptr);
-  glBindVertexArray(0);
-  seen_target_->ReadRgba(&seen_rgba_);
-  for (int y = 0; y < seen_rgba_.rows; ++y) {
-    const auto* row = seen_rgba_.ptr<cv::Vec4b>(y);
-    for (int x = 0; x < seen_rgba_.cols; ++x) {
-      if (row[x][3] == 0) continue;
-      seen_.Mark(row[x][0] | (row[x][1] << 8), row[x][2]);
-    }
-  }
-  return seen_.SeenShare();
 }
 
 }  // namespace ves::render

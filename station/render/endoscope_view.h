@@ -7,7 +7,7 @@
 
 #include "station/render/colon_mesh.h"
 #include "station/render/gl_context.h"
-#include "station/render/mucosa_seen.h"
+#include "station/render/gl_objects_fwd.h"
 #include "station/render/scene_geometry.h"
 
 namespace ves::render {
@@ -32,12 +32,6 @@ struct EndoscopeViewOptions {
   // Wall closer to the lens than this fills the pixel with red (red-out).
   double red_out_distance_m{0.005};
   ColonMeshOptions mesh;
-  // Mucosa-seen accumulator: sectors around each model ring, the farthest a
-  // wall patch may be to count as seen, and the size of the ID pass.
-  int seen_sectors{12};
-  double seen_distance_m{0.08};
-  int seen_width{128};
-  int seen_height{96};
 };
 
 struct EndoscopeFrame {
@@ -47,10 +41,6 @@ struct EndoscopeFrame {
   double red_out_share{0.0};
   bool lens_in_wall{false};
 };
-
-class GlProgram;
-class OffscreenTarget;
-class GlStreamBuffer;
 
 // The endoscope image from the camera at the distal tip (paper §4.2): the
 // colon mesh rebuilt from the scene every frame, lit by a light at the
@@ -75,13 +65,6 @@ class EndoscopeView {
   void Render(const SceneGeometry& scene, EndoscopeFrame* frame);
   EndoscopeFrame Render(const SceneGeometry& scene);
 
-  // Marks the wall patches visible from the pose of the last Render (an ID
-  // pass at seen_width x seen_height) and returns the share seen so far.
-  // The map is sized by the scene's model rings and reset when that changes.
-  double AccumulateMucosaSeen();
-  const MucosaSeenMap& mucosa_seen() const { return seen_; }
-  void ResetMucosaSeen() { seen_ = MucosaSeenMap(); }
-
   // Pixel (column right, row down, continuous; pixel (0,0) has its centre
   // at (0.5,0.5)) where a point given in the tip frame lands through the
   // fisheye: tip +x is right, tip +y is up.
@@ -101,18 +84,11 @@ class EndoscopeView {
   EndoscopeMode mode_{EndoscopeMode::kTexture};
   ColonMesh mesh_;
   std::vector<double> arc_m_;
-  int model_rings_{0};
-  Eigen::Isometry3d last_X_WTip_{Eigen::Isometry3d::Identity()};
-  bool has_frame_{false};
-  MucosaSeenMap seen_;
   cv::Mat rgba_;
-  cv::Mat seen_rgba_;
   std::unique_ptr<GlProgram> polygon_program_;
   std::unique_ptr<GlProgram> texture_program_;
   std::unique_ptr<GlProgram> wire_program_;
-  std::unique_ptr<GlProgram> id_program_;
   std::unique_ptr<OffscreenTarget> target_;
-  std::unique_ptr<OffscreenTarget> seen_target_;
   std::unique_ptr<GlStreamBuffer> vertices_;
   std::unique_ptr<GlStreamBuffer> triangles_;
   std::unique_ptr<GlStreamBuffer> lines_;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "station/render/gl_context.h"
+#include "station/render/gl_objects_fwd.h"
 #include "station/render/scene_geometry.h"
 
 namespace ves::render {
@@ -43,10 +44,6 @@ struct FluoroscopyOptions {
   double noise_level{3.0};
   double blur_sigma_px{0.7};  // detector blur; 0 for none
 };
-
-class GlProgram;
-class OffscreenTarget;
-class GlStreamBuffer;
 
 // The X-ray fluoroscopic image (paper §4.3, Fig. 13): the colon as a
 // sequence of rings, the scope as a thick dark tube, X-ray look (dark where

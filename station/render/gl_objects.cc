@@ -1,5 +1,6 @@
 #include "station/render/gl_objects.h"
 
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -10,6 +11,17 @@
 namespace ves::render {
 namespace {
 
+// The info log of a shader or a program, through its glGet*iv and
+// glGet*InfoLog.
+template <typename GetParameter, typename GetInfoLog>
+std::string InfoLog(GLuint id, GetParameter get_parameter, GetInfoLog get_info_log) {
+  GLint length = 0;
+  get_parameter(id, GL_INFO_LOG_LENGTH, &length);
+  std::string log(std::max(length, 1), '\0');
+  get_info_log(id, length, nullptr, log.data());
+  return log;
+}
+
 GLuint CompileStage(GLenum stage, const char* source) {
   GLuint shader = glCreateShader(stage);
   glShaderSource(shader, 1, &source, nullptr);
@@ -17,10 +29,7 @@ GLuint CompileStage(GLenum stage, const char* source) {
   GLint ok = GL_FALSE;
   glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
   if (ok != GL_TRUE) {
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::string log(std::max(length, 1), '\0');
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
+    const std::string log = InfoLog(shader, glGetShaderiv, glGetShaderInfoLog);
     glDeleteShader(shader);
     throw RenderError(std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
                       " shader does not compile: " + log);
@@ -48,10 +57,7 @@ GlProgram::GlProgram(const char* vertex_source, const char* fragment_source) {
   GLint ok = GL_FALSE;
   glGetProgramiv(id_, GL_LINK_STATUS, &ok);
   if (ok != GL_TRUE) {
-    GLint length = 0;
-    glGetProgramiv(id_, GL_INFO_LOG_LENGTH, &length);
-    std::string log(std::max(length, 1), '\0');
-    glGetProgramInfoLog(id_, length, nullptr, log.data());
+    const std::string log = InfoLog(id_, glGetProgramiv, glGetProgramInfoLog);
     glDeleteProgram(id_);
     throw RenderError("shader program does not link: " + log);
   }

@@ -4,9 +4,6 @@
 #include <functional>
 #include <string>
 
-#include <boost/asio/io_context.hpp>
-#include <boost/asio/steady_timer.hpp>
-
 #include "station/sync/outbox.h"
 
 namespace ves::sync {
@@ -48,35 +45,10 @@ struct DrainResult {
 };
 
 // One pass over the outbox, oldest first. Stops at the first RetryLater (the
-// server is unreachable: later records would fail the same way).
+// server is unreachable: later records would fail the same way). The
+// station's upload (ves::station::DeliverOutbox) runs a bounded number of
+// passes, CalcBackoff apart.
 DrainResult DrainOutbox(Outbox& outbox, SessionUploader& uploader,
                         const std::function<int64_t()>& now_unix_ms);
-
-// Keeps draining the outbox on a Boost.Asio timer: after a pass that hit
-// RetryLater it waits CalcBackoff(failures), otherwise it waits for Notify()
-// (a new commit) or the idle poll period.
-class OutboxSync {
- public:
-  OutboxSync(boost::asio::io_context& io, Outbox& outbox, SessionUploader& uploader,
-             BackoffPolicy policy = {},
-             std::chrono::milliseconds idle_poll = std::chrono::seconds(30));
-  void Start();
-  void Notify();  // something was committed: drain now
-  void Stop();
-  int consecutive_failures() const { return failures_; }
-
- private:
-  void RunPass();
-  void ScheduleAfter(std::chrono::milliseconds delay);
-
-  boost::asio::io_context& io_;
-  Outbox& outbox_;
-  SessionUploader& uploader_;
-  BackoffPolicy policy_;
-  std::chrono::milliseconds idle_poll_;
-  boost::asio::steady_timer timer_;
-  int failures_{0};
-  bool stopped_{false};
-};
 
 }  // namespace ves::sync

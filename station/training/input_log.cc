@@ -22,6 +22,10 @@ constexpr std::uint64_t kMaxVarintBytes = 10;
 // Refuse absurd headers before allocating: 2^28 samples is 74 h at 1 kHz.
 constexpr std::uint64_t kMaxSamples = std::uint64_t{1} << 28;
 constexpr double kMaxQuantized = 1e15;
+// The log's thrust-mode column holds the model's enum as a number: these
+// values are the wire format and must never change.
+static_assert(static_cast<int>(ThrustMode::kPosition) == 0);
+static_assert(static_cast<int>(ThrustMode::kForce) == 1);
 
 std::int64_t ToUnits(double value, double resolution, const char* field) {
   const double units = std::round(value / resolution);

@@ -7,14 +7,16 @@
 #include <string_view>
 #include <vector>
 
+#include "station/model/model.h"
 #include "station/training/observation.h"
 #include "ves/v1/session.pb.h"
 
 namespace ves::training {
 
 // How the operator drives insertion: by position (encoder, spring mode) or by
-// the hand's force (free/coupled mode), paper §2.2.
-enum class ThrustMode : std::uint8_t { kPosition = 0, kForce = 1 };
+// the hand's force (free/coupled mode), paper §2.2. The model's own enum; the
+// log stores its number (kPosition 0, kForce 1, checked in input_log.cc).
+using ThrustMode = model::ThrustMode;
 
 // What the operator did during one model step: everything replay needs to
 // re-run the model (DESIGN.md §5). Values are held at the log's resolution

@@ -9,8 +9,8 @@
 namespace ves::training {
 
 // Turns the model's state and step output into a StepObservation (what the
-// metrics need). Until the views report their per-frame measures it supplies
-// geometric stand-ins, documented in docs/scoring.md:
+// metrics need), from the model alone so that replay reproduces it without
+// rendering; red-out and mucosa seen are geometric (docs/scoring.md):
 //  - red-out: the tip sample touches the wall while the camera axis points
 //    into it (within 60 degrees of the wall normal);
 //  - mucosa seen: a colon segment point counts as seen once it has been

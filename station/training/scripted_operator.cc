@@ -60,92 +60,106 @@ InputSample ExpertOperator::Act(const Perception& p) {
     started_ = true;
     last_inserted_m_ = p.inserted_m;
   }
-  const Settings& k = settings_;
   // How much scope is in beyond the shortest it has been for this depth: the
   // loop, as the insertion that did not move the image tells it.
   const double loop_m = loop_index_.Update(p.inserted_m, p.tip_arc_m);
   if (!reducing_) {
-    const bool scope_used_up = p.inserted_m > p.working_length_m - kScopeLeft_m;
-    const bool deeper = p.tip_arc_m > last_reduce_tip_m_ + kReduceAgainDepth_m;
-    // A pull-back that found the tip loose waits only until the tip is a
-    // little deeper, where it may be round the next corner.
-    const bool past_loose = p.tip_arc_m > loose_tip_m_ + kReprobeDepth_m;
-    if (p.tip_arc_m > stall_tip_m_ + kStallAdvance_m) {
-      stall_tip_m_ = p.tip_arc_m;
-      stall_since_s_ = p.t_s;
-    }
-    // Stalled (the tip has not moved for kStall_s) while the patient does
-    // not complain: the tip is against a wall, not stretching a loop (a tip
-    // stalled in mobile colon that stretches it is pushed on through).
-    const bool stalled =
-        p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m < kComplaintStretch_m;
-    // Stalled, it pulls back to straighten the scope whatever the loop index reads, once per
-    // kReduceAgainDepth_m of depth: repeated pull-backs at one place pressed
-    // the rectosigmoid (redundant-sigmoid, docs/scoring.md).
-    const bool stall_reduce = stalled && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
-    if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
-    // Stalled in the sigmoid while the patient complains: the push stretches
-    // a sigmoid loop that holds the tip back; it asks for help. (A pull-back
-    // there took the scope so short that the colon gathered onto it held the
-    // tip, and for a transverse loop the turn cost generated seed 10 its cecum.)
-    if (p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m >= kComplaintStretch_m &&
-        p.tip_arc_m < kSigmoidTip_m) {
-      stall_since_s_ = p.t_s;
-      CallForHelp(p);
-    }
-    // More scope in than a straight route needs: a loop the loop index has
-    // not seen (it counts from the shortest insertion for this depth, and a
-    // reduction that slipped resets that).
-    const bool looped_by_length = p.inserted_m > kLoopedLength_m && past_loose &&
-                                  p.tip_arc_m > last_reduce_tip_m_ + kLengthReduceAgainDepth_m;
-    const bool loop_reading = deeper && past_loose && loop_m > k.loop_limit_m;
-    const bool reduce = loop_reading || looped_by_length ||
-                        (scope_used_up && past_loose && (deeper || stalled)) || stall_reduce;
-    // Stalled again where it already pulled back: it backs the tip off a
-    // little and steers again ("pull back to find the lumen"), once per
-    // kBackOffAgainDepth_m of depth (a tip that the back-off did not free
-    // goes on under the hand's steady push); a back-off is not a reduction,
-    // so the next one still waits only for depth.
-    const bool back_off =
-        !reduce && stalled && p.tip_arc_m > last_back_off_tip_m_ + kBackOffAgainDepth_m;
-    if (back_off) last_back_off_tip_m_ = p.tip_arc_m;
-    if (reduce || back_off) {
-      reducing_ = true;
-      backing_off_ = back_off;
-      stall_since_s_ = p.t_s;
-      length_reduce_ = looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
-      reduce_start_s_ = p.t_s;
-      reduce_start_inserted_m_ = p.inserted_m;
-      reduce_start_loop_m_ = loop_m;
-      reduce_tip_max_m_ = p.tip_arc_m;
-    }
+    StartAPullBackIfNeeded(p, loop_m);
   } else {
-    // The loop is out once the tip comes back with the scope (insertion and
-    // image move one to one again); also stop after a long pull or a while,
-    // and a reduction for the length alone once the length is well under it.
-    reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
-    const double withdrawn_m = reduce_start_inserted_m_ - p.inserted_m;
-    const bool tip_back = p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m;
-    if (tip_back || withdrawn_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
-        p.t_s - reduce_start_s_ > k.max_reduce_s ||
-        (length_reduce_ && p.inserted_m < kLoopedLength_m - kLoopedLengthMargin_m)) {
-      reducing_ = false;
-      settle_until_s_ = p.t_s + k.settle_s;
-      if (!backing_off_) {
-        // The tip came back with the scope before the loop gave: the tip is
-        // not anchored beyond the loop, and turning the shaft did not take the
-        // loop out. The loop resists; the assistant's hand or the patient's
-        // position must hold the colon while the scope advances.
-        const bool loose = tip_back && withdrawn_m < kLoosePull_m + kTipBack_m;
-        if (loose) {
-          loose_tip_m_ = p.tip_arc_m;
-          if (reduce_start_loop_m_ > k.loop_limit_m) CallForHelp(p);
-        } else {
-          last_reduce_tip_m_ = reduce_tip_max_m_;
-        }
+    EndThePullBackIfDone(p);
+  }
+  TendThePatient(p);
+  return MoveTheHands(p);
+}
+
+void ExpertOperator::StartAPullBackIfNeeded(const Perception& p, double loop_m) {
+  const Settings& k = settings_;
+  const bool scope_used_up = p.inserted_m > p.working_length_m - kScopeLeft_m;
+  const bool deeper = p.tip_arc_m > last_reduce_tip_m_ + kReduceAgainDepth_m;
+  // A pull-back that found the tip loose waits only until the tip is a
+  // little deeper, where it may be round the next corner.
+  const bool past_loose = p.tip_arc_m > loose_tip_m_ + kReprobeDepth_m;
+  if (p.tip_arc_m > stall_tip_m_ + kStallAdvance_m) {
+    stall_tip_m_ = p.tip_arc_m;
+    stall_since_s_ = p.t_s;
+  }
+  // Stalled (the tip has not moved for kStall_s) while the patient does
+  // not complain: the tip is against a wall, not stretching a loop (a tip
+  // stalled in mobile colon that stretches it is pushed on through).
+  const bool stalled =
+      p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m < kComplaintStretch_m;
+  // Stalled, it pulls back to straighten the scope whatever the loop index reads, once per
+  // kReduceAgainDepth_m of depth: repeated pull-backs at one place pressed
+  // the rectosigmoid (redundant-sigmoid, docs/scoring.md).
+  const bool stall_reduce = stalled && p.tip_arc_m > last_stall_reduce_tip_m_ + kReduceAgainDepth_m;
+  if (stall_reduce) last_stall_reduce_tip_m_ = p.tip_arc_m;
+  // Stalled in the sigmoid while the patient complains: the push stretches
+  // a sigmoid loop that holds the tip back; it asks for help. (A pull-back
+  // there took the scope so short that the colon gathered onto it held the
+  // tip, and for a transverse loop the turn cost generated seed 10 its cecum.)
+  if (p.t_s - stall_since_s_ > kStall_s && p.peak_stretch_m >= kComplaintStretch_m &&
+      p.tip_arc_m < kSigmoidTip_m) {
+    stall_since_s_ = p.t_s;
+    CallForHelp(p);
+  }
+  // More scope in than a straight route needs: a loop the loop index has
+  // not seen (it counts from the shortest insertion for this depth, and a
+  // reduction that slipped resets that).
+  const bool looped_by_length = p.inserted_m > kLoopedLength_m && past_loose &&
+                                p.tip_arc_m > last_reduce_tip_m_ + kLengthReduceAgainDepth_m;
+  const bool loop_reading = deeper && past_loose && loop_m > k.loop_limit_m;
+  const bool reduce = loop_reading || looped_by_length ||
+                      (scope_used_up && past_loose && (deeper || stalled)) || stall_reduce;
+  // Stalled again where it already pulled back: it backs the tip off a
+  // little and steers again ("pull back to find the lumen"), once per
+  // kBackOffAgainDepth_m of depth (a tip that the back-off did not free
+  // goes on under the hand's steady push); a back-off is not a reduction,
+  // so the next one still waits only for depth.
+  const bool back_off =
+      !reduce && stalled && p.tip_arc_m > last_back_off_tip_m_ + kBackOffAgainDepth_m;
+  if (back_off) last_back_off_tip_m_ = p.tip_arc_m;
+  if (reduce || back_off) {
+    reducing_ = true;
+    backing_off_ = back_off;
+    stall_since_s_ = p.t_s;
+    length_reduce_ = looped_by_length && !loop_reading && !scope_used_up && !stall_reduce;
+    reduce_start_s_ = p.t_s;
+    reduce_start_inserted_m_ = p.inserted_m;
+    reduce_start_loop_m_ = loop_m;
+    reduce_tip_max_m_ = p.tip_arc_m;
+  }
+}
+
+void ExpertOperator::EndThePullBackIfDone(const Perception& p) {
+  const Settings& k = settings_;
+  // The loop is out once the tip comes back with the scope (insertion and
+  // image move one to one again); also stop after a long pull or a while,
+  // and a reduction for the length alone once the length is well under it.
+  reduce_tip_max_m_ = std::max(reduce_tip_max_m_, p.tip_arc_m);
+  const double withdrawn_m = reduce_start_inserted_m_ - p.inserted_m;
+  const bool tip_back = p.tip_arc_m < reduce_tip_max_m_ - kTipBack_m;
+  if (tip_back || withdrawn_m > (backing_off_ ? kBackOff_m : k.max_withdraw_m) ||
+      p.t_s - reduce_start_s_ > k.max_reduce_s ||
+      (length_reduce_ && p.inserted_m < kLoopedLength_m - kLoopedLengthMargin_m)) {
+    reducing_ = false;
+    settle_until_s_ = p.t_s + k.settle_s;
+    if (!backing_off_) {
+      // The tip came back with the scope before the loop gave: the tip is
+      // not anchored beyond the loop, and turning the shaft did not take the
+      // loop out. The loop resists; the assistant's hand or the patient's
+      // position must hold the colon while the scope advances.
+      const bool loose = tip_back && withdrawn_m < kLoosePull_m + kTipBack_m;
+      if (loose) {
+        loose_tip_m_ = p.tip_arc_m;
+        if (reduce_start_loop_m_ > k.loop_limit_m) CallForHelp(p);
+      } else {
+        last_reduce_tip_m_ = reduce_tip_max_m_;
       }
     }
   }
+}
+
+void ExpertOperator::TendThePatient(const Perception& p) {
   // Turned, a patient who complains for kTurnedComplaint_s is turned back
   // onto the back, and not onto that side again.
   if (position_ != PatientPosition::kSupine) {
@@ -161,7 +175,10 @@ InputSample ExpertOperator::Act(const Perception& p) {
       (p.tip_arc_m > press_until_tip_m_ || p.t_s > press_until_s_)) {
     press_ = AbdominalPress::kNone;
   }
+}
 
+InputSample ExpertOperator::MoveTheHands(const Perception& p) {
+  const Settings& k = settings_;
   InputSample in;
   in.thrust_mode = ThrustMode::kForce;
   in.view_mode = ViewMode::kTextured;

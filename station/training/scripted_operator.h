@@ -99,8 +99,8 @@ class ExpertOperator final : public ScriptedOperator {
     double withdraw_speed_m_per_s{0.01};  // while reducing a loop
     // Most the hand pushes: 10 N, the level real endoscopists' hands stay
     // under 95 % of the time (peak push about 43 N; Appleyard et al., GIE
-    // 2000). It was 8 N, and 8 N at -20 % stalled at the sigmoid-descending
-    // junction of standard-adult, which takes between 6.4 and 6.6 N
+    // 2000). A limit of 8 N moved by -20 % (6.4 N) stalls at the sigmoid-
+    // descending junction of standard-adult, which takes between 6.4 and 6.6 N
     // (docs/model-shortening-notes.md, "The hand's push limit").
     double push_limit_N{10.0};
     double pull_limit_N{8.0};             // most the hand pulls
@@ -171,6 +171,15 @@ class ExpertOperator final : public ScriptedOperator {
   InputSample Act(const Perception& perception) override;
 
  private:
+  // The steps of Act, in order. Not pulling back: start a reduction or a
+  // back-off when a loop, a stall or the scope's length calls for one.
+  void StartAPullBackIfNeeded(const Perception& perception, double loop_m);
+  // Pulling back: stop once the loop is out or the pull is long enough.
+  void EndThePullBackIfDone(const Perception& perception);
+  // Turn a complaining patient back; the assistant lets go of the abdomen.
+  void TendThePatient(const Perception& perception);
+  // Knobs, shaft roll and the speed-tracking hand's force for this step.
+  InputSample MoveTheHands(const Perception& perception);
   // A loop resisted a pull-back: the assistant presses over it or the
   // patient is turned (docs/scoring.md, "Calling for help").
   void CallForHelp(const Perception& perception);

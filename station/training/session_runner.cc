@@ -7,8 +7,7 @@ namespace ves::training {
 
 model::StepInput ToStepInput(const InputSample& in) {
   model::StepInput s;
-  s.thrust_mode = in.thrust_mode == ThrustMode::kPosition ? model::ThrustMode::kPosition
-                                                          : model::ThrustMode::kForce;
+  s.thrust_mode = in.thrust_mode;
   s.insertion_m = in.insertion_m;
   s.push_force_N = in.push_force_N;
   s.roll_rad = in.roll_rad;

@@ -220,14 +220,19 @@ void ApplyPanelAction(PanelAction action, const ScreenModel& model, ControlState
   }
 }
 
-cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
-                      const cv::Mat& fluoroscopy_bgr, const ScreenModel& model,
-                      const ControlState& controls) {
-  const double s = layout.scale;
-  cv::Mat canvas(layout.canvas, CV_8UC3, kBackground);
-  const auto px = [s](double design) { return static_cast<int>(std::lround(design * s)); };
+namespace {
 
-  // Endoscope.
+// Design lengths to canvas pixels at scale s.
+auto Scaler(double s) {
+  return [s](double design) { return static_cast<int>(std::lround(design * s)); };
+}
+
+// The endoscope and fluoroscopy images, captioned and framed.
+void DrawImages(cv::Mat& canvas, const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
+                const cv::Mat& fluoroscopy_bgr, const ScreenModel& model,
+                const ControlState& controls) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
   PutImage(canvas, endoscope_bgr, layout.endoscope);
   if (endoscope_bgr.empty()) {
     DrawTextFitted(canvas, "starting ...", layout.endoscope, 1.2 * s, kDim, true);
@@ -252,8 +257,13 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
              s);
   cv::rectangle(canvas, layout.endoscope, kFrame, std::max(1, px(2)));
   cv::rectangle(canvas, layout.fluoroscopy, kFrame, std::max(1, px(2)));
+}
 
-  // Buttons, case and scope.
+// Buttons, case and scope.
+void DrawButtonsAndChoices(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model,
+                           const ControlState& controls) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
   for (const auto& button : layout.buttons) {
     cv::rectangle(canvas, button.rect, IsActive(button.action, controls) ? kButtonActive : kButton,
                   cv::FILLED);
@@ -272,9 +282,14 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
                  choice_box(PanelAction::kPreviousCase), 0.62 * s, kText);
   DrawTextFitted(canvas, "Scope: " + NameAt(model.scope_names, controls.scope_choice),
                  choice_box(PanelAction::kPreviousScope), 0.62 * s, kText);
+}
 
-  // Live figures: two columns of six lines; on the right what the score
-  // weighs, amber once it costs points, damage red.
+// Live figures: two columns of six lines; on the right what the score
+// weighs, amber once it costs points, damage red.
+void DrawLiveFigures(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model,
+                     const ControlState& controls) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
   const ScoreFigures& sf = model.score_figures;
   const cv::Rect& f = layout.figures;
   constexpr int kLines = 6;
@@ -318,9 +333,13 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
     DrawTextFitted(canvas, right[i], {f.x + left_width, f.y + i * line, f.width - left_width, line},
                    0.62 * s, right_color[i]);
   }
+}
 
-  // Force gauge: the hand's axial force against the device's range, the
-  // hand's limit marked and labelled.
+// Force gauge: the hand's axial force against the device's range, the
+// hand's limit marked and labelled.
+void DrawForceGauge(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
   const cv::Rect& g = layout.gauge;
   cv::rectangle(canvas, g, kButton, cv::FILLED);
   const double share =
@@ -337,10 +356,14 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
   DrawTextFitted(canvas, Format("| limit %.0f N (hand)", model.hand_limit_N),
                  cv::Rect(limit_x + px(4), g.y, g.br().x - limit_x - px(8), g.height), 0.55 * s,
                  kText);
+}
 
-  // A damage episode: a red warning across the endoscope the moment the
-  // model reports it, for kDamageWarningHold_s.
-  if (model.phase == SessionPhase::kRunning && DamageWarningOn(sf, model.elapsed_s)) {
+// A damage episode: a red warning across the endoscope the moment the
+// model reports it, for kDamageWarningHold_s.
+void DrawDamageWarning(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
+  if (model.phase == SessionPhase::kRunning && DamageWarningOn(model.score_figures, model.elapsed_s)) {
     const cv::Rect& w = layout.warning;
     cv::rectangle(canvas, w, kRed, cv::FILLED);
     DrawTextFitted(canvas,
@@ -349,8 +372,11 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
                    w - cv::Size(px(24), 0) + cv::Point(px(12), 0), 0.9 * s, kText, true,
                    std::max(1, px(2)));
   }
+}
 
-  // Status strip: clock and state, device, keys.
+// Status strip: clock and state, device, keys.
+void DrawStatusStrip(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model) {
+  const double s = layout.scale;
   const cv::Rect& st = layout.status;
   const cv::Rect top(st.x, st.y, st.width, st.height / 2);
   const cv::Rect bottom(st.x, st.y + st.height / 2, st.width, st.height - st.height / 2);
@@ -372,28 +398,45 @@ cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
       "w/s insert  a/d roll  i/k j/l knobs  c centre  1 2 3 v view  f X-ray  g damage  "
       "+/- zoom  drag X-ray: rotate  p press  t patient  n/m case/scope  r repeat  q quit",
       bottom, 0.55 * s, kDim);
+}
 
-  // Session over: a banner across the endoscope image with the debrief.
-  if (model.phase == SessionPhase::kOver) {
-    const cv::Rect& b = layout.banner;
-    cv::Mat roi = canvas(b);
-    roi *= 0.2;
-    cv::rectangle(canvas, b, kAmber, std::max(1, px(3)));
-    const int h = b.height;
-    const cv::Rect inner(b.x + px(24), b.y, b.width - px(48), h);
-    DrawTextFitted(canvas, "SESSION OVER: " + model.outcome,
-                   {inner.x, b.y + h * 2 / 100, inner.width, h * 10 / 100}, 1.5 * s, kText, true,
-                   std::max(1, px(3)));
-    DrawTextFitted(canvas, Format("Score %.1f of %.0f", model.score, model.score_max),
-                   {inner.x, b.y + h * 12 / 100, inner.width, h * 8 / 100}, 1.1 * s, kAmber, true,
-                   std::max(1, px(2)));
-    if (!model.debrief.parts.empty()) {
-      DrawDebrief(canvas, {inner.x, b.y + h * 22 / 100, inner.width, h * 68 / 100}, model.debrief,
-                  model.sitting_line, s);
-    }
-    DrawTextFitted(canvas, "r: train again     q: finish",
-                   {inner.x, b.y + h * 91 / 100, inner.width, h * 7 / 100}, 0.8 * s, kDim, true);
+// Session over: a banner across the endoscope image with the debrief.
+void DrawOverBanner(cv::Mat& canvas, const ScreenLayout& layout, const ScreenModel& model) {
+  const double s = layout.scale;
+  const auto px = Scaler(s);
+  const cv::Rect& b = layout.banner;
+  cv::Mat roi = canvas(b);
+  roi *= 0.2;
+  cv::rectangle(canvas, b, kAmber, std::max(1, px(3)));
+  const int h = b.height;
+  const cv::Rect inner(b.x + px(24), b.y, b.width - px(48), h);
+  DrawTextFitted(canvas, "SESSION OVER: " + model.outcome,
+                 {inner.x, b.y + h * 2 / 100, inner.width, h * 10 / 100}, 1.5 * s, kText, true,
+                 std::max(1, px(3)));
+  DrawTextFitted(canvas, Format("Score %.1f of %.0f", model.score, model.score_max),
+                 {inner.x, b.y + h * 12 / 100, inner.width, h * 8 / 100}, 1.1 * s, kAmber, true,
+                 std::max(1, px(2)));
+  if (!model.debrief.parts.empty()) {
+    DrawDebrief(canvas, {inner.x, b.y + h * 22 / 100, inner.width, h * 68 / 100}, model.debrief,
+                model.sitting_line, s);
   }
+  DrawTextFitted(canvas, "r: train again     q: finish",
+                 {inner.x, b.y + h * 91 / 100, inner.width, h * 7 / 100}, 0.8 * s, kDim, true);
+}
+
+}  // namespace
+
+cv::Mat ComposeScreen(const ScreenLayout& layout, const cv::Mat& endoscope_bgr,
+                      const cv::Mat& fluoroscopy_bgr, const ScreenModel& model,
+                      const ControlState& controls) {
+  cv::Mat canvas(layout.canvas, CV_8UC3, kBackground);
+  DrawImages(canvas, layout, endoscope_bgr, fluoroscopy_bgr, model, controls);
+  DrawButtonsAndChoices(canvas, layout, model, controls);
+  DrawLiveFigures(canvas, layout, model, controls);
+  DrawForceGauge(canvas, layout, model);
+  DrawDamageWarning(canvas, layout, model);
+  DrawStatusStrip(canvas, layout, model);
+  if (model.phase == SessionPhase::kOver) DrawOverBanner(canvas, layout, model);
   return canvas;
 }
 

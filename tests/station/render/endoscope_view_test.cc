@@ -227,37 +227,6 @@ TEST(EndoscopeView, LensInsideTheWallIsAllRed) {
   }
 }
 
-TEST(EndoscopeView, MucosaSeenGrowsAsTheScopeAdvancesAndCountsOnlyWhatWasInView) {
-  // Straight tube, no folds, 5 mm rings, tip on the axis at z = 0.1 m. With
-  // 12 sectors and an 8 cm visibility limit: the rings behind the lens are
-  // never seen; a ring 4 cm ahead is seen all round (wall at 25 mm radius
-  // is at atan(25/40) = 32° off axis, inside the image's 42° half-height).
-  EndoscopeViewOptions options = SmallView();
-  options.mesh.fold_depth = 0.0;
-  GlContext context;
-  EndoscopeView view(&context, options);
-  SceneGeometry scene = testing::StraightTube(0.5, 0.005);
-  EXPECT_EQ(view.AccumulateMucosaSeen(), 0.0);  // nothing rendered yet
-  view.Render(scene);
-  const double first = view.AccumulateMucosaSeen();
-  const MucosaSeenMap& seen = view.mucosa_seen();
-  ASSERT_EQ(seen.rings(), static_cast<int>(scene.colon_centers_m.size()));
-  const int tip_ring = 20;  // z = 0.1 m
-  for (int sector = 0; sector < seen.sectors(); ++sector) {
-    EXPECT_TRUE(seen.IsSeen(tip_ring + 8, sector)) << "sector " << sector;
-    EXPECT_FALSE(seen.IsSeen(tip_ring - 2, sector)) << "sector " << sector;
-    EXPECT_FALSE(seen.IsSeen(tip_ring + 20, sector)) << "sector " << sector;  // 10 cm ahead
-  }
-  EXPECT_GT(first, 0.0);
-  EXPECT_LT(first, 0.2);
-  scene.X_WTip.translation().z() += 0.05;
-  view.Render(scene);
-  const double second = view.AccumulateMucosaSeen();
-  EXPECT_GT(second, first);
-  view.ResetMucosaSeen();
-  EXPECT_EQ(view.mucosa_seen().SeenShare(), 0.0);
-}
-
 TEST(EndoscopeView, InconsistentSceneIsRejected) {
   GlContext context;
   EndoscopeView view(&context, SmallView());

@@ -3,7 +3,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
-#include "station/render/mucosa_seen.h"
 #include "station/render/mucosa_texture.h"
 
 namespace ves::render {
@@ -64,23 +63,6 @@ TEST(MucosaTexture, DecodesACaseImageAndRejectsGarbage) {
   EXPECT_THROW(DecodeMucosaTexture("not an image"), std::invalid_argument);
   EXPECT_THROW(DecodeMucosaTexture(""), std::invalid_argument);
   EXPECT_THROW(MakeProceduralMucosa(4), std::invalid_argument);
-}
-
-TEST(MucosaSeenMap, CountsEachPatchOnce) {
-  MucosaSeenMap map(10, 4);  // 40 patches
-  EXPECT_EQ(map.SeenShare(), 0.0);
-  EXPECT_TRUE(map.Mark(2, 3));
-  EXPECT_TRUE(map.Mark(2, 3));
-  EXPECT_TRUE(map.Mark(9, 0));
-  EXPECT_FALSE(map.Mark(10, 0));
-  EXPECT_FALSE(map.Mark(0, -1));
-  EXPECT_EQ(map.seen_count(), 2);
-  EXPECT_DOUBLE_EQ(map.SeenShare(), 2.0 / 40.0);
-  EXPECT_TRUE(map.IsSeen(2, 3));
-  EXPECT_FALSE(map.IsSeen(3, 2));
-  map.Reset(10, 4);
-  EXPECT_EQ(map.seen_count(), 0);
-  EXPECT_THROW(map.Reset(0, 4), std::invalid_argument);
 }
 
 }  // namespace

@@ -90,22 +90,20 @@ TEST(DrainOutbox, RejectedRecordDoesNotBlockTheRest) {
   EXPECT_TRUE(outbox.Find("bad").has_value());
 }
 
-TEST(OutboxSync, RetriesWithBackoffUntilTheServerComesBack) {
-  Outbox outbox(FreshDb("sync"));
+// As the station's upload does: passes until one is not cut short by the
+// server; each refused pass counts one failed attempt on the record.
+TEST(DrainOutbox, LaterPassesDeliverOnceTheServerComesBack) {
+  Outbox outbox(FreshDb("passes"));
   outbox.Commit(MakeRecord("a"));
   FakeServer server(/*down_for=*/3);
-  boost::asio::io_context io;
-  OutboxSync sync(io, outbox, server,
-                  BackoffPolicy{std::chrono::milliseconds(1), std::chrono::milliseconds(4), 2.0},
-                  std::chrono::milliseconds(10'000));
-  sync.Start();
-  // Bounded: stop as soon as the record is acknowledged, or after 5 s.
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (outbox.PendingCount() > 0 && std::chrono::steady_clock::now() < give_up) {
-    io.run_for(std::chrono::milliseconds(5));
-  }
-  sync.Stop();
-  io.run_for(std::chrono::milliseconds(5));
+  int passes = 0;
+  DrainResult result;
+  do {
+    result = DrainOutbox(outbox, server, Now);
+    ++passes;
+  } while (result.stopped_on_retry && passes < 10);
+  EXPECT_EQ(passes, 4);
+  EXPECT_EQ(result, (DrainResult{1, 0, false}));
   EXPECT_EQ(outbox.PendingCount(), 0u);
   EXPECT_EQ(server.calls, 4);  // three refusals, then the delivery
   EXPECT_EQ(server.stored["a"], 1);
