@@ -6,7 +6,10 @@
 
 #include <pqxx/pqxx>
 
+#include "patient_db/clock.h"
 #include "patient_db/migrations/postgres/pg_migrations.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
@@ -14,21 +17,8 @@ namespace {
 // Any constant works: it only has to be the same in every replica.
 constexpr int64_t kMigrationLockKey = 0x7665735f6d6967;  // "ves_mig"
 
-int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 StoreStatus Internal(const std::string& what, const std::string& error) {
   return StoreStatus::Error(StoreCode::kInternal, what + ": " + error);
-}
-
-// An audit listing's row (its columns in AuditRow's order).
-AuditRow AuditRowFrom(const pqxx::row& row) {
-  return {row[0].as<int64_t>(),     row[1].as<int64_t>(),     row[2].as<std::string>(),
-          row[3].as<std::string>(), row[4].as<std::string>(), row[5].as<std::string>(),
-          row[6].as<std::string>(), row[7].as<std::string>(), row[8].as<std::string>()};
 }
 
 }  // namespace
@@ -287,7 +277,7 @@ StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int
         "FROM audit_log WHERE at_unix_ms >= $1 AND id > $2 ORDER BY id LIMIT $3",
         since_unix_ms, after_id, limit);
     for (const auto& row : r) {
-      out.push_back(AuditRowFrom(row));
+      out.push_back(AuditRowFrom(PgColumns(row)));
     }
     return StoreStatus::Ok();
   });
@@ -309,7 +299,7 @@ StoreResult<std::vector<AuditRow>> PgStore::ListAuditNewest(const AuditQuery& q)
         q.actor, q.action, q.from_unix_ms, q.to_unix_ms, q.before_id,
         q.limit > 0 ? int64_t{q.limit} : int64_t{1} << 62);
     for (const auto& row : r) {
-      out.push_back(AuditRowFrom(row));
+      out.push_back(AuditRowFrom(PgColumns(row)));
     }
     return StoreStatus::Ok();
   });

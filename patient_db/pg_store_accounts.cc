@@ -3,26 +3,11 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-constexpr const char* kAccountColumns =
-    "username, role, institution, password_hash, idp_identity, created_unix_ms, "
-    "expires_unix_ms, revoked_unix_ms";
-
-AccountRow ReadAccountRow(const pqxx::row& r) {
-  AccountRow a;
-  a.username = r[0].as<std::string>();
-  ParseRoleName(r[1].as<std::string>(), &a.role);
-  a.institution = r[2].as<std::string>();
-  a.password_hash = r[3].as<std::string>();
-  a.idp_identity = r[4].as<std::string>();
-  a.created_unix_ms = r[5].as<int64_t>();
-  a.expires_unix_ms = r[6].as<int64_t>();
-  a.revoked_unix_ms = r[7].as<int64_t>();
-  return a;
-}
 
 StoreStatus ReadOne(pqxx::transaction_base& tx, const char* column, const std::string& value,
                     AccountRow* out) {
@@ -30,7 +15,7 @@ StoreStatus ReadOne(pqxx::transaction_base& tx, const char* column, const std::s
                                       " FROM accounts WHERE " + column + " = $1",
                                   value);
   if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  *out = ReadAccountRow(r[0]);
+  *out = AccountRowFrom(PgColumns(r[0]));
   return StoreStatus::Ok();
 }
 
@@ -87,7 +72,7 @@ StoreResult<std::vector<AccountRow>> PgStore::ListAccounts(const std::string& in
                                         " FROM accounts WHERE $1 = '' OR institution = $1 "
                                         "ORDER BY username",
                                     institution);
-    for (const auto& row : r) out.push_back(ReadAccountRow(row));
+    for (const auto& row : r) out.push_back(AccountRowFrom(PgColumns(row)));
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;

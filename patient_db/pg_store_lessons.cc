@@ -5,28 +5,11 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-constexpr const char* kVerdictColumns =
-    "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
-    "judged_unix_ms, detail, rejected";
-
-LessonVerdictRow ReadVerdictRow(const pqxx::row& r) {
-  LessonVerdictRow v;
-  v.session_uuid = r[0].as<std::string>();
-  v.trainee_id = r[1].as<std::string>();
-  v.curriculum_id = r[2].as<std::string>();
-  v.lesson_id = r[3].as<std::string>();
-  v.passed = r[4].as<int>() != 0;
-  v.score = r[5].as<double>();
-  v.session_start_unix_ms = r[6].as<int64_t>();
-  v.judged_unix_ms = r[7].as<int64_t>();
-  v.detail = r[8].as<std::string>();
-  v.rejected = r[9].as<int>() != 0;
-  return v;
-}
 
 // Reads one curriculum with its lesson ids; kNotFound when absent.
 StoreStatus ReadCurriculum(pqxx::transaction_base& tx, const std::string& id, CurriculumRow* out) {
@@ -302,7 +285,7 @@ StoreResult<LessonVerdictRow> PgStore::GetLessonVerdict(const std::string& sessi
     if (r.empty()) {
       return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
     }
-    out = ReadVerdictRow(r[0]);
+    out = VerdictRowFrom(PgColumns(r[0]));
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;
@@ -319,7 +302,7 @@ StoreResult<std::vector<LessonVerdictRow>> PgStore::ListLessonVerdicts(
                  " FROM lesson_verdicts WHERE trainee_id = $1 "
                  "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
              trainee_id)) {
-      out.push_back(ReadVerdictRow(r));
+      out.push_back(VerdictRowFrom(PgColumns(r)));
     }
     return StoreStatus::Ok();
   });
@@ -339,7 +322,7 @@ StoreResult<std::vector<std::vector<LessonVerdictRow>>> PgStore::ListLessonVerdi
                  "(SELECT json_array_elements_text($1::json)) "
                  "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
              JsonStringArray(trainee_ids))) {
-      LessonVerdictRow v = ReadVerdictRow(r);
+      LessonVerdictRow v = VerdictRowFrom(PgColumns(r));
       of[v.trainee_id].push_back(std::move(v));
     }
     return StoreStatus::Ok();

@@ -3,19 +3,10 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-constexpr const char* kSignOffColumns = "session_uuid, signed_by, signed_by_label, signed_unix_ms";
-
-SessionSignOffRow ReadSignOff(const pqxx::row& r) {
-  return {r[0].as<std::string>(), r[1].as<std::string>(), r[2].as<std::string>(),
-          r[3].as<int64_t>()};
-}
-
-}  // namespace
-
 StoreStatus PgStore::AddSessionNote(const SessionNoteRow& row) {
   StoreStatus bad = CheckSessionNote(row);
   if (!bad.ok()) return bad;
@@ -83,7 +74,7 @@ StoreResult<SessionSignOffRow> PgStore::GetSessionSignOff(const std::string& ses
       return StoreStatus::Error(StoreCode::kNotFound,
                                 "session '" + session_uuid + "' not signed off");
     }
-    out = ReadSignOff(r[0]);
+    out = SignOffRowFrom(PgColumns(r[0]));
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;
@@ -100,7 +91,7 @@ StoreResult<std::vector<SessionSignOffRow>> PgStore::ListTraineeSignOffs(
         "FROM session_sign_offs o JOIN sessions s ON s.uuid = o.session_uuid "
         "WHERE s.trainee_id = $1",
         trainee_id);
-    for (const auto& row : r) out.push_back(ReadSignOff(row));
+    for (const auto& row : r) out.push_back(SignOffRowFrom(PgColumns(row)));
     return StoreStatus::Ok();
   });
   if (!st.ok()) return st;

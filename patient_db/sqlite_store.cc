@@ -1,22 +1,14 @@
 #include "patient_db/sqlite_store.h"
 
-#include <chrono>
 #include <stdexcept>
 
+#include "patient_db/clock.h"
 #include "patient_db/migrations/migrations.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
 
 // A constraint failure is the caller's mistake (unknown institution, ...).
 StoreStatus FromStep(SqliteDb& db, int rc, const std::string& what) {
@@ -31,8 +23,7 @@ StoreResult<std::vector<AuditRow>> ReadAuditRows(SqliteDb& db, SqliteStatement* 
   int rc = SQLITE_OK;
   std::vector<AuditRow> out;
   while (s->Step(&rc)) {
-    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
-                   s->Text(6), s->Text(7), s->Text(8)});
+    out.push_back(AuditRowFrom(*s));
   }
   s->Reset();
   if (rc != SQLITE_OK) return Internal(db, "list audit");

@@ -3,30 +3,11 @@
 #include <optional>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-constexpr const char* kAccountColumns =
-    "username, role, institution, password_hash, idp_identity, created_unix_ms, "
-    "expires_unix_ms, revoked_unix_ms";
-
-AccountRow ReadAccountRow(const SqliteStatement& s) {
-  AccountRow a;
-  a.username = s.Text(0);
-  ParseRoleName(s.Text(1), &a.role);
-  a.institution = s.Text(2);
-  a.password_hash = s.Text(3);
-  a.idp_identity = s.Text(4);
-  a.created_unix_ms = s.Int(5);
-  a.expires_unix_ms = s.Int(6);
-  a.revoked_unix_ms = s.Int(7);
-  return a;
-}
 
 // One account by `column` (username or idp_identity).
 StoreResult<AccountRow> ReadOne(SqliteDb& db, const char* column, const std::string& value) {
@@ -37,7 +18,7 @@ StoreResult<AccountRow> ReadOne(SqliteDb& db, const char* column, const std::str
   s->Bind(1, value);
   int rc = SQLITE_OK;
   std::optional<AccountRow> row;
-  if (s->Step(&rc)) row = ReadAccountRow(*s);
+  if (s->Step(&rc)) row = AccountRowFrom(*s);
   s->Reset();
   if (rc != SQLITE_OK) return Internal(db, "get account");
   if (!row) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
@@ -115,7 +96,7 @@ StoreResult<std::vector<AccountRow>> SqliteStore::ListAccounts(const std::string
   s->Bind(1, institution).Bind(2, institution);
   int rc = SQLITE_OK;
   std::vector<AccountRow> out;
-  while (s->Step(&rc)) out.push_back(ReadAccountRow(*s));
+  while (s->Step(&rc)) out.push_back(AccountRowFrom(*s));
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list accounts");
   return out;

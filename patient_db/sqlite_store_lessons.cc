@@ -6,44 +6,10 @@
 #include <tuple>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-bool Run(SqliteStatement* s, int* rc) {
-  *rc = SQLITE_OK;
-  s->Step(rc);
-  s->Reset();
-  return *rc == SQLITE_OK;
-}
-
-bool IsConstraint(int rc) { return (rc & 0xff) == SQLITE_CONSTRAINT; }
-
-constexpr const char* kVerdictColumns =
-    "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
-    "judged_unix_ms, detail, rejected";
-
-LessonVerdictRow ReadVerdictRow(const SqliteStatement& s) {
-  LessonVerdictRow v;
-  v.session_uuid = s.Text(0);
-  v.trainee_id = s.Text(1);
-  v.curriculum_id = s.Text(2);
-  v.lesson_id = s.Text(3);
-  v.passed = s.Int(4) != 0;
-  v.score = s.Real(5);
-  v.session_start_unix_ms = s.Int(6);
-  v.judged_unix_ms = s.Int(7);
-  v.detail = s.Text(8);
-  v.rejected = s.Int(9) != 0;
-  return v;
-}
-
-}  // namespace
-
 StoreResult<CurriculumRow> SqliteStore::ReadCurriculum(SqliteDb& db, const std::string& id) {
   SqliteStatement* s = db.Prepare(
       "SELECT curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, "
@@ -349,7 +315,7 @@ StoreResult<LessonVerdictRow> SqliteStore::GetLessonVerdict(const std::string& s
   s->Bind(1, session_uuid);
   int rc = SQLITE_OK;
   std::optional<LessonVerdictRow> v;
-  if (s->Step(&rc)) v = ReadVerdictRow(*s);
+  if (s->Step(&rc)) v = VerdictRowFrom(*s);
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get verdict");
   if (!v) return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
@@ -368,7 +334,7 @@ StoreResult<std::vector<LessonVerdictRow>> SqliteStore::ListLessonVerdicts(
   s->Bind(1, trainee_id);
   int rc = SQLITE_OK;
   std::vector<LessonVerdictRow> out;
-  while (s->Step(&rc)) out.push_back(ReadVerdictRow(*s));
+  while (s->Step(&rc)) out.push_back(VerdictRowFrom(*s));
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list verdicts");
   return out;
@@ -386,7 +352,7 @@ StoreResult<std::vector<std::vector<LessonVerdictRow>>> SqliteStore::ListLessonV
   int rc = SQLITE_OK;
   std::map<std::string, std::vector<LessonVerdictRow>> of;
   while (s->Step(&rc)) {
-    LessonVerdictRow v = ReadVerdictRow(*s);
+    LessonVerdictRow v = VerdictRowFrom(*s);
     of[v.trainee_id].push_back(std::move(v));
   }
   s->Reset();

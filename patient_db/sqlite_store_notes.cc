@@ -3,26 +3,10 @@
 #include <optional>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-bool IsConstraint(int rc) { return (rc & 0xff) == SQLITE_CONSTRAINT; }
-
-constexpr const char* kNoteColumns =
-    "note_id, session_uuid, author, author_label, written_unix_ms, text";
-constexpr const char* kSignOffColumns = "session_uuid, signed_by, signed_by_label, signed_unix_ms";
-
-SessionSignOffRow ReadSignOff(const SqliteStatement& s) {
-  return {s.Text(0), s.Text(1), s.Text(2), s.Int(3)};
-}
-
-}  // namespace
-
 StoreStatus SqliteStore::AddSessionNote(const SessionNoteRow& row) {
   StoreStatus bad = CheckSessionNote(row);
   if (!bad.ok()) return bad;
@@ -100,7 +84,7 @@ StoreResult<SessionSignOffRow> SqliteStore::GetSessionSignOff(const std::string&
   s->Bind(1, session_uuid);
   int rc = SQLITE_OK;
   std::optional<SessionSignOffRow> row;
-  if (s->Step(&rc)) row = ReadSignOff(*s);
+  if (s->Step(&rc)) row = SignOffRowFrom(*s);
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "get sign-off");
   if (!row) {
@@ -122,7 +106,7 @@ StoreResult<std::vector<SessionSignOffRow>> SqliteStore::ListTraineeSignOffs(
   s->Bind(1, trainee_id);
   int rc = SQLITE_OK;
   std::vector<SessionSignOffRow> out;
-  while (s->Step(&rc)) out.push_back(ReadSignOff(*s));
+  while (s->Step(&rc)) out.push_back(SignOffRowFrom(*s));
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list sign-offs");
   return out;

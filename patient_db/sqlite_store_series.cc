@@ -3,16 +3,10 @@
 #include <optional>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-}  // namespace
-
 StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
   StoreStatus bad = CheckSessionSeries(row);
   if (!bad.ok()) return bad;

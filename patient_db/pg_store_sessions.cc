@@ -1,109 +1,26 @@
-// PgStore: cases (content-addressed blobs, versions, shares) and sessions
-// (group-committed batches). Races between replicas are settled by the
-// primary keys with INSERT ... ON CONFLICT DO NOTHING: the loser waits for the
-// winner's transaction and then reads its row, so no error reaches the caller.
+// PgStore: sessions (group-committed batches) and the station reports that
+// come with them.
+// Races between replicas are settled by the primary keys with INSERT ... ON
+// CONFLICT DO NOTHING: the loser waits for the winner's transaction and then
+// reads its row, so no error reaches the caller.
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <numeric>
-#include <optional>
 #include <set>
 #include <stdexcept>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include <pqxx/pqxx>
 
-#include <cstdint>
-
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-constexpr const char* kCaseColumns =
-    "c.case_id, c.version, c.title, c.difficulty, c.region_mask, c.institution, c.sha256_hex, "
-    "c.payload_sha256_hex, c.size_bytes, c.uploaded_by, c.stored_unix_ms";
-
-CaseRow ReadCaseRow(const pqxx::row& r) {
-  CaseRow c;
-  c.case_id = r[0].as<std::string>();
-  c.version = static_cast<uint32_t>(r[1].as<int64_t>());
-  c.title = r[2].as<std::string>();
-  c.difficulty = r[3].as<int>();
-  c.region_mask = static_cast<uint64_t>(r[4].as<int64_t>());
-  c.institution = r[5].as<std::string>();
-  c.sha256_hex = r[6].as<std::string>();
-  c.payload_sha256_hex = r[7].as<std::string>();
-  c.size_bytes = static_cast<uint64_t>(r[8].as<int64_t>());
-  c.uploaded_by = r[9].as<std::string>();
-  c.stored_unix_ms = r[10].as<int64_t>();
-  return c;
-}
-
-constexpr const char* kSessionColumns =
-    "uuid, trainee_id, institution, case_id, case_version, station_id, start_unix_ms, "
-    "end_unix_ms, outcome, completed, time_to_cecum_s, pain_s, score, body_sha256_hex, "
-    "stored_unix_ms, operator_kind, max_tip_arc_m, loop_s, xray_s";
-
-// Column 19 of a session read back: the lesson the record names ('' when
-// none), kept in lesson_sessions rather than in sessions.
-constexpr const char* kSessionLessonColumn =
-    ", COALESCE((SELECT l.lesson_id FROM lesson_sessions l WHERE l.session_uuid = sessions.uuid), "
-    "'')";
-
-SessionRow ReadSessionRow(const pqxx::row& r) {
-  SessionRow s;
-  s.uuid = r[0].as<std::string>();
-  s.trainee_id = r[1].as<std::string>();
-  s.institution = r[2].as<std::string>();
-  s.case_id = r[3].as<std::string>();
-  s.case_version = static_cast<uint32_t>(r[4].as<int64_t>());
-  s.station_id = r[5].as<std::string>();
-  s.start_unix_ms = r[6].as<int64_t>();
-  s.end_unix_ms = r[7].as<int64_t>();
-  s.outcome = r[8].as<int>();
-  s.completed = r[9].as<int>() != 0;
-  s.time_to_cecum_s = r[10].as<double>();
-  s.pain_s = r[11].as<double>();
-  s.score = r[12].as<double>();
-  s.body_sha256_hex = r[13].as<std::string>();
-  s.stored_unix_ms = r[14].as<int64_t>();
-  s.operator_kind = r[15].as<std::string>();
-  s.max_tip_arc_m = r[16].as<double>();
-  s.loop_s = r[17].as<double>();
-  s.xray_s = r[18].as<double>();
-  return s;
-}
-
-constexpr const char* kStationColumns =
-    "institution, station_id, last_seen_unix_ms, software_version, version_session_end_unix_ms, "
-    "has_health, health_session_uuid, health_session_end_unix_ms, device, loop_cycles, "
-    "loop_cycle_p99_us, loop_budget_us, loop_overruns, safe_state_entries, force_pauses, "
-    "can_bus_errors, can_lost_frames, can_send_failures, can_malformed_frames";
-
-StationRow ReadStationRow(const pqxx::row& r) {
-  StationRow s;
-  s.institution = r[0].as<std::string>();
-  s.station_id = r[1].as<std::string>();
-  s.last_seen_unix_ms = r[2].as<int64_t>();
-  s.software_version = r[3].as<std::string>();
-  s.version_session_end_unix_ms = r[4].as<int64_t>();
-  s.has_health = r[5].as<int>() != 0;
-  s.health_session_uuid = r[6].as<std::string>();
-  s.health_session_end_unix_ms = r[7].as<int64_t>();
-  StationHealthRow& h = s.health;
-  h.device = r[8].as<std::string>();
-  h.loop_cycles = static_cast<uint64_t>(r[9].as<int64_t>());
-  h.loop_cycle_p99_us = r[10].as<double>();
-  h.loop_budget_us = r[11].as<double>();
-  h.loop_overruns = static_cast<uint64_t>(r[12].as<int64_t>());
-  h.safe_state_entries = static_cast<uint64_t>(r[13].as<int64_t>());
-  h.force_pauses = static_cast<uint64_t>(r[14].as<int64_t>());
-  h.can_bus_errors = static_cast<uint64_t>(r[15].as<int64_t>());
-  h.can_lost_frames = static_cast<uint64_t>(r[16].as<int64_t>());
-  h.can_send_failures = static_cast<uint64_t>(r[17].as<int64_t>());
-  h.can_malformed_frames = static_cast<uint64_t>(r[18].as<int64_t>());
-  return s;
-}
 
 // The 19 column values of kStationColumns, in order, as text parameters.
 std::vector<std::string> StationParams(const StationRow& r) {
@@ -145,7 +62,7 @@ void WriteStation(pqxx::transaction_base& tx, const StationRow& report) {
                          " FROM stations WHERE institution = $1 AND station_id = $2 FOR UPDATE",
                      report.institution, report.station_id);
   if (found.empty()) throw std::runtime_error("station " + report.station_id + " vanished");
-  const StationRow stored = ReadStationRow(found[0]);
+  const StationRow stored = StationRowFrom(PgColumns(found[0]));
   const StationRow merged = MergeStationReport(&stored, report);
   std::string sql = "UPDATE stations SET ";
   const std::string columns = kStationColumns;
@@ -200,158 +117,6 @@ std::string ByteaHex(const std::string& bytes) {
 }
 
 }  // namespace
-
-StoreStatus PgStore::ReadShares(pqxx::transaction_base& tx, CaseRow* row) {
-  pqxx::result r = tx.exec_params(
-      "SELECT institution FROM case_shares WHERE case_id = $1 AND version = $2 "
-      "ORDER BY institution COLLATE \"C\"",
-      row->case_id, int64_t{row->version});
-  row->shared_with.clear();
-  for (const auto& s : r) row->shared_with.push_back(s[0].as<std::string>());
-  return StoreStatus::Ok();
-}
-
-StoreResult<PutCaseResult> PgStore::PutCase(const CaseRow& row, const std::string& payload) {
-  const std::string name = "case '" + row.case_id + "' version " + std::to_string(row.version);
-  PutCaseResult result;
-  StoreStatus st = Transact("put " + name, TxMode::kWrite, [&](pqxx::transaction_base& tx) {
-    tx.exec_params(
-        "INSERT INTO case_blobs (sha256_hex, size_bytes, payload) VALUES ($1, $2, $3) "
-        "ON CONFLICT (sha256_hex) DO NOTHING",
-        row.sha256_hex, static_cast<int64_t>(payload.size()), pqxx::binarystring(payload));
-    pqxx::result inserted = tx.exec_params(
-        "INSERT INTO cases (case_id, version, title, difficulty, region_mask, institution, "
-        "sha256_hex, payload_sha256_hex, size_bytes, uploaded_by, stored_unix_ms) "
-        "VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) "
-        "ON CONFLICT (case_id, version) DO NOTHING RETURNING 1",
-        row.case_id, int64_t{row.version}, row.title, int64_t{row.difficulty},
-        static_cast<int64_t>(row.region_mask), row.institution, row.sha256_hex,
-        row.payload_sha256_hex, static_cast<int64_t>(payload.size()), row.uploaded_by,
-        row.stored_unix_ms);
-    if (inserted.empty()) {
-      // Stored before (maybe a moment ago by another replica): same content is
-      // an idempotent repeat, other content a refusal. Either way nothing of
-      // this transaction is kept.
-      pqxx::result r = tx.exec_params(std::string("SELECT ") + kCaseColumns +
-                                          " FROM cases c WHERE c.case_id = $1 AND c.version = $2",
-                                      row.case_id, int64_t{row.version});
-      CaseRow existing = ReadCaseRow(r.at(0));
-      if (existing.sha256_hex != row.sha256_hex) {
-        return StoreStatus::Error(
-            StoreCode::kAlreadyExists,
-            name + " is already stored with other content (sha256 " + existing.sha256_hex +
-                "); give the new content a higher version");
-      }
-      ReadShares(tx, &existing);
-      std::string refusal;
-      const std::vector<std::string> added =
-          NewCaseShares(existing, row.institution, row.shared_with, &refusal);
-      if (!refusal.empty()) return StoreStatus::Error(StoreCode::kAlreadyExists, refusal);
-      // The blob was there too: the commit writes only the new shares, if any
-      // (another replica adding the same one at once is no conflict).
-      for (const std::string& institution : added) {
-        tx.exec_params(
-            "INSERT INTO case_shares (case_id, version, institution) VALUES ($1, $2, $3) "
-            "ON CONFLICT DO NOTHING",
-            row.case_id, int64_t{row.version}, institution);
-        existing.shared_with.push_back(institution);
-      }
-      std::sort(existing.shared_with.begin(), existing.shared_with.end());
-      result = {existing, true};
-      return StoreStatus::Ok();
-    }
-    CaseRow stored = row;
-    stored.size_bytes = payload.size();
-    std::map<std::string, bool> shares;  // sorted, unique
-    for (const std::string& i : row.shared_with) {
-      if (i != row.institution) shares[i] = true;
-    }
-    stored.shared_with.clear();
-    for (const auto& [institution, unused] : shares) {
-      tx.exec_params("INSERT INTO case_shares (case_id, version, institution) VALUES ($1, $2, $3)",
-                     row.case_id, int64_t{row.version}, institution);
-      stored.shared_with.push_back(institution);
-    }
-    result = {stored, false};
-    return StoreStatus::Ok();
-  });
-  if (st.code == StoreCode::kInvalidArgument) {
-    return StoreStatus::Error(StoreCode::kInvalidArgument,
-                              name + ": unknown institution '" + row.institution + "'");
-  }
-  if (!st.ok()) return st;
-  return result;
-}
-
-StoreResult<std::vector<CaseRow>> PgStore::ListCases(const CaseFilter& f) {
-  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE TRUE";
-  // Unused filters compare with themselves so the parameter list stays fixed.
-  sql += " AND ($1::BIGINT = 0 OR (c.region_mask & $1::BIGINT) <> 0)";
-  sql += " AND ($2::INTEGER = 0 OR c.difficulty = $2::INTEGER)";
-  sql += " AND ($3 = '' OR c.institution = $3)";
-  sql += " AND ($4 = '' OR c.institution = $4 OR EXISTS (SELECT 1 FROM case_shares s WHERE "
-         "s.case_id = c.case_id AND s.version = c.version AND s.institution = $4))";
-  // Pages: after (case_id, version) with all versions, else after case_id.
-  sql += f.all_versions ? " AND ($5 = 0 OR c.case_id COLLATE \"C\" > $6 OR "
-                          "(c.case_id = $6 AND c.version > $7::BIGINT))"
-                        : " AND ($5 = 0 OR c.case_id COLLATE \"C\" > $6 OR $7::BIGINT < 0)";
-  sql += " ORDER BY c.case_id COLLATE \"C\", c.version";
-  const int64_t region_bit = f.region != 0 ? static_cast<int64_t>(uint64_t{1} << f.region) : 0;
-  const size_t limit = f.page.limit > 0 ? static_cast<size_t>(f.page.limit) : SIZE_MAX;
-  std::vector<CaseRow> out;
-  StoreStatus st = Transact("list cases", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r =
-        tx.exec_params(sql, region_bit, int64_t{f.difficulty}, f.institution, f.visible_to,
-                       f.page.has_after ? 1 : 0, f.page.after_text, f.page.after_number);
-    for (const auto& row : r) {
-      CaseRow c = ReadCaseRow(row);
-      // Rows come ordered by (id, version): a later version replaces the last one.
-      if (!f.all_versions && !out.empty() && out.back().case_id == c.case_id) {
-        out.back() = std::move(c);
-        continue;
-      }
-      if (out.size() == limit) break;  // the next case would be one too many
-      out.push_back(std::move(c));
-    }
-    for (CaseRow& c : out) ReadShares(tx, &c);
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
-}
-
-StoreResult<CaseRow> PgStore::GetCase(const std::string& case_id, uint32_t version) {
-  std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE c.case_id = $1";
-  sql += version == 0 ? " AND $2::BIGINT = 0 ORDER BY c.version DESC LIMIT 1" : " AND c.version = $2";
-  CaseRow out;
-  StoreStatus st = Transact("get case", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(sql, case_id, int64_t{version});
-    if (r.empty()) {
-      return StoreStatus::Error(
-          StoreCode::kNotFound,
-          "no case '" + case_id + "'" +
-              (version == 0 ? std::string() : " version " + std::to_string(version)));
-    }
-    out = ReadCaseRow(r[0]);
-    return ReadShares(tx, &out);
-  });
-  if (!st.ok()) return st;
-  return out;
-}
-
-StoreResult<std::string> PgStore::GetBlob(const std::string& sha256_hex) {
-  std::string out;
-  StoreStatus st = Transact("get blob", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r =
-        tx.exec_params("SELECT payload FROM case_blobs WHERE sha256_hex = $1", sha256_hex);
-    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
-    out = pqxx::binarystring(r[0][0]).str();
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
-}
 
 StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch& batch) {
   // Rows are inserted in uuid order (stable, so repeats keep batch order) so
@@ -429,7 +194,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
       for (size_t k = 0; k < lookup.size(); ++k) find += (k ? ", $" : "$") + std::to_string(k + 1);
       find += ")";
       for (const auto& r : tx.exec_params(find, pqxx::prepare::make_dynamic_params(lookup))) {
-        SessionRow found = ReadSessionRow(r);
+        SessionRow found = SessionRowFrom(PgColumns(r));
         first[found.uuid] = std::move(found);
       }
     }
@@ -479,7 +244,7 @@ StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
                            ", body FROM sessions WHERE uuid = $1",
                        uuid);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
-    out = ReadSessionRow(r[0]);
+    out = SessionRowFrom(PgColumns(r[0]));
     out.lesson_id = r[0][19].as<std::string>();
     out.body = pqxx::binarystring(r[0][20]).str();
     return StoreStatus::Ok();
@@ -502,7 +267,7 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
     for (const auto& row : tx.exec_params(
              sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
              page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
-      out.push_back(ReadSessionRow(row));
+      out.push_back(SessionRowFrom(PgColumns(row)));
       out.back().lesson_id = row[19].as<std::string>();
     }
     return StoreStatus::Ok();
@@ -525,7 +290,7 @@ StoreResult<std::vector<std::vector<SessionRow>>> PgStore::ListSessionsOf(
         of.clear();
         for (const auto& row :
              tx.exec_params(sql, JsonStringArray(trainee_ids), from_unix_ms, to_unix_ms)) {
-          SessionRow s = ReadSessionRow(row);
+          SessionRow s = SessionRowFrom(PgColumns(row));
           s.lesson_id = row[19].as<std::string>();
           std::vector<SessionRow>& rows = of[s.trainee_id];
           if (limit_each < 0 || rows.size() <= static_cast<size_t>(limit_each)) {
@@ -568,7 +333,7 @@ StoreResult<std::vector<StationRow>> PgStore::ListStations(const std::string& in
                  "> $3) ORDER BY station_id COLLATE \"C\" LIMIT $4",
              institution, page.has_after ? 1 : 0, page.after_text,
              page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
-      out.push_back(ReadStationRow(row));
+      out.push_back(StationRowFrom(PgColumns(row)));
     }
     return StoreStatus::Ok();
   });
@@ -589,7 +354,7 @@ StoreResult<std::vector<SessionRow>> PgStore::ListOperatorSessions(
         out.clear();
         for (const auto& row :
              tx.exec_params(sql, institution, case_id, operator_kind, int64_t{limit})) {
-          out.push_back(ReadSessionRow(row));
+          out.push_back(SessionRowFrom(PgColumns(row)));
         }
         return StoreStatus::Ok();
       });
