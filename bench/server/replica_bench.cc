@@ -30,6 +30,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/server/bench_server.h"
 #include "patient_db/case_format.h"
 #include "patient_db/pg_store.h"
 #include "station/training/input_log.h"
@@ -282,15 +283,7 @@ int main(int argc, char** argv) {
       store.AddInstitution("bench", 1);
       store.AddTrainee({"bench-trainee", "bench", "Bench", 1});
       // The case the records name (the server refuses sessions of unknown cases).
-      const auto colon_case = ves::patient_db::LoadCaseFile(kCaseFile);
-      const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
-      ves::patient_db::CaseRow row;
-      row.case_id = colon_case.id();
-      row.version = colon_case.version();
-      row.institution = "bench";
-      row.sha256_hex = ves::server::Sha256HexOf(bundle);
-      row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
-      store.PutCase(row, bundle);
+      ves::bench::PutBenchCase(store, ves::patient_db::LoadCaseFile(kCaseFile), "bench");
       store.AddToken({ves::server::Sha256HexOf(token), ves::patient_db::StoreRole::kStation,
                       "bench", "", "bench", 1});
     }
