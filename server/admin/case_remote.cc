@@ -93,11 +93,7 @@ int RunCaseList(const CommandArgs& args) {
   q.set_all_versions(vm.count("all-versions") > 0);
   q.set_page_size(1000);
   auto stub = ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client));
-  auto status = ForEachPage<ves::v1::ListCasesResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListCases(c, request, reply);
-      },
+  return ListAllPages("case list", client, *stub, &ves::v1::Cases::Stub::ListCases, q,
       [](const ves::v1::ListCasesResponse& r) {
         for (const auto& c : r.cases()) {
           // The payload hash, as `case validate` and the station print it.
@@ -110,8 +106,6 @@ int RunCaseList(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("case list", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunCaseDownload(const CommandArgs& args) {

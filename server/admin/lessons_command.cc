@@ -83,11 +83,7 @@ int CurriculumList(const ClientOptions& client, const std::string& institution) 
   ves::v1::ListCurriculaRequest q;
   q.set_institution(institution);
   auto stub = LessonsStub(client);
-  auto status = ForEachPage<ves::v1::ListCurriculaResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListCurricula(c, request, reply);
-      },
+  return ListAllPages("curriculum list", client, *stub, &ves::v1::Lessons::Stub::ListCurricula, q,
       [](const ves::v1::ListCurriculaResponse& r) {
         for (const auto& c : r.curricula()) {
           std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),
@@ -95,10 +91,6 @@ int CurriculumList(const ClientOptions& client, const std::string& institution) 
         }
         return true;
       });
-  if (!status.ok()) {
-    return ReportRpcError("curriculum list", status.error_code(), status.error_message());
-  }
-  return kExitOk;
 }
 
 // The progress of one trainee: one line per lesson.

@@ -27,28 +27,29 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
                 int deadline_s);
 // "YYYY-MM-DD HH:MM" in UTC: the date column of the tables ves-admin prints.
 std::string FormatUtcMinute(int64_t unix_ms);
-// Calls a paginated List method (docs/server.md, "Limits") page after page
-// until the last: `call(context, request, reply)` sends one, `each(reply)`
-// sees every reply. Returns the first failure, else OK.
-template <typename Response, typename Request, typename Call, typename Each>
-grpc::Status ForEachPage(const ves::server::ClientOptions& client, Request request, Call call,
-                         Each each) {
-  for (;;) {
-    grpc::ClientContext context;
-    ves::server::PrepareContext(&context, client);
-    Response reply;
-    const grpc::Status status = call(&context, request, &reply);
-    if (!status.ok()) return status;
-    const bool more = each(reply);
-    if (!more || reply.next_page_token().empty()) return status;
-    request.set_page_token(reply.next_page_token());
-  }
-}
-
 // A string from the server made safe for the terminal: control characters
 // (an ANSI escape in a display name) escaped as \xNN, cut at 256 bytes.
 std::string Shown(const std::string& text);
 // Prints "ves-admin NAME: CODE: message" and returns kExitFailed.
 int ReportRpcError(const std::string& name, int code, const std::string& message);
+
+// Calls the paginated List method `method` of `stub` (docs/server.md,
+// "Limits") page after page until the last: `each(reply)` sees every reply
+// and returns false to stop early. Returns the exit status: kExitOk, or the
+// first failure, reported as `name` (ReportRpcError).
+template <typename Stub, typename Request, typename Response, typename Each>
+int ListAllPages(const std::string& name, const ves::server::ClientOptions& client, Stub& stub,
+                 grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
+                 Request request, Each each) {
+  for (;;) {
+    grpc::ClientContext context;
+    ves::server::PrepareContext(&context, client);
+    Response reply;
+    const grpc::Status status = (stub.*method)(&context, request, &reply);
+    if (!status.ok()) return ReportRpcError(name, status.error_code(), status.error_message());
+    if (!each(reply) || reply.next_page_token().empty()) return kExitOk;
+    request.set_page_token(reply.next_page_token());
+  }
+}
 
 }  // namespace ves::admin

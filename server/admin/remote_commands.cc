@@ -286,20 +286,15 @@ int RunTraineeCommand(const CommandArgs& args) {
   if (action == "list") {
     ves::v1::ListTraineesRequest q;
     q.set_institution(institution);
-    auto status = ForEachPage<ves::v1::ListTraineesResponse>(
-        client, q,
-        [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-          return stub->ListTrainees(c, request, reply);
-        },
-        [](const ves::v1::ListTraineesResponse& r) {
-          for (const auto& t : r.trainees()) {
-            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
-                        Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
-          }
-          return true;
-        });
-    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    return kExitOk;
+    return ListAllPages("trainee", client, *stub, &ves::v1::Trainees::Stub::ListTrainees, q,
+                        [](const ves::v1::ListTraineesResponse& r) {
+                          for (const auto& t : r.trainees()) {
+                            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
+                                        Shown(t.institution()).c_str(),
+                                        Shown(t.display_name()).c_str());
+                          }
+                          return true;
+                        });
   }
   std::cerr << "ves-admin trainee: unknown action '" << action << "' (add or list)\n";
   return kExitUsage;
@@ -323,11 +318,7 @@ int RunScoresCommand(const CommandArgs& args) {
   q.set_page_size(1000);
   auto stub = Stub<ves::v1::Trainees>(client);
   bool header = false;
-  auto status = ForEachPage<ves::v1::ListSessionsResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListSessions(c, request, reply);
-      },
+  return ListAllPages("scores", client, *stub, &ves::v1::Trainees::Stub::ListSessions, q,
       [&](const ves::v1::ListSessionsResponse& r) {
         // One session a line, oldest first; `session show SESSION` reads one.
         if (!header) {
@@ -351,8 +342,6 @@ int RunScoresCommand(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunSessionCommand(const CommandArgs& args) {
@@ -414,11 +403,7 @@ int RunAuditCommand(const CommandArgs& args) {
   q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
   auto stub = Stub<ves::v1::Admin>(client);
   unsigned shown = 0;
-  auto status = ForEachPage<ves::v1::ListAuditResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListAudit(c, request, reply);
-      },
+  return ListAllPages("audit", client, *stub, &ves::v1::Admin::Stub::ListAudit, q,
       [&](const ves::v1::ListAuditResponse& r) {
         for (const auto& e : r.entries()) {
           if (shown == limit) return false;
@@ -431,8 +416,6 @@ int RunAuditCommand(const CommandArgs& args) {
         }
         return shown < limit;
       });
-  if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunStationsCommand(const CommandArgs& args) {
@@ -454,11 +437,7 @@ int RunStationsCommand(const CommandArgs& args) {
   std::printf("%-24s %-17s %-12s %-10s %-14s %-10s %-12s %-10s %s\n", "station", "last seen UTC",
               "version", "device", "p99/budget us", "overruns", "safe-state", "CAN errors",
               "flags");
-  auto status = ForEachPage<ves::v1::ListStationsResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListStations(c, request, reply);
-      },
+  return ListAllPages("stations", client, *stub, &ves::v1::Admin::Stub::ListStations, q,
       [&](const ves::v1::ListStationsResponse& r) {
         for (const auto& st : r.stations()) {
           std::string device = "-", loop = "-", overruns = "-", safe = "-", can = "-", flags;
@@ -490,8 +469,6 @@ int RunStationsCommand(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("stations", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 }  // namespace ves::admin
