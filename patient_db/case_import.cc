@@ -21,7 +21,6 @@
 namespace ves::patient_db::case_import {
 namespace {
 
-
 // Arc length along the polyline through `points` of the point of it nearest
 // to `p` (the first of equally near ones).
 double ProjectOntoPolyline(const std::vector<std::array<double, 3>>& points,

@@ -31,8 +31,8 @@ std::vector<std::string> SplitCells(std::string_view line) {
   size_t start = 0;
   while (true) {
     const size_t comma = line.find(',', start);
-    cells.push_back(Trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos
-                                                                            : comma - start)));
+    cells.push_back(Trim(line.substr(
+        start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
     if (comma == std::string_view::npos) break;
     start = comma + 1;
   }
@@ -100,8 +100,9 @@ std::map<std::string, int> MapColumns(const CsvTable& table, const std::vector<s
   for (int i = 0; i < static_cast<int>(table.header.size()); ++i) {
     const std::string& name = table.header[i];
     if (std::find(known.begin(), known.end(), name) == known.end()) {
-      problems.push_back({file, "csv.header", i, name, "unknown column (expected one of the header " +
-                                                           std::string("names in docs/case-format.md)")});
+      problems.push_back({file, "csv.header", i, name,
+                          "unknown column (expected one of the header " +
+                              std::string("names in docs/case-format.md)")});
     } else {
       columns[name] = i;
     }
@@ -172,12 +173,12 @@ ves::v1::ColonCase ImportCenterlineCsv(std::string_view csv_text, const std::str
       const std::string& cell = row.cells[columns.at(names[k])];
       const auto value = ParseNumber(cell);
       if (!value) {
-        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
-                            "not a number"});
+        problems.push_back(
+            {file_label, std::string("csv.") + names[k], row.line, cell, "not a number"});
       } else if (!std::isfinite(*value)) {
         // Said here, once: arcs, radii and regions derived from it would repeat it.
-        problems.push_back({file_label, std::string("csv.") + names[k], row.line, cell,
-                            "not a finite number"});
+        problems.push_back(
+            {file_label, std::string("csv.") + names[k], row.line, cell, "not a finite number"});
       }
       p[k] = value.value_or(0.0) * kMetresPerMillimetre;
     }

@@ -42,7 +42,6 @@ std::map<std::string, int> MapColumns(const CsvTable& table, const std::vector<s
                                       const std::vector<std::string>& required,
                                       const std::string& file);
 
-
 // A region landmark: the region that begins where `p_W_m` projects onto the curve.
 struct RegionLandmark {
   std::array<double, 3> p_W_m;  // same frame as ImportedPoints::p_W_m
@@ -50,10 +49,10 @@ struct RegionLandmark {
 };
 
 struct ImportedPoints {
-  std::vector<std::array<double, 3>> p_W_m;     // patient frame, not yet translated
-  std::vector<double> radius_m;                 // empty: use options.radius_mm
-  std::vector<ves::v1::Region> regions;         // empty: landmarks or options.region
-  std::vector<RegionLandmark> landmarks;        // regions by position along the curve
+  std::vector<std::array<double, 3>> p_W_m;  // patient frame, not yet translated
+  std::vector<double> radius_m;              // empty: use options.radius_mm
+  std::vector<ves::v1::Region> regions;      // empty: landmarks or options.region
+  std::vector<RegionLandmark> landmarks;     // regions by position along the curve
 
   // How the file names its points and radii, so a problem says it in the
   // file's own terms (its line, its point label, its unit), not the case's.

@@ -63,8 +63,8 @@ std::vector<std::array<double, 3>> ReadControlPoints(const nlohmann::json& marku
   }
   int index = 0;
   for (const json& point : markup["controlPoints"]) {
-    const json* position = point.is_object() && point.contains("position") ? &point["position"]
-                                                                            : nullptr;
+    const json* position =
+        point.is_object() && point.contains("position") ? &point["position"] : nullptr;
     if (!position || !position->is_array() || position->size() != 3 ||
         !std::all_of(position->begin(), position->end(),
                      [](const json& v) { return v.is_number(); })) {
@@ -107,7 +107,8 @@ void ReadLandmarks(const nlohmann::json& markup, const std::string& file_label,
     }
     in.landmarks.push_back({points[i], *region});
   }
-  if (points.empty()) problems.push_back({file_label, where + ".controlPoints", -1, "", "no landmarks"});
+  if (points.empty())
+    problems.push_back({file_label, where + ".controlPoints", -1, "", "no landmarks"});
 }
 
 // The curve's "Radius" measurement, one value per control point (Slicer's
@@ -125,7 +126,10 @@ std::vector<double> ReadRadiusMeasurement(const nlohmann::json& markup, size_t p
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (name != "radius") continue;
     const std::string units = measurement.value("units", std::string("mm"));
-    const double metres_per_unit = units == "mm" ? 1e-3 : units == "cm" ? 1e-2 : units == "um" ? 1e-6 : 0.0;
+    const double metres_per_unit = units == "mm"   ? 1e-3
+                                   : units == "cm" ? 1e-2
+                                   : units == "um" ? 1e-6
+                                                   : 0.0;
     if (metres_per_unit == 0.0) {
       problems.push_back({file_label, where + ".units", -1, units, "must be mm, cm or um"});
       return {};
@@ -138,10 +142,9 @@ std::vector<double> ReadRadiusMeasurement(const nlohmann::json& markup, size_t p
     }
     const auto& values = measurement["controlPointValues"];
     if (values.size() != point_count) {
-      problems.push_back({file_label, where + ".controlPointValues", -1,
-                          std::to_string(values.size()) + " values",
-                          "must have one value per control point (" +
-                              std::to_string(point_count) + ")"});
+      problems.push_back(
+          {file_label, where + ".controlPointValues", -1, std::to_string(values.size()) + " values",
+           "must have one value per control point (" + std::to_string(point_count) + ")"});
       return {};
     }
     in.radius_file = file_label;
@@ -232,9 +235,9 @@ ves::v1::ColonCase ImportSlicerMarkupsOrThrow(
     if (!row_problems.empty()) {
       // Rows are missing: the count check below would only repeat them.
     } else if (table.rows.size() != in.p_W_m.size() && problems.empty()) {
-      problems.push_back({sidecar, "csv", -1, std::to_string(table.rows.size()) + " rows",
-                          "must have one row per control point (" +
-                              std::to_string(in.p_W_m.size()) + ")"});
+      problems.push_back(
+          {sidecar, "csv", -1, std::to_string(table.rows.size()) + " rows",
+           "must have one row per control point (" + std::to_string(in.p_W_m.size()) + ")"});
     } else {
       ReadRadiusAndRegion(table, columns, sidecar, in, problems);
     }
@@ -247,8 +250,7 @@ ves::v1::ColonCase ImportSlicerMarkupsOrThrow(
 
 ves::v1::ColonCase ImportSlicerMarkups(std::string_view json_text,
                                        const std::optional<std::string>& radius_csv_text,
-                                       const std::string& file_label,
-                                       const ImportOptions& options,
+                                       const std::string& file_label, const ImportOptions& options,
                                        const std::optional<std::string>& landmarks_json_text) {
   // A member of the wrong JSON type ("coordinateSystem": 5) is a problem of
   // the file, not an abort (found by fuzzing: tests/fuzz/regressions/markups).

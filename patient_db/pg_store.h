@@ -66,6 +66,10 @@ class PgStore final : public Store {
   // Runs `body` in a transaction and commits it when it returns Ok (an error
   // status rolls back). Retries as described above.
   StoreStatus Transact(const std::string& what, TxMode mode, const Body& body);
+  // A read (Transact, kRead) whose `body(tx)` returns its StoreResult<T>;
+  // defined in pg_store_internal.h.
+  template <typename T, typename Fn>
+  StoreResult<T> Query(const std::string& what, const Fn& body);
   InDoubt ResolveInDoubt(int64_t txid);
   void Migrate();
   StoreStatus ReadShares(pqxx::transaction_base& tx, CaseRow* row);

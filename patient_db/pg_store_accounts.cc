@@ -9,14 +9,13 @@
 namespace ves::patient_db {
 namespace {
 
-StoreStatus ReadOne(pqxx::transaction_base& tx, const char* column, const std::string& value,
-                    AccountRow* out) {
+StoreResult<AccountRow> ReadOne(pqxx::transaction_base& tx, const char* column,
+                                const std::string& value) {
   pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
                                       " FROM accounts WHERE " + column + " = $1",
                                   value);
   if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  *out = AccountRowFrom(PgColumns(r[0]));
-  return StoreStatus::Ok();
+  return AccountRowFrom(PgColumns(r[0]));
 }
 
 }  // namespace
@@ -46,37 +45,25 @@ StoreStatus PgStore::AddAccount(const AccountRow& a) {
 }
 
 StoreResult<AccountRow> PgStore::GetAccount(const std::string& username) {
-  AccountRow a;
-  StoreStatus st = Transact("get account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    return ReadOne(tx, "username", username, &a);
-  });
-  if (!st.ok()) return st;
-  return a;
+  return Query<AccountRow>(
+      "get account", [&](pqxx::transaction_base& tx) { return ReadOne(tx, "username", username); });
 }
 
 StoreResult<AccountRow> PgStore::FindAccountByIdentity(const std::string& identity) {
   if (identity.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  AccountRow a;
-  StoreStatus st = Transact("find account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    return ReadOne(tx, "idp_identity", identity, &a);
+  return Query<AccountRow>("find account", [&](pqxx::transaction_base& tx) {
+    return ReadOne(tx, "idp_identity", identity);
   });
-  if (!st.ok()) return st;
-  return a;
 }
 
 StoreResult<std::vector<AccountRow>> PgStore::ListAccounts(const std::string& institution) {
-  std::vector<AccountRow> out;
-  StoreStatus st = Transact("list accounts", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
-                                        " FROM accounts WHERE $1 = '' OR institution = $1 "
-                                        "ORDER BY username",
-                                    institution);
-    for (const auto& row : r) out.push_back(AccountRowFrom(PgColumns(row)));
-    return StoreStatus::Ok();
+  return Query<std::vector<AccountRow>>("list accounts", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(std::string("SELECT ") + kAccountColumns +
+                                     " FROM accounts WHERE $1 = '' OR institution = $1 "
+                                     "ORDER BY username",
+                                 institution),
+                  AccountRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreStatus PgStore::RevokeAccount(const std::string& username, int64_t now_unix_ms) {

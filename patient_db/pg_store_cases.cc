@@ -3,11 +3,10 @@
 // CONFLICT DO NOTHING: the loser waits for the winner's transaction and then
 // reads its row, so no error reaches the caller.
 #include <optional>
+#include <pqxx/pqxx>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
 #include "patient_db/pg_store_internal.h"
@@ -79,8 +78,9 @@ StoreResult<std::vector<CaseRow>> PgStore::ListCases(const CaseFilter& f) {
   sql += " AND ($1::BIGINT = 0 OR (c.region_mask & $1::BIGINT) <> 0)";
   sql += " AND ($2::INTEGER = 0 OR c.difficulty = $2::INTEGER)";
   sql += " AND ($3 = '' OR c.institution = $3)";
-  sql += " AND ($4 = '' OR c.institution = $4 OR EXISTS (SELECT 1 FROM case_shares s WHERE "
-         "s.case_id = c.case_id AND s.version = c.version AND s.institution = $4))";
+  sql +=
+      " AND ($4 = '' OR c.institution = $4 OR EXISTS (SELECT 1 FROM case_shares s WHERE "
+      "s.case_id = c.case_id AND s.version = c.version AND s.institution = $4))";
   // Pages: after (case_id, version) with all versions, else after case_id.
   sql += f.all_versions ? " AND ($5 = 0 OR c.case_id COLLATE \"C\" > $6 OR "
                           "(c.case_id = $6 AND c.version > $7::BIGINT))"
@@ -113,9 +113,9 @@ StoreResult<std::vector<CaseRow>> PgStore::ListCases(const CaseFilter& f) {
 
 StoreResult<CaseRow> PgStore::GetCase(const std::string& case_id, uint32_t version) {
   std::string sql = std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE c.case_id = $1";
-  sql += version == 0 ? " AND $2::BIGINT = 0 ORDER BY c.version DESC LIMIT 1" : " AND c.version = $2";
-  CaseRow out;
-  StoreStatus st = Transact("get case", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+  sql +=
+      version == 0 ? " AND $2::BIGINT = 0 ORDER BY c.version DESC LIMIT 1" : " AND c.version = $2";
+  return Query<CaseRow>("get case", [&](pqxx::transaction_base& tx) -> StoreResult<CaseRow> {
     pqxx::result r = tx.exec_params(sql, case_id, int64_t{version});
     if (r.empty()) {
       return StoreStatus::Error(
@@ -123,24 +123,20 @@ StoreResult<CaseRow> PgStore::GetCase(const std::string& case_id, uint32_t versi
           "no case '" + case_id + "'" +
               (version == 0 ? std::string() : " version " + std::to_string(version)));
     }
-    out = CaseRowFrom(PgColumns(r[0]));
-    return ReadShares(tx, &out);
+    CaseRow out = CaseRowFrom(PgColumns(r[0]));
+    ReadShares(tx, &out);
+    return out;
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::string> PgStore::GetBlob(const std::string& sha256_hex) {
-  std::string out;
-  StoreStatus st = Transact("get blob", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r =
-        tx.exec_params("SELECT payload FROM case_blobs WHERE sha256_hex = $1", sha256_hex);
-    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
-    out = pqxx::binarystring(r[0][0]).str();
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<std::string>(
+      "get blob", [&](pqxx::transaction_base& tx) -> StoreResult<std::string> {
+        pqxx::result r =
+            tx.exec_params("SELECT payload FROM case_blobs WHERE sha256_hex = $1", sha256_hex);
+        if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
+        return pqxx::binarystring(r[0][0]).str();
+      });
 }
 
 }  // namespace ves::patient_db

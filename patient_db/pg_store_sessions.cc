@@ -7,13 +7,12 @@
 #include <cstdint>
 #include <map>
 #include <numeric>
+#include <pqxx/pqxx>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
 #include "patient_db/pg_store_internal.h"
@@ -139,15 +138,26 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
         insert += (c == 1 ? "$" : ", $") + std::to_string(params.size() + c);
       }
       insert += ")";
-      for (const std::string& v :
-           {row.uuid, row.trainee_id, row.institution, row.case_id,
-            std::to_string(row.case_version), row.station_id, std::to_string(row.start_unix_ms),
-            std::to_string(row.end_unix_ms), std::to_string(row.outcome),
-            std::string(row.completed ? "1" : "0"), pqxx::to_string(row.time_to_cecum_s),
-            pqxx::to_string(row.pain_s), pqxx::to_string(row.score), row.body_sha256_hex,
-            std::to_string(row.stored_unix_ms), row.operator_kind,
-            pqxx::to_string(row.max_tip_arc_m), pqxx::to_string(row.loop_s),
-            pqxx::to_string(row.xray_s), ByteaHex(row.body)}) {
+      for (const std::string& v : {row.uuid,
+                                   row.trainee_id,
+                                   row.institution,
+                                   row.case_id,
+                                   std::to_string(row.case_version),
+                                   row.station_id,
+                                   std::to_string(row.start_unix_ms),
+                                   std::to_string(row.end_unix_ms),
+                                   std::to_string(row.outcome),
+                                   std::string(row.completed ? "1" : "0"),
+                                   pqxx::to_string(row.time_to_cecum_s),
+                                   pqxx::to_string(row.pain_s),
+                                   pqxx::to_string(row.score),
+                                   row.body_sha256_hex,
+                                   std::to_string(row.stored_unix_ms),
+                                   row.operator_kind,
+                                   pqxx::to_string(row.max_tip_arc_m),
+                                   pqxx::to_string(row.loop_s),
+                                   pqxx::to_string(row.xray_s),
+                                   ByteaHex(row.body)}) {
         params.push_back(v);
       }
     }
@@ -190,7 +200,8 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
     // Present before (or committed a moment ago by another replica: ON
     // CONFLICT waited for it, and this statement sees it).
     if (!lookup.empty()) {
-      std::string find = std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE uuid IN (";
+      std::string find =
+          std::string("SELECT ") + kSessionColumns + " FROM sessions WHERE uuid IN (";
       for (size_t k = 0; k < lookup.size(); ++k) find += (k ? ", $" : "$") + std::to_string(k + 1);
       find += ")";
       for (const auto& r : tx.exec_params(find, pqxx::prepare::make_dynamic_params(lookup))) {
@@ -207,7 +218,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
       const bool stored_here = inserted.count(row.uuid) && seen.insert(row.uuid).second;
       if (stored_here) continue;  // kStored, set above
       results[i].outcome = stored.body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
-                                                                          : SessionPut::kConflict;
+                                                                         : SessionPut::kConflict;
     }
     // Station reports of the sessions not refused, in key order (as the
     // sessions above, so replicas lock stations in the same order).
@@ -237,20 +248,17 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
 }
 
 StoreResult<SessionRow> PgStore::GetSession(const std::string& uuid) {
-  SessionRow out;
-  StoreStatus st = Transact("get session", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r =
-        tx.exec_params(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
-                           ", body FROM sessions WHERE uuid = $1",
-                       uuid);
-    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
-    out = SessionRowFrom(PgColumns(r[0]));
-    out.lesson_id = r[0][19].as<std::string>();
-    out.body = pqxx::binarystring(r[0][20]).str();
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<SessionRow>(
+      "get session", [&](pqxx::transaction_base& tx) -> StoreResult<SessionRow> {
+        pqxx::result r =
+            tx.exec_params(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+                               ", body FROM sessions WHERE uuid = $1",
+                           uuid);
+        if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
+        SessionRow out = SessionWithLessonFrom(PgColumns(r[0]));
+        out.body = pqxx::binarystring(r[0][kSessionColumnCount + 1]).str();
+        return out;
+      });
 }
 
 StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& trainee_id,
@@ -261,19 +269,12 @@ StoreResult<std::vector<SessionRow>> PgStore::ListSessions(const std::string& tr
                           " AND ($3 = 0 OR start_unix_ms > $4 OR (start_unix_ms = $4 AND "
                           "uuid COLLATE \"C\" > $5))"
                           " ORDER BY start_unix_ms, uuid COLLATE \"C\" LIMIT $6";
-  std::vector<SessionRow> out;
-  StoreStatus st = Transact("list sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const auto& row : tx.exec_params(
-             sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
-             page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
-      out.push_back(SessionRowFrom(PgColumns(row)));
-      out.back().lesson_id = row[19].as<std::string>();
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<SessionRow>>("list sessions", [&](pqxx::transaction_base& tx) {
+    return RowsOf(
+        tx.exec_params(sql, trainee_id, case_id, page.has_after ? 1 : 0, page.after_number,
+                       page.after_text, page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62),
+        SessionWithLessonFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<std::vector<SessionRow>>> PgStore::ListSessionsOf(
@@ -284,92 +285,68 @@ StoreResult<std::vector<std::vector<SessionRow>>> PgStore::ListSessionsOf(
                           "(SELECT json_array_elements_text($1::json))"
                           " AND start_unix_ms >= $2 AND ($3 = 0 OR start_unix_ms < $3)"
                           " ORDER BY start_unix_ms, uuid COLLATE \"C\"";
-  std::map<std::string, std::vector<SessionRow>> of;
-  StoreStatus st =
-      Transact("list sessions of trainees", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-        of.clear();
+  return Query<std::vector<std::vector<SessionRow>>>(
+      "list sessions of trainees", [&](pqxx::transaction_base& tx) {
+        std::map<std::string, std::vector<SessionRow>> of;
         for (const auto& row :
              tx.exec_params(sql, JsonStringArray(trainee_ids), from_unix_ms, to_unix_ms)) {
-          SessionRow s = SessionRowFrom(PgColumns(row));
-          s.lesson_id = row[19].as<std::string>();
+          SessionRow s = SessionWithLessonFrom(PgColumns(row));
           std::vector<SessionRow>& rows = of[s.trainee_id];
           if (limit_each < 0 || rows.size() <= static_cast<size_t>(limit_each)) {
             rows.push_back(std::move(s));
           }
         }
-        return StoreStatus::Ok();
+        return InKeyOrder(trainee_ids, std::move(of));
       });
-  if (!st.ok()) return st;
-  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<TraineeActivity>> PgStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
-  std::map<std::string, TraineeActivity> of;
-  StoreStatus st = Transact("trainee activity", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    of.clear();
-    for (const auto& r : tx.exec_params(
-             "SELECT trainee_id, COUNT(*), MAX(end_unix_ms) FROM sessions "
-             "WHERE trainee_id IN (SELECT json_array_elements_text($1::json)) "
-             "GROUP BY trainee_id",
-             JsonStringArray(trainee_ids))) {
+  return Query<std::vector<TraineeActivity>>("trainee activity", [&](pqxx::transaction_base& tx) {
+    std::map<std::string, TraineeActivity> of;
+    for (const auto& r :
+         tx.exec_params("SELECT trainee_id, COUNT(*), MAX(end_unix_ms) FROM sessions "
+                        "WHERE trainee_id IN (SELECT json_array_elements_text($1::json)) "
+                        "GROUP BY trainee_id",
+                        JsonStringArray(trainee_ids))) {
       of[r[0].as<std::string>()] = {r[1].as<int64_t>(), r[2].as<int64_t>()};
     }
-    return StoreStatus::Ok();
+    return InKeyOrder(trainee_ids, std::move(of));
   });
-  if (!st.ok()) return st;
-  return InKeyOrder(trainee_ids, std::move(of));
 }
 
 StoreResult<std::vector<StationRow>> PgStore::ListStations(const std::string& institution,
                                                            const ListPage& page) {
-  std::vector<StationRow> out;
-  StoreStatus st = Transact("list stations", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
+  return Query<std::vector<StationRow>>("list stations", [&](pqxx::transaction_base& tx) {
     // COLLATE "C": byte order, as SQLite sorts.
-    for (const auto& row : tx.exec_params(
-             std::string("SELECT ") + kStationColumns +
-                 " FROM stations WHERE institution = $1 AND ($2 = 0 OR station_id COLLATE \"C\" "
-                 "> $3) ORDER BY station_id COLLATE \"C\" LIMIT $4",
-             institution, page.has_after ? 1 : 0, page.after_text,
-             page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62)) {
-      out.push_back(StationRowFrom(PgColumns(row)));
-    }
-    return StoreStatus::Ok();
+    return RowsOf(
+        tx.exec_params(std::string("SELECT ") + kStationColumns +
+                           " FROM stations WHERE institution = $1 AND ($2 = 0 OR station_id "
+                           "COLLATE \"C\" > $3) ORDER BY station_id COLLATE \"C\" LIMIT $4",
+                       institution, page.has_after ? 1 : 0, page.after_text,
+                       page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62),
+        StationRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
-StoreResult<std::vector<SessionRow>> PgStore::ListOperatorSessions(
-    const std::string& institution, const std::string& case_id, const std::string& operator_kind,
-    int limit) {
+StoreResult<std::vector<SessionRow>> PgStore::ListOperatorSessions(const std::string& institution,
+                                                                   const std::string& case_id,
+                                                                   const std::string& operator_kind,
+                                                                   int limit) {
   const std::string sql = std::string("SELECT ") + kSessionColumns +
                           " FROM sessions WHERE institution = $1 AND case_id = $2 AND "
                           "operator_kind = $3 ORDER BY start_unix_ms DESC, uuid COLLATE \"C\" "
                           "DESC LIMIT $4";
-  std::vector<SessionRow> out;
-  StoreStatus st =
-      Transact("list operator sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-        out.clear();
-        for (const auto& row :
-             tx.exec_params(sql, institution, case_id, operator_kind, int64_t{limit})) {
-          out.push_back(SessionRowFrom(PgColumns(row)));
-        }
-        return StoreStatus::Ok();
-      });
-  if (!st.ok()) return st;
-  return out;
+  return Query<std::vector<SessionRow>>("list operator sessions", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(sql, institution, case_id, operator_kind, int64_t{limit}),
+                  SessionRowFrom<PgColumns>);
+  });
 }
 
 StoreResult<int64_t> PgStore::CountSessions() {
-  int64_t n = 0;
-  StoreStatus st = Transact("count sessions", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    n = tx.exec("SELECT COUNT(*) FROM sessions")[0][0].as<int64_t>();
-    return StoreStatus::Ok();
+  return Query<int64_t>("count sessions", [&](pqxx::transaction_base& tx) {
+    return StoreResult<int64_t>(tx.exec("SELECT COUNT(*) FROM sessions")[0][0].as<int64_t>());
   });
-  if (!st.ok()) return st;
-  return n;
 }
 
 }  // namespace ves::patient_db

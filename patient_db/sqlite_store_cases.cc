@@ -14,18 +14,11 @@ namespace ves::patient_db {
 StoreResult<std::vector<std::string>> SqliteStore::ReadShares(SqliteDb& db,
                                                               const std::string& case_id,
                                                               uint32_t version) {
-  SqliteStatement* s = db.Prepare(
+  return ReadRows(
+      db, "read shares",
       "SELECT institution FROM case_shares WHERE case_id = ? AND version = ? "
       "ORDER BY institution",
-      nullptr);
-  if (!s) return Internal(db, "read shares");
-  s->Bind(1, case_id).Bind(2, int64_t{version});
-  int rc = SQLITE_OK;
-  std::vector<std::string> out;
-  while (s->Step(&rc)) out.push_back(s->Text(0));
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(db, "read shares");
-  return out;
+      [](const SqliteStatement& s) { return s.Text(0); }, case_id, int64_t{version});
 }
 
 StoreResult<PutCaseResult> SqliteStore::PutCase(const CaseRow& row, const std::string& payload) {
@@ -40,16 +33,16 @@ StoreResult<PutCaseResult> SqliteStore::PutCase(const CaseRow& row, const std::s
     return status;
   };
   const std::string name = CaseVersionName(row);
-  SqliteStatement* s = db.Prepare(std::string("SELECT ") + kCaseColumns +
-                                      " FROM cases c WHERE c.case_id = ? AND c.version = ?",
-                                  nullptr);
-  if (!s) return fail(Internal(db, "put case"));
-  s->Bind(1, row.case_id).Bind(2, int64_t{row.version});
-  int rc = SQLITE_OK;
   std::optional<CaseRow> existing;
-  if (s->Step(&rc)) existing = CaseRowFrom(*s);
-  s->Reset();
-  if (rc != SQLITE_OK) return fail(Internal(db, "put case"));
+  auto found = ReadFirst(
+      db, "put case", "",
+      std::string("SELECT ") + kCaseColumns + " FROM cases c WHERE c.case_id = ? AND c.version = ?",
+      CaseRowFrom<SqliteStatement>, row.case_id, int64_t{row.version});
+  if (found.ok()) {
+    existing = std::move(found.value);
+  } else if (found.status.code != StoreCode::kNotFound) {
+    return fail(found.status);
+  }
   if (existing) {
     auto shares = ReadShares(db, row.case_id, row.version);
     if (!shares.ok()) return fail(shares.status);
@@ -66,11 +59,11 @@ StoreResult<PutCaseResult> SqliteStore::PutCase(const CaseRow& row, const std::s
     if (!st.ok()) return fail(st);
   }
   for (const std::string& institution : plan.new_shares) {
-    s = db.Prepare("INSERT INTO case_shares (case_id, version, institution) VALUES (?, ?, ?)",
-                   nullptr);
-    if (!s) return fail(Internal(db, "put case share"));
-    s->Bind(1, row.case_id).Bind(2, int64_t{row.version}).Bind(3, institution);
-    if (!Run(s, &rc)) return fail(Internal(db, "put case share"));
+    int rc = SQLITE_OK;
+    if (!Execute(db, "INSERT INTO case_shares (case_id, version, institution) VALUES (?, ?, ?)",
+                 &rc, row.case_id, int64_t{row.version}, institution)) {
+      return fail(Internal(db, "put case share"));
+    }
   }
   if (!db.Exec("COMMIT", &error)) {
     return fail(StoreStatus::Error(StoreCode::kInternal, "commit " + name + ": " + error));
@@ -88,20 +81,18 @@ StoreStatus SqliteStore::WriteCase(const CaseRow& row, const std::string& payloa
   s->Bind(1, row.sha256_hex).Bind(2, static_cast<int64_t>(payload.size())).BindBlob(3, payload);
   int rc = SQLITE_OK;
   if (!Run(s, &rc)) return Internal(db, "put case blob");
-  s = db.Prepare(
-      "INSERT INTO cases (case_id, version, title, difficulty, region_mask, institution, "
-      "sha256_hex, payload_sha256_hex, size_bytes, uploaded_by, stored_unix_ms) "
-      "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-      nullptr);
-  if (!s) return Internal(db, "put case");
-  s->Bind(1, row.case_id).Bind(2, int64_t{row.version}).Bind(3, row.title);
-  s->Bind(4, int64_t{row.difficulty}).Bind(5, static_cast<int64_t>(row.region_mask));
-  s->Bind(6, row.institution).Bind(7, row.sha256_hex).Bind(8, row.payload_sha256_hex);
-  s->Bind(9, static_cast<int64_t>(payload.size())).Bind(10, row.uploaded_by);
-  s->Bind(11, row.stored_unix_ms);
-  if (Run(s, &rc)) return StoreStatus::Ok();
+  if (Execute(db,
+              "INSERT INTO cases (case_id, version, title, difficulty, region_mask, institution, "
+              "sha256_hex, payload_sha256_hex, size_bytes, uploaded_by, stored_unix_ms) "
+              "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+              &rc, row.case_id, int64_t{row.version}, row.title, int64_t{row.difficulty},
+              static_cast<int64_t>(row.region_mask), row.institution, row.sha256_hex,
+              row.payload_sha256_hex, static_cast<int64_t>(payload.size()), row.uploaded_by,
+              row.stored_unix_ms)) {
+    return StoreStatus::Ok();
+  }
   const std::string name = CaseVersionName(row);
-  if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+  if (IsConstraint(rc)) {
     return StoreStatus::Error(StoreCode::kInvalidArgument,
                               name + ": unknown institution '" + row.institution + "'");
   }
@@ -114,8 +105,9 @@ StoreResult<std::vector<CaseRow>> SqliteStore::ListCases(const CaseFilter& f) {
   if (f.difficulty != 0) sql += " AND c.difficulty = ?";
   if (!f.institution.empty()) sql += " AND c.institution = ?";
   if (!f.visible_to.empty()) {
-    sql += " AND (c.institution = ? OR EXISTS (SELECT 1 FROM case_shares s WHERE "
-           "s.case_id = c.case_id AND s.version = c.version AND s.institution = ?))";
+    sql +=
+        " AND (c.institution = ? OR EXISTS (SELECT 1 FROM case_shares s WHERE "
+        "s.case_id = c.case_id AND s.version = c.version AND s.institution = ?))";
   }
   if (f.page.has_after) {
     sql += f.all_versions ? " AND (c.case_id > ? OR (c.case_id = ? AND c.version > ?))"
@@ -190,17 +182,10 @@ StoreResult<CaseRow> SqliteStore::GetCase(const std::string& case_id, uint32_t v
 
 StoreResult<std::string> SqliteStore::GetBlob(const std::string& sha256_hex) {
   Reader r = Read();
-  SqliteStatement* s =
-      r.db().Prepare("SELECT payload FROM case_blobs WHERE sha256_hex = ?", nullptr);
-  if (!s) return Internal(r.db(), "get blob");
-  s->Bind(1, sha256_hex);
-  int rc = SQLITE_OK;
-  std::optional<std::string> payload;
-  if (s->Step(&rc)) payload = s->Blob(0);
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "get blob");
-  if (!payload) return StoreStatus::Error(StoreCode::kNotFound, "no blob " + sha256_hex);
-  return std::move(*payload);
+  return ReadFirst(
+      r.db(), "get blob", "no blob " + sha256_hex,
+      "SELECT payload FROM case_blobs WHERE sha256_hex = ?",
+      [](const SqliteStatement& s) { return s.Blob(0); }, sha256_hex);
 }
 
 }  // namespace ves::patient_db

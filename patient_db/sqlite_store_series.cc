@@ -21,9 +21,8 @@ StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
   s->Bind(1, row.session_uuid).Bind(2, int64_t{row.format_version});
   s->Bind(3, row.computed_unix_ms).BindBlob(4, row.json);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+  Run(s, &rc);
+  if (IsConstraint(rc)) {
     return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
   }
   if (rc != SQLITE_OK) return Internal(*writer_, "put session series");
@@ -32,23 +31,14 @@ StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
 
 StoreResult<SessionSeriesRow> SqliteStore::GetSessionSeries(const std::string& session_uuid) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadFirst(
+      r.db(), "get session series", "no series for '" + session_uuid + "'",
       "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
       "WHERE session_uuid = ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "get session series");
-  s->Bind(1, session_uuid);
-  int rc = SQLITE_OK;
-  std::optional<SessionSeriesRow> row;
-  if (s->Step(&rc)) {
-    row = SessionSeriesRow{s->Text(0), static_cast<int>(s->Int(1)), s->Int(2), s->Blob(3)};
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "get session series");
-  if (!row) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
-  }
-  return std::move(*row);
+      [](const SqliteStatement& s) {
+        return SessionSeriesRow{s.Text(0), static_cast<int>(s.Int(1)), s.Int(2), s.Blob(3)};
+      },
+      session_uuid);
 }
 
 }  // namespace ves::patient_db

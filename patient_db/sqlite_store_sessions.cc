@@ -44,7 +44,7 @@ StoreStatus SqliteStore::WriteSession(const SessionRow& row, SessionPutResult* r
   if (rc != SQLITE_OK) return Internal(db, "find session");
   if (first) {
     result->outcome = first->body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
-                                                                     : SessionPut::kConflict;
+                                                                    : SessionPut::kConflict;
     result->first = std::move(*first);
     return StoreStatus::Ok();
   }
@@ -103,20 +103,12 @@ StoreStatus SqliteStore::WriteStation(const StationRow& report) {
 StoreResult<std::vector<StationRow>> SqliteStore::ListStations(const std::string& institution,
                                                                const ListPage& page) {
   Reader r = Read();
-  SqliteStatement* s =
-      r.db().Prepare(std::string("SELECT ") + kStationColumns +
-                         " FROM stations WHERE institution = ? AND (? = 0 OR station_id > ?) "
-                         "ORDER BY station_id LIMIT ?",
-                     nullptr);
-  if (!s) return Internal(r.db(), "list stations");
-  s->Bind(1, institution).Bind(2, int64_t{page.has_after}).Bind(3, page.after_text);
-  s->Bind(4, int64_t{page.limit > 0 ? page.limit : -1});
-  int rc = SQLITE_OK;
-  std::vector<StationRow> out;
-  while (s->Step(&rc)) out.push_back(StationRowFrom(*s));
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list stations");
-  return out;
+  return ReadRows(r.db(), "list stations",
+                  std::string("SELECT ") + kStationColumns +
+                      " FROM stations WHERE institution = ? AND (? = 0 OR station_id > ?) "
+                      "ORDER BY station_id LIMIT ?",
+                  StationRowFrom<SqliteStatement>, institution, int64_t{page.has_after},
+                  page.after_text, int64_t{page.limit > 0 ? page.limit : -1});
 }
 
 StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteBatch& batch) {
@@ -162,23 +154,16 @@ StoreResult<std::vector<SessionPutResult>> SqliteStore::CommitBatch(const WriteB
 
 StoreResult<SessionRow> SqliteStore::GetSession(const std::string& uuid) {
   Reader r = Read();
-  SqliteStatement* s =
-      r.db().Prepare(std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
-                         ", body FROM sessions WHERE uuid = ?",
-                     nullptr);
-  if (!s) return Internal(r.db(), "get session");
-  s->Bind(1, uuid);
-  int rc = SQLITE_OK;
-  std::optional<SessionRow> row;
-  if (s->Step(&rc)) {
-    row = SessionRowFrom(*s);
-    row->lesson_id = s->Text(19);
-    row->body = s->Blob(20);
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "get session");
-  if (!row) return StoreStatus::Error(StoreCode::kNotFound, "no session '" + uuid + "'");
-  return std::move(*row);
+  return ReadFirst(
+      r.db(), "get session", "no session '" + uuid + "'",
+      std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
+          ", body FROM sessions WHERE uuid = ?",
+      [](const SqliteStatement& s) {
+        SessionRow row = SessionWithLessonFrom(s);
+        row.body = s.Blob(kSessionColumnCount + 1);
+        return row;
+      },
+      uuid);
 }
 
 StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string& trainee_id,
@@ -202,10 +187,7 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListSessions(const std::string
   s->Bind(i, int64_t{page.limit > 0 ? page.limit : -1});
   int rc = SQLITE_OK;
   std::vector<SessionRow> out;
-  while (s->Step(&rc)) {
-    out.push_back(SessionRowFrom(*s));
-    out.back().lesson_id = s->Text(19);
-  }
+  while (s->Step(&rc)) out.push_back(SessionWithLessonFrom(*s));
   s->Reset();
   if (rc != SQLITE_OK) return Internal(r.db(), "list sessions");
   return out;
@@ -215,25 +197,18 @@ StoreResult<std::vector<std::vector<SessionRow>>> SqliteStore::ListSessionsOf(
     const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
     int limit_each) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  std::map<std::string, std::vector<SessionRow>> of;
+  StoreStatus st = ForEachRow(
+      r.db(), "list sessions of trainees",
       std::string("SELECT ") + kSessionColumns + kSessionLessonColumn +
           " FROM sessions WHERE trainee_id IN (SELECT value FROM json_each(?))"
           " AND start_unix_ms >= ? AND (? = 0 OR start_unix_ms < ?)",
-      nullptr);
-  if (!s) return Internal(r.db(), "list sessions of trainees");
-  s->Bind(1, JsonStringArray(trainee_ids))
-      .Bind(2, from_unix_ms)
-      .Bind(3, to_unix_ms)
-      .Bind(4, to_unix_ms);
-  int rc = SQLITE_OK;
-  std::map<std::string, std::vector<SessionRow>> of;
-  while (s->Step(&rc)) {
-    SessionRow row = SessionRowFrom(*s);
-    row.lesson_id = s->Text(19);
-    of[row.trainee_id].push_back(std::move(row));
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list sessions of trainees");
+      [&](const SqliteStatement& s) {
+        SessionRow row = SessionWithLessonFrom(s);
+        of[row.trainee_id].push_back(std::move(row));
+      },
+      JsonStringArray(trainee_ids), from_unix_ms, to_unix_ms, to_unix_ms);
+  if (!st.ok()) return st;
   // ListSessions' order, sorted here rather than by SQLite (as the verdicts
   // of ListLessonVerdictsOf are: SQLite's sort of a whole group's rows is
   // the slower part).
@@ -251,17 +226,16 @@ StoreResult<std::vector<std::vector<SessionRow>>> SqliteStore::ListSessionsOf(
 StoreResult<std::vector<TraineeActivity>> SqliteStore::GetTraineeActivity(
     const std::vector<std::string>& trainee_ids) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  std::map<std::string, TraineeActivity> of;
+  StoreStatus st = ForEachRow(
+      r.db(), "trainee activity",
       "SELECT trainee_id, COUNT(*), MAX(end_unix_ms) FROM sessions "
       "WHERE trainee_id IN (SELECT value FROM json_each(?)) GROUP BY trainee_id",
-      nullptr);
-  if (!s) return Internal(r.db(), "trainee activity");
-  s->Bind(1, JsonStringArray(trainee_ids));
-  int rc = SQLITE_OK;
-  std::map<std::string, TraineeActivity> of;
-  while (s->Step(&rc)) of[s->Text(0)] = {s->Int(1), s->Int(2)};
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "trainee activity");
+      [&](const SqliteStatement& s) {
+        of[s.Text(0)] = {s.Int(1), s.Int(2)};
+      },
+      JsonStringArray(trainee_ids));
+  if (!st.ok()) return st;
   return InKeyOrder(trainee_ids, std::move(of));
 }
 
@@ -269,31 +243,18 @@ StoreResult<std::vector<SessionRow>> SqliteStore::ListOperatorSessions(
     const std::string& institution, const std::string& case_id, const std::string& operator_kind,
     int limit) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
-      std::string("SELECT ") + kSessionColumns +
-          " FROM sessions WHERE institution = ? AND case_id = ? AND operator_kind = ?"
-          " ORDER BY start_unix_ms DESC, uuid DESC LIMIT ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "list operator sessions");
-  s->Bind(1, institution).Bind(2, case_id).Bind(3, operator_kind).Bind(4, int64_t{limit});
-  int rc = SQLITE_OK;
-  std::vector<SessionRow> out;
-  while (s->Step(&rc)) out.push_back(SessionRowFrom(*s));
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list operator sessions");
-  return out;
+  return ReadRows(r.db(), "list operator sessions",
+                  std::string("SELECT ") + kSessionColumns +
+                      " FROM sessions WHERE institution = ? AND case_id = ? AND operator_kind = ?"
+                      " ORDER BY start_unix_ms DESC, uuid DESC LIMIT ?",
+                  SessionRowFrom<SqliteStatement>, institution, case_id, operator_kind,
+                  int64_t{limit});
 }
 
 StoreResult<int64_t> SqliteStore::CountSessions() {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare("SELECT COUNT(*) FROM sessions", nullptr);
-  if (!s) return Internal(r.db(), "count sessions");
-  int rc = SQLITE_OK;
-  int64_t n = 0;
-  if (s->Step(&rc)) n = s->Int(0);
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "count sessions");
-  return n;
+  return ReadFirst(r.db(), "count sessions", "no count", "SELECT COUNT(*) FROM sessions",
+                   [](const SqliteStatement& s) { return s.Int(0); });
 }
 
 }  // namespace ves::patient_db

@@ -104,10 +104,10 @@ CasePutPlan PlanCasePut(const CaseRow* stored, const CaseRow& row, uint64_t size
     return plan;
   }
   if (stored->sha256_hex != row.sha256_hex) {
-    plan.status = StoreStatus::Error(
-        StoreCode::kAlreadyExists,
-        CaseVersionName(row) + " is already stored with other content (sha256 " +
-            stored->sha256_hex + "); give the new content a higher version");
+    plan.status =
+        StoreStatus::Error(StoreCode::kAlreadyExists,
+                           CaseVersionName(row) + " is already stored with other content (sha256 " +
+                               stored->sha256_hex + "); give the new content a higher version");
     return plan;
   }
   std::string refusal;

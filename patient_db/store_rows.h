@@ -78,6 +78,14 @@ SessionRow SessionRowFrom(const Columns& c) {
   return r;
 }
 
+// A session selected with kSessionLessonColumn after kSessionColumns.
+template <typename Columns>
+SessionRow SessionWithLessonFrom(const Columns& c) {
+  SessionRow r = SessionRowFrom(c);
+  r.lesson_id = c.Text(kSessionColumnCount);
+  return r;
+}
+
 template <typename Columns>
 StationRow StationRowFrom(const Columns& c) {
   StationRow r;

@@ -39,8 +39,7 @@ inline std::unique_ptr<ves::server::VesServer> LoopbackServer(const std::filesys
 
 // Stores `colon_case` for `institution` as its upload would; returns the
 // bundle stored.
-inline std::string PutBenchCase(ves::patient_db::Store& store,
-                                const ves::v1::ColonCase& colon_case,
+inline std::string PutBenchCase(ves::patient_db::Store& store, const ves::v1::ColonCase& colon_case,
                                 const std::string& institution) {
   const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
   ves::patient_db::CaseRow row;

@@ -33,9 +33,9 @@
 #include "bench/server/bench_server.h"
 #include "patient_db/case_format.h"
 #include "patient_db/pg_store.h"
-#include "station/training/input_log.h"
 #include "server/auth.h"
 #include "server/client.h"
+#include "station/training/input_log.h"
 #include "ves/v1/services.grpc.pb.h"
 
 namespace {

@@ -84,8 +84,8 @@ std::string OsUser() {
 patient_db::StoreStatus Audit(patient_db::Store& store, const std::string& action,
                               const AccountRow& account) {
   patient_db::WriteBatch batch;
-  batch.audit.push_back({0, patient_db::NowUnixMs(), "ves-admin", OsUser(), "admin", account.institution, action,
-                         account.username, "OK"});
+  batch.audit.push_back({0, patient_db::NowUnixMs(), "ves-admin", OsUser(), "admin",
+                         account.institution, action, account.username, "OK"});
   return store.CommitBatch(batch).status;
 }
 
@@ -146,8 +146,8 @@ int ListAccounts(patient_db::Store& store, const AccountOptions& o) {
   if (!rows.ok()) return Fail(rows.status.message, 1);
   std::cout << "username\trole\tinstitution\tpassword\tidp_identity\texpires\trevoked\n";
   for (const AccountRow& a : rows.value) {
-    std::cout << a.username << "\t" << patient_db::RoleName(a.role) << "\t" << a.institution
-              << "\t" << (a.password_hash.empty() ? "no" : "yes") << "\t"
+    std::cout << a.username << "\t" << patient_db::RoleName(a.role) << "\t" << a.institution << "\t"
+              << (a.password_hash.empty() ? "no" : "yes") << "\t"
               << (a.idp_identity.empty() ? "-" : a.idp_identity) << "\t"
               << FormatDate(a.expires_unix_ms) << "\t" << FormatDate(a.revoked_unix_ms) << "\n";
   }

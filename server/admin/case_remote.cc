@@ -93,7 +93,8 @@ int RunCaseList(const CommandArgs& args) {
   q.set_all_versions(vm.count("all-versions") > 0);
   q.set_page_size(1000);
   auto stub = ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client));
-  return ListAllPages("case list", client, *stub, &ves::v1::Cases::Stub::ListCases, q,
+  return ListAllPages(
+      "case list", client, *stub, &ves::v1::Cases::Stub::ListCases, q,
       [](const ves::v1::ListCasesResponse& r) {
         for (const auto& c : r.cases()) {
           // The payload hash, as `case validate` and the station print it.

@@ -83,7 +83,8 @@ int CurriculumList(const ClientOptions& client, const std::string& institution) 
   ves::v1::ListCurriculaRequest q;
   q.set_institution(institution);
   auto stub = LessonsStub(client);
-  return ListAllPages("curriculum list", client, *stub, &ves::v1::Lessons::Stub::ListCurricula, q,
+  return ListAllPages(
+      "curriculum list", client, *stub, &ves::v1::Lessons::Stub::ListCurricula, q,
       [](const ves::v1::ListCurriculaResponse& r) {
         for (const auto& c : r.curricula()) {
           std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),

@@ -318,7 +318,8 @@ int RunScoresCommand(const CommandArgs& args) {
   q.set_page_size(1000);
   auto stub = Stub<ves::v1::Trainees>(client);
   bool header = false;
-  return ListAllPages("scores", client, *stub, &ves::v1::Trainees::Stub::ListSessions, q,
+  return ListAllPages(
+      "scores", client, *stub, &ves::v1::Trainees::Stub::ListSessions, q,
       [&](const ves::v1::ListSessionsResponse& r) {
         // One session a line, oldest first; `session show SESSION` reads one.
         if (!header) {
@@ -403,7 +404,8 @@ int RunAuditCommand(const CommandArgs& args) {
   q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
   auto stub = Stub<ves::v1::Admin>(client);
   unsigned shown = 0;
-  return ListAllPages("audit", client, *stub, &ves::v1::Admin::Stub::ListAudit, q,
+  return ListAllPages(
+      "audit", client, *stub, &ves::v1::Admin::Stub::ListAudit, q,
       [&](const ves::v1::ListAuditResponse& r) {
         for (const auto& e : r.entries()) {
           if (shown == limit) return false;
@@ -437,7 +439,8 @@ int RunStationsCommand(const CommandArgs& args) {
   std::printf("%-24s %-17s %-12s %-10s %-14s %-10s %-12s %-10s %s\n", "station", "last seen UTC",
               "version", "device", "p99/budget us", "overruns", "safe-state", "CAN errors",
               "flags");
-  return ListAllPages("stations", client, *stub, &ves::v1::Admin::Stub::ListStations, q,
+  return ListAllPages(
+      "stations", client, *stub, &ves::v1::Admin::Stub::ListStations, q,
       [&](const ves::v1::ListStationsResponse& r) {
         for (const auto& st : r.stations()) {
           std::string device = "-", loop = "-", overruns = "-", safe = "-", can = "-", flags;
