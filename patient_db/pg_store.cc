@@ -197,15 +197,7 @@ StoreResult<TokenRow> PgStore::FindToken(const std::string& token_sha256_hex) {
         "WHERE token_sha256_hex = $1",
         token_sha256_hex);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such token");
-    const PgColumns c(r[0]);
-    TokenRow t;
-    t.token_sha256_hex = token_sha256_hex;
-    ParseRoleName(c.Text(0), &t.role);
-    t.institution = c.Text(1);
-    t.trainee_id = c.Text(2);
-    t.label = c.Text(3);
-    t.created_unix_ms = c.Int(4);
-    return t;
+    return TokenRowFrom(PgColumns(r[0]), token_sha256_hex);
   });
 }
 
@@ -247,9 +239,7 @@ StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& in
                        "$3) ORDER BY trainee_id COLLATE \"C\" LIMIT $4",
                        institution, page.has_after ? 1 : 0, page.after_text,
                        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62),
-        [](const PgColumns& c) {
-          return TraineeRow{c.Text(0), c.Text(1), c.Text(2), c.Int(3)};
-        });
+        TraineeRowFrom<PgColumns>);
   });
 }
 

@@ -70,6 +70,12 @@ class PgStore final : public Store {
   // defined in pg_store_internal.h.
   template <typename T, typename Fn>
   StoreResult<T> Query(const std::string& what, const Fn& body);
+  // Inserts a row a session has at most once (`sql` ends ON CONFLICT DO
+  // NOTHING RETURNING 1): true when this one was stored, false when the
+  // session already had one; kNotFound when there is no such session.
+  template <typename... Args>
+  StoreResult<bool> InsertOncePerSession(const std::string& what, const std::string& session_uuid,
+                                         const std::string& sql, const Args&... args);
   InDoubt ResolveInDoubt(int64_t txid);
   void Migrate();
   StoreStatus ReadShares(pqxx::transaction_base& tx, CaseRow* row);

@@ -12,13 +12,14 @@
 // Helpers of the PgStore's source files (pg_store*.cc); not for other code.
 namespace ves::patient_db {
 
-// A result row read as store_rows.h reads columns.
+// A result row read as store_rows.h reads columns (BYTEA for Blob).
 class PgColumns {
  public:
   explicit PgColumns(const pqxx::row& row) : row_(row) {}
   std::string Text(int i) const { return row_[i].as<std::string>(); }
   int64_t Int(int i) const { return row_[i].as<int64_t>(); }
   double Real(int i) const { return row_[i].as<double>(); }
+  std::string Blob(int i) const { return pqxx::binarystring(row_[i]).str(); }
 
  private:
   const pqxx::row& row_;
@@ -41,6 +42,23 @@ StoreResult<T> PgStore::Query(const std::string& what, const Fn& body) {
   });
   if (!st.ok()) return st;
   return out;
+}
+
+template <typename... Args>
+StoreResult<bool> PgStore::InsertOncePerSession(const std::string& what,
+                                                const std::string& session_uuid,
+                                                const std::string& sql, const Args&... args) {
+  bool inserted = false;
+  StoreStatus st = Transact(what, TxMode::kWrite, [&](pqxx::transaction_base& tx) {
+    inserted = !tx.exec_params(sql, args...).empty();
+    return StoreStatus::Ok();
+  });
+  // A foreign key violation: the session is not stored.
+  if (st.code == StoreCode::kInvalidArgument) {
+    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + session_uuid + "'");
+  }
+  if (!st.ok()) return st;
+  return inserted;
 }
 
 }  // namespace ves::patient_db

@@ -18,14 +18,7 @@ StoreStatus ReadCurriculum(pqxx::transaction_base& tx, const std::string& id, Cu
       "body FROM curricula WHERE curriculum_id = $1",
       id);
   if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no curriculum '" + id + "'");
-  CurriculumRow row;
-  row.curriculum_id = r[0][0].as<std::string>();
-  row.institution = r[0][1].as<std::string>();
-  row.title = r[0][2].as<std::string>();
-  row.created_by = r[0][3].as<std::string>();
-  row.created_unix_ms = r[0][4].as<int64_t>();
-  row.body_sha256_hex = r[0][5].as<std::string>();
-  row.body = pqxx::binarystring(r[0][6]).str();
+  CurriculumRow row = CurriculumRowFrom(PgColumns(r[0]));
   for (const auto& l : tx.exec_params(
            "SELECT lesson_id FROM lessons WHERE curriculum_id = $1 ORDER BY position", id)) {
     row.lesson_ids.push_back(l[0].as<std::string>());
@@ -201,10 +194,7 @@ StoreResult<std::vector<AssignmentRow>> PgStore::ListAssignments(const std::stri
                        "AND a.institution = t.institution) "
                        "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
                        trainee_id),
-        [](const PgColumns& c) {
-          return AssignmentRow{c.Text(0), c.Text(1) == "group", c.Text(2), c.Text(3), c.Text(4),
-                               c.Int(5)};
-        });
+        [](const PgColumns& c) { return AssignmentRowFrom(c); });
   });
 }
 
@@ -225,30 +215,20 @@ StoreResult<std::vector<std::vector<AssignmentRow>>> PgStore::ListAssignmentsOf(
                  "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
                  JsonStringArray(trainee_ids))) {
           const PgColumns c(r);
-          of[c.Text(0)].push_back(
-              {c.Text(1), c.Text(2) == "group", c.Text(3), c.Text(4), c.Text(5), c.Int(6)});
+          of[c.Text(0)].push_back(AssignmentRowFrom(c, 1));
         }
         return InKeyOrder(trainee_ids, std::move(of));
       });
 }
 
 StoreResult<bool> PgStore::PutLessonVerdict(const LessonVerdictRow& v) {
-  bool inserted = false;
-  StoreStatus st = Transact("put verdict", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
-            ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) "
-            "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
-        v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
-        v.session_start_unix_ms, v.judged_unix_ms, v.detail, v.rejected ? 1 : 0);
-    inserted = !r.empty();
-    return StoreStatus::Ok();
-  });
-  if (st.code == StoreCode::kInvalidArgument) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + v.session_uuid + "'");
-  }
-  if (!st.ok()) return st;
-  return inserted;
+  return InsertOncePerSession(
+      "put verdict", v.session_uuid,
+      std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
+          ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) "
+          "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
+      v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
+      v.session_start_unix_ms, v.judged_unix_ms, v.detail, v.rejected ? 1 : 0);
 }
 
 StoreResult<LessonVerdictRow> PgStore::GetLessonVerdict(const std::string& session_uuid) {

@@ -34,29 +34,16 @@ StoreResult<std::vector<SessionNoteRow>> PgStore::ListSessionNotes(const std::st
                                      " FROM session_notes WHERE session_uuid = $1 ORDER BY "
                                      "written_unix_ms, note_id LIMIT $2",
                                  session_uuid, int64_t{limit}),
-                  [](const PgColumns& c) {
-                    return SessionNoteRow{c.Text(0), c.Text(1), c.Text(2),
-                                          c.Text(3), c.Int(4),  c.Text(5)};
-                  });
+                  NoteRowFrom<PgColumns>);
   });
 }
 
 StoreResult<bool> PgStore::SignOffSession(const SessionSignOffRow& row) {
-  bool inserted = false;
-  StoreStatus st = Transact("sign off session", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
-            ") VALUES ($1, $2, $3, $4) ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
-        row.session_uuid, row.signed_by, row.signed_by_label, row.signed_unix_ms);
-    inserted = !r.empty();
-    return StoreStatus::Ok();
-  });
-  // A foreign key violation: the session is not stored.
-  if (st.code == StoreCode::kInvalidArgument) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
-  }
-  if (!st.ok()) return st;
-  return inserted;
+  return InsertOncePerSession(
+      "sign off session", row.session_uuid,
+      std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
+          ") VALUES ($1, $2, $3, $4) ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
+      row.session_uuid, row.signed_by, row.signed_by_label, row.signed_unix_ms);
 }
 
 StoreResult<SessionSignOffRow> PgStore::GetSessionSignOff(const std::string& session_uuid) {

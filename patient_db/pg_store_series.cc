@@ -4,6 +4,7 @@
 
 #include "patient_db/pg_store.h"
 #include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 
@@ -37,8 +38,7 @@ StoreResult<SessionSeriesRow> PgStore::GetSessionSeries(const std::string& sessi
         if (r.empty()) {
           return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
         }
-        return SessionSeriesRow{r[0][0].as<std::string>(), r[0][1].as<int>(), r[0][2].as<int64_t>(),
-                                pqxx::binarystring(r[0][3]).str()};
+        return SeriesRowFrom(PgColumns(r[0]));
       });
 }
 

@@ -135,16 +135,7 @@ StoreResult<TokenRow> SqliteStore::FindToken(const std::string& token_sha256_hex
       r.db(), "find token", "no such token",
       "SELECT role, institution, trainee_id, label, created_unix_ms FROM tokens "
       "WHERE token_sha256_hex = ?",
-      [&](const SqliteStatement& s) {
-        TokenRow t;
-        t.token_sha256_hex = token_sha256_hex;
-        ParseRoleName(s.Text(0), &t.role);
-        t.institution = s.Text(1);
-        t.trainee_id = s.Text(2);
-        t.label = s.Text(3);
-        t.created_unix_ms = s.Int(4);
-        return t;
-      },
+      [&](const SqliteStatement& s) { return TokenRowFrom(s, token_sha256_hex); },
       token_sha256_hex);
 }
 
@@ -182,9 +173,7 @@ StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string
       r.db(), "list trainees",
       "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
       "WHERE institution = ? AND (? = 0 OR trainee_id > ?) ORDER BY trainee_id LIMIT ?",
-      [](const SqliteStatement& s) {
-        return TraineeRow{s.Text(0), s.Text(1), s.Text(2), s.Int(3)};
-      },
+      TraineeRowFrom<SqliteStatement>,
       institution, int64_t{page.has_after}, page.after_text,
       int64_t{page.limit > 0 ? page.limit : -1});
 }

@@ -49,6 +49,21 @@ bool Execute(SqliteDb& db, const std::string& sql, int* rc, const Args&... args)
   return Run(s, rc);
 }
 
+// Inserts a row a session has at most once (`sql` ends ON CONFLICT DO
+// NOTHING): true when this one was stored, false when the session already
+// had one (the first is kept); kNotFound when there is no such session.
+template <typename... Args>
+StoreResult<bool> InsertOncePerSession(SqliteDb& db, const std::string& what,
+                                       const std::string& session_uuid, const std::string& sql,
+                                       const Args&... args) {
+  int rc = SQLITE_OK;
+  if (Execute(db, sql, &rc, args...)) return sqlite3_changes(db.raw()) > 0;
+  if (IsConstraint(rc)) {  // the foreign key
+    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + session_uuid + "'");
+  }
+  return Internal(db, what);
+}
+
 // Runs the query `sql` with `args` bound and calls `each(row)` on every row
 // (an `each` that returns bool stops at false); kInternal naming `what` when
 // SQLite fails.

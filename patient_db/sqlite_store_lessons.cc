@@ -15,17 +15,7 @@ StoreResult<CurriculumRow> SqliteStore::ReadCurriculum(SqliteDb& db, const std::
       db, "get curriculum", "no curriculum '" + id + "'",
       "SELECT curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, "
       "body FROM curricula WHERE curriculum_id = ?",
-      [](const SqliteStatement& s) {
-        CurriculumRow c;
-        c.curriculum_id = s.Text(0);
-        c.institution = s.Text(1);
-        c.title = s.Text(2);
-        c.created_by = s.Text(3);
-        c.created_unix_ms = s.Int(4);
-        c.body_sha256_hex = s.Text(5);
-        c.body = s.Blob(6);
-        return c;
-      },
+      CurriculumRowFrom<SqliteStatement>,
       id);
   if (!row.ok()) return row;
   auto lessons = ReadRows(
@@ -210,10 +200,7 @@ StoreResult<std::vector<AssignmentRow>> SqliteStore::ListAssignments(
       "OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
       "AND a.institution = t.institution) "
       "ORDER BY a.assigned_unix_ms, a.curriculum_id",
-      [](const SqliteStatement& s) {
-        return AssignmentRow{s.Text(0), s.Text(1) == "group", s.Text(2), s.Text(3), s.Text(4),
-                             s.Int(5)};
-      },
+      [](const SqliteStatement& s) { return AssignmentRowFrom(s); },
       trainee_id);
 }
 
@@ -233,8 +220,7 @@ StoreResult<std::vector<std::vector<AssignmentRow>>> SqliteStore::ListAssignment
       "WHERE t.trainee_id IN (SELECT value FROM json_each(?)) "
       "ORDER BY t.trainee_id, a.assigned_unix_ms, a.curriculum_id",
       [&](const SqliteStatement& s) {
-        of[s.Text(0)].push_back(
-            {s.Text(1), s.Text(2) == "group", s.Text(3), s.Text(4), s.Text(5), s.Int(6)});
+        of[s.Text(0)].push_back(AssignmentRowFrom(s, 1));
       },
       JsonStringArray(trainee_ids));
   if (!st.ok()) return st;
@@ -243,18 +229,12 @@ StoreResult<std::vector<std::vector<AssignmentRow>>> SqliteStore::ListAssignment
 
 StoreResult<bool> SqliteStore::PutLessonVerdict(const LessonVerdictRow& v) {
   std::lock_guard lock(write_mutex_);
-  int rc = SQLITE_OK;
-  if (!Execute(*writer_,
-               std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
-                   ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
-               &rc, v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, int64_t{v.passed},
-               v.score, v.session_start_unix_ms, v.judged_unix_ms, v.detail, int64_t{v.rejected})) {
-    if (IsConstraint(rc)) {
-      return StoreStatus::Error(StoreCode::kNotFound, "no session '" + v.session_uuid + "'");
-    }
-    return Internal(*writer_, "put verdict");
-  }
-  return sqlite3_changes(writer_->raw()) > 0;
+  return InsertOncePerSession(
+      *writer_, "put verdict", v.session_uuid,
+      std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
+          ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
+      v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, int64_t{v.passed}, v.score,
+      v.session_start_unix_ms, v.judged_unix_ms, v.detail, int64_t{v.rejected});
 }
 
 StoreResult<LessonVerdictRow> SqliteStore::GetLessonVerdict(const std::string& session_uuid) {

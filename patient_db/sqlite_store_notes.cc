@@ -39,25 +39,17 @@ StoreResult<std::vector<SessionNoteRow>> SqliteStore::ListSessionNotes(
       r.db(), "list session notes",
       std::string("SELECT ") + kNoteColumns +
           " FROM session_notes WHERE session_uuid = ? ORDER BY written_unix_ms, note_id LIMIT ?",
-      [](const SqliteStatement& s) {
-        return SessionNoteRow{s.Text(0), s.Text(1), s.Text(2), s.Text(3), s.Int(4), s.Text(5)};
-      },
+      NoteRowFrom<SqliteStatement>,
       session_uuid, int64_t{limit});
 }
 
 StoreResult<bool> SqliteStore::SignOffSession(const SessionSignOffRow& row) {
   std::lock_guard lock(write_mutex_);
-  int rc = SQLITE_OK;
-  if (!Execute(*writer_,
-               std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
-                   ") VALUES (?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
-               &rc, row.session_uuid, row.signed_by, row.signed_by_label, row.signed_unix_ms)) {
-    if (IsConstraint(rc)) {  // the foreign key: no such session
-      return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
-    }
-    return Internal(*writer_, "sign off session");
-  }
-  return sqlite3_changes(writer_->raw()) > 0;
+  return InsertOncePerSession(*writer_, "sign off session", row.session_uuid,
+                              std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
+                                  ") VALUES (?, ?, ?, ?) ON CONFLICT (session_uuid) DO NOTHING",
+                              row.session_uuid, row.signed_by, row.signed_by_label,
+                              row.signed_unix_ms);
 }
 
 StoreResult<SessionSignOffRow> SqliteStore::GetSessionSignOff(const std::string& session_uuid) {

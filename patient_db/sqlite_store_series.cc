@@ -35,9 +35,7 @@ StoreResult<SessionSeriesRow> SqliteStore::GetSessionSeries(const std::string& s
       r.db(), "get session series", "no series for '" + session_uuid + "'",
       "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
       "WHERE session_uuid = ?",
-      [](const SqliteStatement& s) {
-        return SessionSeriesRow{s.Text(0), static_cast<int>(s.Int(1)), s.Int(2), s.Blob(3)};
-      },
+      SeriesRowFrom<SqliteStatement>,
       session_uuid);
 }
 

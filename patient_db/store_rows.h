@@ -6,8 +6,8 @@
 #include "patient_db/store.h"
 
 // The column lists both stores select, and the rows read back from them, for
-// any result type `Columns` with Text(i), Int(i) and Real(i) (SqliteStatement;
-// PgColumns in pg_store.cc's files). Internal to the stores.
+// any result type `Columns` with Text(i), Int(i), Real(i) and Blob(i)
+// (SqliteStatement; PgColumns of pg_store_internal.h). Internal to the stores.
 namespace ves::patient_db {
 
 inline constexpr const char* kCaseColumns =
@@ -166,6 +166,66 @@ LessonVerdictRow VerdictRowFrom(const Columns& c) {
 template <typename Columns>
 SessionSignOffRow SignOffRowFrom(const Columns& c) {
   return {c.Text(0), c.Text(1), c.Text(2), c.Int(3)};
+}
+
+// A token of `SELECT role, institution, trainee_id, label, created_unix_ms`
+// (the hash it was found by is the caller's).
+template <typename Columns>
+TokenRow TokenRowFrom(const Columns& c, const std::string& token_sha256_hex) {
+  TokenRow r;
+  r.token_sha256_hex = token_sha256_hex;
+  ParseRoleName(c.Text(0), &r.role);
+  r.institution = c.Text(1);
+  r.trainee_id = c.Text(2);
+  r.label = c.Text(3);
+  r.created_unix_ms = c.Int(4);
+  return r;
+}
+
+inline constexpr const char* kTraineeColumns =
+    "trainee_id, institution, display_name, created_unix_ms";
+
+template <typename Columns>
+TraineeRow TraineeRowFrom(const Columns& c) {
+  return {c.Text(0), c.Text(1), c.Text(2), c.Int(3)};
+}
+
+inline constexpr const char* kCurriculumColumns =
+    "curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, body";
+
+// Without its lesson ids (table lessons).
+template <typename Columns>
+CurriculumRow CurriculumRowFrom(const Columns& c) {
+  CurriculumRow r;
+  r.curriculum_id = c.Text(0);
+  r.institution = c.Text(1);
+  r.title = c.Text(2);
+  r.created_by = c.Text(3);
+  r.created_unix_ms = c.Int(4);
+  r.body_sha256_hex = c.Text(5);
+  r.body = c.Blob(6);
+  return r;
+}
+
+// An assignment of `SELECT a.curriculum_id, a.assignee_kind, a.assignee,
+// a.institution, a.assigned_by, a.assigned_unix_ms` from column `first` on.
+template <typename Columns>
+AssignmentRow AssignmentRowFrom(const Columns& c, int first = 0) {
+  return {c.Text(first),     c.Text(first + 1) == "group", c.Text(first + 2),
+          c.Text(first + 3), c.Text(first + 4),            c.Int(first + 5)};
+}
+
+template <typename Columns>
+SessionNoteRow NoteRowFrom(const Columns& c) {
+  return {c.Text(0), c.Text(1), c.Text(2), c.Text(3), c.Int(4), c.Text(5)};
+}
+
+inline constexpr const char* kSeriesColumns =
+    "session_uuid, format_version, computed_unix_ms, series";
+
+template <typename Columns>
+SessionSeriesRow SeriesRowFrom(const Columns& c) {
+  return {c.Text(0), static_cast<int>(c.Int(1)), c.Int(2), c.Blob(3)};
 }
 
 }  // namespace ves::patient_db
