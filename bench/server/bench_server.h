@@ -11,6 +11,7 @@
 #include "server/auth.h"
 #include "server/server.h"
 #include "ves/v1/case.pb.h"
+#include "ves/v1/session.pb.h"
 
 // What the server benches set up alike (server_bench, replica_bench,
 // live_bench, web_bench, web_cohort_bench): a scratch directory, an
@@ -50,6 +51,25 @@ inline std::string PutBenchCase(ves::patient_db::Store& store, const ves::v1::Co
   row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
   store.PutCase(row, bundle);
   return bundle;
+}
+
+// The part of a benchmark's session record every server bench fills alike:
+// a scripted trainee's 300 s run of the standard case that reached the cecum
+// at 200 s, started at `start_unix_ms`.
+inline ves::v1::SessionRecord BenchRecord(const std::string& uuid, int64_t start_unix_ms) {
+  ves::v1::SessionRecord r;
+  r.set_uuid(uuid);
+  r.set_trainee_id("bench-trainee");
+  r.set_case_id("standard-adult");
+  r.set_case_version(1);
+  r.set_station_id("bench-station");
+  r.set_start_unix_ms(start_unix_ms);
+  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
+  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
+  r.mutable_metrics()->set_duration_s(300);
+  r.mutable_metrics()->set_completed(true);
+  r.mutable_metrics()->set_time_to_cecum_s(200);
+  return r;
 }
 
 }  // namespace ves::bench

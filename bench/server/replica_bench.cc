@@ -75,18 +75,7 @@ constexpr char kCaseFile[] = VES_SOURCE_DIR "/patient_db/cases/standard-adult.te
 
 // A record of realistic size (a few KiB with its input log).
 ves::v1::SessionRecord Record(std::mt19937_64& rng, int i) {
-  ves::v1::SessionRecord r;
-  r.set_uuid(Uuid(rng));
-  r.set_trainee_id("bench-trainee");
-  r.set_case_id("standard-adult");
-  r.set_case_version(1);
-  r.set_station_id("bench-station");
-  r.set_start_unix_ms(1'700'000'000'000 + i);
-  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
-  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
-  r.mutable_metrics()->set_duration_s(300);
-  r.mutable_metrics()->set_completed(true);
-  r.mutable_metrics()->set_time_to_cecum_s(200);
+  ves::v1::SessionRecord r = ves::bench::BenchRecord(Uuid(rng), 1'700'000'000'000 + i);
   r.set_score(75);
   // A well-formed log (its header is checked at upload) of 1000 steps.
   std::vector<ves::training::InputSample> samples(1000);

@@ -63,18 +63,7 @@ const ves::v1::InputLog& InputLogBytes() {
 
 // A session record of typical size: metrics, a few events, a 1 KiB input log.
 ves::v1::SessionRecord Record(const std::string& uuid, int seed) {
-  ves::v1::SessionRecord r;
-  r.set_uuid(uuid);
-  r.set_trainee_id("bench-trainee");
-  r.set_case_id("standard-adult");
-  r.set_case_version(1);
-  r.set_station_id("bench-station");
-  r.set_start_unix_ms(1'700'000'000'000 + seed);
-  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
-  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
-  r.mutable_metrics()->set_duration_s(300);
-  r.mutable_metrics()->set_completed(true);
-  r.mutable_metrics()->set_time_to_cecum_s(200);
+  ves::v1::SessionRecord r = ves::bench::BenchRecord(uuid, 1'700'000'000'000 + seed);
   r.mutable_metrics()->set_pain_s(4);
   r.set_score(70);
   for (int i = 0; i < 8; ++i) {
