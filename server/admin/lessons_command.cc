@@ -62,11 +62,10 @@ int CurriculumCreate(const std::string& file, const ClientOptions& client,
   }
   if (!institution.empty()) q.mutable_curriculum()->set_institution(institution);
   ves::v1::CreateCurriculumResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->CreateCurriculum(&ctx, q, &r);
-  if (!status.ok()) {
-    return ReportRpcError("curriculum create", status.error_code(), status.error_message());
+  if (const int called = CallOnce("curriculum create", client, *LessonsStub(client),
+                              &ves::v1::Lessons::Stub::CreateCurriculum, q, &r);
+      called != kExitOk) {
+    return called;
   }
   const auto& c = r.curriculum();
   std::cout << (r.already_stored() ? "already stored: " : "created: ") << c.curriculum_id()
@@ -210,10 +209,11 @@ int RunAssignCommand(const CommandArgs& args) {
     q.set_group(group);
   }
   ves::v1::AssignCurriculumResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->AssignCurriculum(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("assign", status.error_code(), status.error_message());
+  if (const int called = CallOnce("assign", client, *LessonsStub(client),
+                              &ves::v1::Lessons::Stub::AssignCurriculum, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << "assigned " << curriculum << " to "
             << (group.empty() ? "trainee " + trainee : "group " + group) << " ("
             << r.trainee_ids_size() << " trainee(s) now)\n";
@@ -245,10 +245,11 @@ int RunProgressCommand(const CommandArgs& args) {
     q.set_institution(institution);
   }
   ves::v1::GetProgressResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->GetProgress(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("progress", status.error_code(), status.error_message());
+  if (const int called = CallOnce("progress", client, *LessonsStub(client),
+                              &ves::v1::Lessons::Stub::GetProgress, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   if (group.empty()) {
     for (const auto& t : r.trainees()) PrintTraineeProgress(t);
   } else {
@@ -280,10 +281,11 @@ int RunGroupCommand(const CommandArgs& args) {
   q.set_trainee_id(trainee);
   q.set_group(group);
   ves::v1::SetTraineeGroupResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->SetTraineeGroup(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("group", status.error_code(), status.error_message());
+  if (const int called = CallOnce("group", client, *LessonsStub(client),
+                              &ves::v1::Lessons::Stub::SetTraineeGroup, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << "trainee " << trainee << ": group " << (group.empty() ? "(none)" : group) << "\n";
   return kExitOk;
 }

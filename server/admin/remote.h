@@ -33,6 +33,19 @@ std::string Shown(const std::string& text);
 // Prints "ves-admin NAME: CODE: message" and returns kExitFailed.
 int ReportRpcError(const std::string& name, int code, const std::string& message);
 
+// Sends `request` to the unary method `method` of `stub` and fills `reply`.
+// Returns the exit status: kExitOk, or the failure, reported as `name`.
+template <typename Stub, typename Request, typename Response>
+int CallOnce(const std::string& name, const ves::server::ClientOptions& client, Stub& stub,
+             grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
+             const Request& request, Response* reply) {
+  grpc::ClientContext context;
+  ves::server::PrepareContext(&context, client);
+  const grpc::Status status = (stub.*method)(&context, request, reply);
+  if (!status.ok()) return ReportRpcError(name, status.error_code(), status.error_message());
+  return kExitOk;
+}
+
 // Calls the paginated List method `method` of `stub` (docs/server.md,
 // "Limits") page after page until the last: `each(reply)` sees every reply
 // and returns false to stop early. Returns the exit status: kExitOk, or the

@@ -238,10 +238,11 @@ int RunTokenCommand(const CommandArgs& args) {
   q.set_trainee_id(trainee);
   q.set_label(label);
   ves::v1::CreateTokenResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = Stub<ves::v1::Admin>(client)->CreateToken(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("token", status.error_code(), status.error_message());
+  if (const int called = CallOnce("token", client, *Stub<ves::v1::Admin>(client),
+                              &ves::v1::Admin::Stub::CreateToken, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << r.token() << "\n";
   std::cerr << "token " << r.token_id() << " (" << role
             << "): shown once, the server keeps only its hash\n";
@@ -265,8 +266,6 @@ int RunTraineeCommand(const CommandArgs& args) {
   if (rc >= 0) return rc;
   auto stub = Stub<ves::v1::Trainees>(client);
   if (action == "add") {
-    grpc::ClientContext ctx;
-    ves::server::PrepareContext(&ctx, client);
     if (id.empty()) {
       std::cerr << "ves-admin trainee add: --id is required\n";
       return kExitUsage;
@@ -276,8 +275,11 @@ int RunTraineeCommand(const CommandArgs& args) {
     q.mutable_trainee()->set_display_name(name);
     q.mutable_trainee()->set_institution(institution);
     ves::v1::AddTraineeResponse r;
-    auto status = stub->AddTrainee(&ctx, q, &r);
-    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
+    if (const int called = CallOnce("trainee", client, *stub, &ves::v1::Trainees::Stub::AddTrainee,
+                                q, &r);
+        called != kExitOk) {
+      return called;
+    }
     std::cout << "added " << Shown(r.trainee().trainee_id()) << " ("
               << Shown(r.trainee().institution())
               << ")\n";
@@ -366,13 +368,14 @@ int RunSessionCommand(const CommandArgs& args) {
     std::cerr << "ves-admin session: unknown action '" << action << "' (only: show)\n";
     return kExitUsage;
   }
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::GetSessionRequest q;
   q.set_uuid(uuid);
   ves::v1::GetSessionResponse r;
-  auto status = Stub<ves::v1::Trainees>(client)->GetSession(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("session", status.error_code(), status.error_message());
+  if (const int called = CallOnce("session", client, *Stub<ves::v1::Trainees>(client),
+                              &ves::v1::Trainees::Stub::GetSession, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   if (!raw) {
     PrintSessionSummary(r.record(), std::cout);
     return kExitOk;
