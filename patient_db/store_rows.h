@@ -33,9 +33,6 @@ inline constexpr const char* kStationColumns =
     "can_bus_errors, can_lost_frames, can_send_failures, can_malformed_frames";
 inline constexpr int kStationColumnCount = 19;
 
-inline constexpr const char* kAuditColumns =
-    "id, at_unix_ms, actor, actor_label, role, institution, action, target, result";
-
 template <typename Columns>
 CaseRow CaseRowFrom(const Columns& c) {
   CaseRow r;
@@ -112,7 +109,8 @@ StationRow StationRowFrom(const Columns& c) {
   return r;
 }
 
-// An audit listing's row (kAuditColumns).
+// An audit row of `SELECT id, at_unix_ms, actor, actor_label, role,
+// institution, action, target, result`.
 template <typename Columns>
 AuditRow AuditRowFrom(const Columns& c) {
   return {c.Int(0),  c.Int(1),  c.Text(2), c.Text(3), c.Text(4),
@@ -182,18 +180,15 @@ TokenRow TokenRowFrom(const Columns& c, const std::string& token_sha256_hex) {
   return r;
 }
 
-inline constexpr const char* kTraineeColumns =
-    "trainee_id, institution, display_name, created_unix_ms";
-
+// A trainee of `SELECT trainee_id, institution, display_name, created_unix_ms`.
 template <typename Columns>
 TraineeRow TraineeRowFrom(const Columns& c) {
   return {c.Text(0), c.Text(1), c.Text(2), c.Int(3)};
 }
 
-inline constexpr const char* kCurriculumColumns =
-    "curriculum_id, institution, title, created_by, created_unix_ms, body_sha256_hex, body";
-
-// Without its lesson ids (table lessons).
+// A curriculum of `SELECT curriculum_id, institution, title, created_by,
+// created_unix_ms, body_sha256_hex, body`, without its lesson ids (table
+// lessons).
 template <typename Columns>
 CurriculumRow CurriculumRowFrom(const Columns& c) {
   CurriculumRow r;
@@ -215,14 +210,13 @@ AssignmentRow AssignmentRowFrom(const Columns& c, int first = 0) {
           c.Text(first + 3), c.Text(first + 4),            c.Int(first + 5)};
 }
 
+// A note of kNoteColumns.
 template <typename Columns>
 SessionNoteRow NoteRowFrom(const Columns& c) {
   return {c.Text(0), c.Text(1), c.Text(2), c.Text(3), c.Int(4), c.Text(5)};
 }
 
-inline constexpr const char* kSeriesColumns =
-    "session_uuid, format_version, computed_unix_ms, series";
-
+// A series of `SELECT session_uuid, format_version, computed_unix_ms, series`.
 template <typename Columns>
 SessionSeriesRow SeriesRowFrom(const Columns& c) {
   return {c.Text(0), static_cast<int>(c.Int(1)), c.Int(2), c.Blob(3)};
