@@ -115,61 +115,80 @@ std::string ByteaHex(const std::string& bytes) {
   return out;
 }
 
-}  // namespace
-
-StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch& batch) {
-  // Rows are inserted in uuid order (stable, so repeats keep batch order) so
-  // two replicas committing overlapping batches lock the same keys in the same
-  // order and cannot deadlock; audit rows are then written in batch order.
-  // Each step is one multi-row statement, whatever the batch size.
+// The multi-row INSERT of the batch's sessions, its parameters in *params;
+// "" for no sessions. Rows go in uuid order (stable, so repeats keep batch
+// order) so two replicas committing overlapping batches lock the same keys in
+// the same order and cannot deadlock; audit rows are then written in batch
+// order. Each step of a commit is one multi-row statement, whatever the
+// batch size.
+std::string SessionsInsert(const WriteBatch& batch, std::vector<std::string>* params) {
+  if (batch.sessions.empty()) return "";
   std::vector<size_t> order(batch.sessions.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return batch.sessions[a].uuid < batch.sessions[b].uuid;
   });
-  std::vector<std::string> params;
-  std::string insert;
-  if (!order.empty()) {
-    insert = std::string("INSERT INTO sessions (") + kSessionColumns + ", body) VALUES ";
-    for (size_t k = 0; k < order.size(); ++k) {
-      const SessionRow& row = batch.sessions[order[k]];
-      insert += k == 0 ? "(" : ", (";
-      for (int c = 1; c <= 20; ++c) {
-        insert += (c == 1 ? "$" : ", $") + std::to_string(params.size() + c);
-      }
-      insert += ")";
-      for (const std::string& v : {row.uuid,
-                                   row.trainee_id,
-                                   row.institution,
-                                   row.case_id,
-                                   std::to_string(row.case_version),
-                                   row.station_id,
-                                   std::to_string(row.start_unix_ms),
-                                   std::to_string(row.end_unix_ms),
-                                   std::to_string(row.outcome),
-                                   std::string(row.completed ? "1" : "0"),
-                                   pqxx::to_string(row.time_to_cecum_s),
-                                   pqxx::to_string(row.pain_s),
-                                   pqxx::to_string(row.score),
-                                   row.body_sha256_hex,
-                                   std::to_string(row.stored_unix_ms),
-                                   row.operator_kind,
-                                   pqxx::to_string(row.max_tip_arc_m),
-                                   pqxx::to_string(row.loop_s),
-                                   pqxx::to_string(row.xray_s),
-                                   ByteaHex(row.body)}) {
-        params.push_back(v);
-      }
+  std::string insert = std::string("INSERT INTO sessions (") + kSessionColumns + ", body) VALUES ";
+  for (size_t k = 0; k < order.size(); ++k) {
+    const SessionRow& row = batch.sessions[order[k]];
+    insert += k == 0 ? "(" : ", (";
+    for (int c = 1; c <= 20; ++c) {
+      insert += (c == 1 ? "$" : ", $") + std::to_string(params->size() + c);
     }
-    // A uuid already stored (or repeated in this batch) is skipped here and
-    // looked up below: the first stored row decides duplicate or conflict.
-    insert += " ON CONFLICT (uuid) DO NOTHING RETURNING uuid";
+    insert += ")";
+    for (const std::string& v : {row.uuid,
+                                 row.trainee_id,
+                                 row.institution,
+                                 row.case_id,
+                                 std::to_string(row.case_version),
+                                 row.station_id,
+                                 std::to_string(row.start_unix_ms),
+                                 std::to_string(row.end_unix_ms),
+                                 std::to_string(row.outcome),
+                                 std::string(row.completed ? "1" : "0"),
+                                 pqxx::to_string(row.time_to_cecum_s),
+                                 pqxx::to_string(row.pain_s),
+                                 pqxx::to_string(row.score),
+                                 row.body_sha256_hex,
+                                 std::to_string(row.stored_unix_ms),
+                                 row.operator_kind,
+                                 pqxx::to_string(row.max_tip_arc_m),
+                                 pqxx::to_string(row.loop_s),
+                                 pqxx::to_string(row.xray_s),
+                                 ByteaHex(row.body)}) {
+      params->push_back(v);
+    }
   }
+  // A uuid already stored (or repeated in this batch) is skipped here and
+  // looked up after: the first stored row decides duplicate or conflict.
+  return insert + " ON CONFLICT (uuid) DO NOTHING RETURNING uuid";
+}
+
+// Station reports of the sessions not refused, in key order (as the
+// sessions, so replicas lock stations in the same order).
+void WriteStationReports(pqxx::transaction_base& tx, const WriteBatch& batch,
+                         const std::vector<SessionPutResult>& results) {
+  std::vector<const StationRow*> reports;
+  for (size_t i = 0; i < batch.sessions.size(); ++i) {
+    const auto& station = batch.sessions[i].station;
+    if (station && results[i].outcome != SessionPut::kConflict) reports.push_back(&*station);
+  }
+  std::stable_sort(reports.begin(), reports.end(), [](const StationRow* a, const StationRow* b) {
+    return std::tie(a->institution, a->station_id) < std::tie(b->institution, b->station_id);
+  });
+  for (const StationRow* report : reports) WriteStation(tx, *report);
+}
+
+}  // namespace
+
+StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch& batch) {
+  std::vector<std::string> params;
+  const std::string insert = SessionsInsert(batch, &params);
   std::vector<SessionPutResult> results;
   StoreStatus st = Transact("commit batch", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
     results.assign(batch.sessions.size(), SessionPutResult{});
     std::set<std::string> inserted;
-    if (!order.empty()) {
+    if (!insert.empty()) {
       for (const auto& r : tx.exec_params(insert, pqxx::prepare::make_dynamic_params(params))) {
         inserted.insert(r[0].as<std::string>());
       }
@@ -220,17 +239,7 @@ StoreResult<std::vector<SessionPutResult>> PgStore::CommitBatch(const WriteBatch
       results[i].outcome = stored.body_sha256_hex == row.body_sha256_hex ? SessionPut::kDuplicate
                                                                          : SessionPut::kConflict;
     }
-    // Station reports of the sessions not refused, in key order (as the
-    // sessions above, so replicas lock stations in the same order).
-    std::vector<const StationRow*> reports;
-    for (size_t i = 0; i < batch.sessions.size(); ++i) {
-      const auto& station = batch.sessions[i].station;
-      if (station && results[i].outcome != SessionPut::kConflict) reports.push_back(&*station);
-    }
-    std::stable_sort(reports.begin(), reports.end(), [](const StationRow* a, const StationRow* b) {
-      return std::tie(a->institution, a->station_id) < std::tie(b->institution, b->station_id);
-    });
-    for (const StationRow* report : reports) WriteStation(tx, *report);
+    WriteStationReports(tx, batch, results);
     std::vector<AuditRow> audit;
     for (size_t i = 0; i < batch.sessions.size() && i < batch.session_audit.size(); ++i) {
       audit.push_back(batch.session_audit[i]);
