@@ -63,7 +63,7 @@ int CurriculumCreate(const std::string& file, const ClientOptions& client,
   if (!institution.empty()) q.mutable_curriculum()->set_institution(institution);
   ves::v1::CreateCurriculumResponse r;
   if (const int called = CallOnce("curriculum create", client, *LessonsStub(client),
-                              &ves::v1::Lessons::Stub::CreateCurriculum, q, &r);
+                                  &ves::v1::Lessons::Stub::CreateCurriculum, q, &r);
       called != kExitOk) {
     return called;
   }
@@ -158,20 +158,16 @@ int RunCurriculumCommand(const CommandArgs& args) {
     const CommandArgs rest(args.begin() + 1, args.end());
     return args[0] == "assign" ? RunAssignCommand(rest) : RunProgressCommand(rest);
   }
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, file, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "create or list")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "create or list")(
       "file", po::value(&file), "create: the curriculum (textproto of ves.v1.Curriculum)")(
       "institution", po::value(&institution), "owner (default: the caller's; admins only)");
-  po::positional_options_description pos;
-  pos.add("action", 1).add("file", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("curriculum", "curriculum create FILE.textproto | list", args,
-                             options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1).Positional("file", 1);
+  if (const int rc = line.Parse("curriculum", "curriculum create FILE.textproto | list", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action == "create") {
     if (file.empty()) {
       std::cerr << "ves-admin curriculum create: give the curriculum FILE.textproto\n";
@@ -186,17 +182,14 @@ int RunCurriculumCommand(const CommandArgs& args) {
 }
 
 int RunAssignCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string curriculum, trainee, group;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("curriculum", po::value(&curriculum)->required(), "curriculum id")(
+  RemoteCommandLine line;
+  line.Add()("curriculum", po::value(&curriculum)->required(), "curriculum id")(
       "trainee", po::value(&trainee), "one trainee")("group", po::value(&group), "a group");
-  po::variables_map vm;
-  const int rc = ParseRemote("assign", "assign --curriculum C --trainee T|--group G", args,
-                             options, nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  if (const int rc = line.Parse("assign", "assign --curriculum C --trainee T|--group G", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (trainee.empty() == group.empty()) {
     std::cerr << "ves-admin assign: give exactly one of --trainee T and --group G\n";
     return kExitUsage;
@@ -210,7 +203,7 @@ int RunAssignCommand(const CommandArgs& args) {
   }
   ves::v1::AssignCurriculumResponse r;
   if (const int called = CallOnce("assign", client, *LessonsStub(client),
-                              &ves::v1::Lessons::Stub::AssignCurriculum, q, &r);
+                                  &ves::v1::Lessons::Stub::AssignCurriculum, q, &r);
       called != kExitOk) {
     return called;
   }
@@ -221,18 +214,14 @@ int RunAssignCommand(const CommandArgs& args) {
 }
 
 int RunProgressCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string trainee, group, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("trainee", po::value(&trainee), "one trainee")(
-      "group", po::value(&group), "a group (table)")(
-      "institution", po::value(&institution), "with --group: the group's institution");
-  po::variables_map vm;
-  const int rc = ParseRemote("progress", "progress --trainee T | --group G", args, options,
-                             nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("trainee", po::value(&trainee), "one trainee")(
+      "group", po::value(&group), "a group (table)")("institution", po::value(&institution),
+                                                     "with --group: the group's institution");
+  if (const int rc = line.Parse("progress", "progress --trainee T | --group G", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (trainee.empty() == group.empty()) {
     std::cerr << "ves-admin progress: give exactly one of --trainee T and --group G\n";
     return kExitUsage;
@@ -246,7 +235,7 @@ int RunProgressCommand(const CommandArgs& args) {
   }
   ves::v1::GetProgressResponse r;
   if (const int called = CallOnce("progress", client, *LessonsStub(client),
-                              &ves::v1::Lessons::Stub::GetProgress, q, &r);
+                                  &ves::v1::Lessons::Stub::GetProgress, q, &r);
       called != kExitOk) {
     return called;
   }
@@ -259,20 +248,15 @@ int RunProgressCommand(const CommandArgs& args) {
 }
 
 int RunGroupCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, trainee, group;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "set")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "set")(
       "trainee", po::value(&trainee)->required(), "trainee id")(
       "group", po::value(&group)->default_value(""), "group name (empty: none)");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("group", "group set --trainee T --group G", args, options, &pos, &vm,
-                             &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1);
+  if (const int rc = line.Parse("group", "group set --trainee T --group G", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action != "set") {
     std::cerr << "ves-admin group: unknown action '" << action << "' (only: set)\n";
     return kExitUsage;
@@ -282,7 +266,7 @@ int RunGroupCommand(const CommandArgs& args) {
   q.set_group(group);
   ves::v1::SetTraineeGroupResponse r;
   if (const int called = CallOnce("group", client, *LessonsStub(client),
-                              &ves::v1::Lessons::Stub::SetTraineeGroup, q, &r);
+                                  &ves::v1::Lessons::Stub::SetTraineeGroup, q, &r);
       called != kExitOk) {
     return called;
   }

@@ -25,6 +25,39 @@ int ParseRemote(const std::string& name, const std::string& usage, const Command
                 const boost::program_options::positional_options_description* positional,
                 boost::program_options::variables_map* vm, ves::server::ClientOptions* client,
                 int deadline_s);
+// The command line of a subcommand that talks to a running ves-server: the
+// shared options (AddRemoteOptions) and the subcommand's own.
+class RemoteCommandLine {
+ public:
+  RemoteCommandLine() { AddRemoteOptions(&options_, &client_, &deadline_s_); }
+  RemoteCommandLine(const RemoteCommandLine&) = delete;
+  RemoteCommandLine& operator=(const RemoteCommandLine&) = delete;
+
+  // The subcommand's own options, as options_description::add_options.
+  boost::program_options::options_description_easy_init Add() { return options_.add_options(); }
+  // A positional argument, as positional_options_description::add.
+  RemoteCommandLine& Positional(const char* name, int max_count) {
+    positional_.add(name, max_count);
+    return *this;
+  }
+  // As ParseRemote: -1 to go on, else the exit status (help or an error).
+  int Parse(const std::string& name, const std::string& usage, const CommandArgs& args) {
+    return ParseRemote(name, usage, args, options_,
+                       positional_.max_total_count() > 0 ? &positional_ : nullptr, &vm_, &client_,
+                       deadline_s_);
+  }
+  const ves::server::ClientOptions& client() const { return client_; }
+  // Whether the (switch) option was given.
+  bool Has(const std::string& option) const { return vm_.count(option) > 0; }
+
+ private:
+  ves::server::ClientOptions client_;
+  int deadline_s_ = 30;
+  boost::program_options::options_description options_{"options"};
+  boost::program_options::positional_options_description positional_;
+  boost::program_options::variables_map vm_;
+};
+
 // "YYYY-MM-DD HH:MM" in UTC: the date column of the tables ves-admin prints.
 std::string FormatUtcMinute(int64_t unix_ms);
 // A string from the server made safe for the terminal: control characters

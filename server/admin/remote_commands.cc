@@ -206,22 +206,19 @@ auto Stub(const ClientOptions& client) {
 }  // namespace
 
 int RunTokenCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, role, institution, trainee, label;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "create")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "create")(
       "role", po::value(&role)->required(), "admin, supervisor, station or trainee")(
       "institution", po::value(&institution), "institution (default: the caller's)")(
-      "trainee", po::value(&trainee), "trainee id (role trainee)")(
-      "label", po::value(&label), "who or what holds the token");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("token", "token create --role R [--institution I] --server A",
-                             args, options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+      "trainee", po::value(&trainee), "trainee id (role trainee)")("label", po::value(&label),
+                                                                   "who or what holds the token");
+  line.Positional("action", 1);
+  if (const int rc =
+          line.Parse("token", "token create --role R [--institution I] --server A", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action != "create") {
     std::cerr << "ves-admin token: unknown action '" << action << "' (only: create)\n";
     return kExitUsage;
@@ -239,7 +236,7 @@ int RunTokenCommand(const CommandArgs& args) {
   q.set_label(label);
   ves::v1::CreateTokenResponse r;
   if (const int called = CallOnce("token", client, *Stub<ves::v1::Admin>(client),
-                              &ves::v1::Admin::Stub::CreateToken, q, &r);
+                                  &ves::v1::Admin::Stub::CreateToken, q, &r);
       called != kExitOk) {
     return called;
   }
@@ -250,20 +247,15 @@ int RunTokenCommand(const CommandArgs& args) {
 }
 
 int RunTraineeCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, id, name, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "add or list")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "add or list")(
       "id", po::value(&id), "trainee id (add)")("name", po::value(&name), "display name (add)")(
       "institution", po::value(&institution), "institution (default: the caller's)");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("trainee", "trainee add --id ID [--name N] | list", args, options,
-                             &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1);
+  if (const int rc = line.Parse("trainee", "trainee add --id ID [--name N] | list", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   auto stub = Stub<ves::v1::Trainees>(client);
   if (action == "add") {
     if (id.empty()) {
@@ -275,8 +267,8 @@ int RunTraineeCommand(const CommandArgs& args) {
     q.mutable_trainee()->set_display_name(name);
     q.mutable_trainee()->set_institution(institution);
     ves::v1::AddTraineeResponse r;
-    if (const int called = CallOnce("trainee", client, *stub, &ves::v1::Trainees::Stub::AddTrainee,
-                                q, &r);
+    if (const int called =
+            CallOnce("trainee", client, *stub, &ves::v1::Trainees::Stub::AddTrainee, q, &r);
         called != kExitOk) {
       return called;
     }
@@ -303,17 +295,13 @@ int RunTraineeCommand(const CommandArgs& args) {
 }
 
 int RunScoresCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string trainee, case_id;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("trainee", po::value(&trainee)->required(), "trainee id")(
-      "case", po::value(&case_id), "only this case");
-  po::variables_map vm;
-  const int rc = ParseRemote("scores", "scores --trainee ID [--case C]", args, options, nullptr,
-                             &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("trainee", po::value(&trainee)->required(), "trainee id")("case", po::value(&case_id),
+                                                                       "only this case");
+  if (const int rc = line.Parse("scores", "scores --trainee ID [--case C]", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListSessionsRequest q;
   q.set_trainee_id(trainee);
   q.set_case_id(case_id);
@@ -348,22 +336,15 @@ int RunScoresCommand(const CommandArgs& args) {
 }
 
 int RunSessionCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, uuid;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
   bool raw = false;
-  options.add_options()("action", po::value(&action)->required(), "show")(
-      "uuid", po::value(&uuid)->required(), "session uuid")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "show")("uuid", po::value(&uuid)->required(),
+                                                               "session uuid")(
       "raw", po::bool_switch(&raw), "the whole record (text format) instead of the summary");
-  po::positional_options_description pos;
-  pos.add("action", 1).add("uuid", 1);
-  po::variables_map vm;
-  const int rc =
-      ParseRemote("session", "session show UUID [--raw]", args, options, &pos, &vm, &client,
-                  deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1).Positional("uuid", 1);
+  if (const int rc = line.Parse("session", "session show UUID [--raw]", args); rc >= 0) return rc;
+  const ClientOptions& client = line.client();
   if (action != "show") {
     std::cerr << "ves-admin session: unknown action '" << action << "' (only: show)\n";
     return kExitUsage;
@@ -372,7 +353,7 @@ int RunSessionCommand(const CommandArgs& args) {
   q.set_uuid(uuid);
   ves::v1::GetSessionResponse r;
   if (const int called = CallOnce("session", client, *Stub<ves::v1::Trainees>(client),
-                              &ves::v1::Trainees::Stub::GetSession, q, &r);
+                                  &ves::v1::Trainees::Stub::GetSession, q, &r);
       called != kExitOk) {
     return called;
   }
@@ -390,18 +371,14 @@ int RunSessionCommand(const CommandArgs& args) {
 }
 
 int RunAuditCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   int64_t since_unix_ms = 0;
   unsigned limit = 1000;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("since", po::value(&since_unix_ms), "Unix time in ms (default: all)")(
+  RemoteCommandLine line;
+  line.Add()("since", po::value(&since_unix_ms), "Unix time in ms (default: all)")(
       "limit", po::value(&limit), "most entries shown (default 1000)");
-  po::variables_map vm;
-  const int rc = ParseRemote("audit", "audit [--since UNIX_MS] [--limit N]", args, options,
-                             nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  if (const int rc = line.Parse("audit", "audit [--since UNIX_MS] [--limit N]", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListAuditRequest q;
   q.set_since_unix_ms(since_unix_ms);
   q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
@@ -424,17 +401,11 @@ int RunAuditCommand(const CommandArgs& args) {
 }
 
 int RunStationsCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("institution", po::value(&institution),
-                        "institution (default: the token's)");
-  po::variables_map vm;
-  const int rc = ParseRemote("stations", "stations [--institution I]", args, options, nullptr, &vm,
-                             &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("institution", po::value(&institution), "institution (default: the token's)");
+  if (const int rc = line.Parse("stations", "stations [--institution I]", args); rc >= 0) return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListStationsRequest q;
   q.set_institution(institution);
   q.set_page_size(1000);
