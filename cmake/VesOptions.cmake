@@ -54,7 +54,28 @@ endif()
 add_library(ves_warnings INTERFACE)
 target_compile_options(ves_warnings INTERFACE -Wall -Wextra -Werror)
 
-# ves_target_defaults(<target>): warnings + the repository root on the include path.
+# ves_target_defaults(<target>): the warning flags.
 function(ves_target_defaults target)
   target_link_libraries(${target} PRIVATE ves_warnings)
+endfunction()
+
+# ves_library(<name> [PUBLIC <item>...] [PRIVATE <item>...]): completes the
+# static library ves_<name>, declared just before with add_library(ves_<name>
+# STATIC <sources>): its alias ves::<name>, the repository root on its and its
+# users' include path, its links, and ves_target_defaults.
+function(ves_library name)
+  cmake_parse_arguments(PARSE_ARGV 1 ARG "" "" "PUBLIC;PRIVATE")
+  if(ARG_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "ves_library(${name}): unexpected ${ARG_UNPARSED_ARGUMENTS}")
+  endif()
+  set(target ves_${name})
+  add_library(ves::${name} ALIAS ${target})
+  target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
+  if(ARG_PUBLIC)
+    target_link_libraries(${target} PUBLIC ${ARG_PUBLIC})
+  endif()
+  if(ARG_PRIVATE)
+    target_link_libraries(${target} PRIVATE ${ARG_PRIVATE})
+  endif()
+  ves_target_defaults(${target})
 endfunction()

@@ -1,13 +1,14 @@
 #include "patient_db/pg_store.h"
 
 #include <chrono>
+#include <pqxx/pqxx>
 #include <stdexcept>
 #include <thread>
 
-#include <pqxx/pqxx>
-
 #include "patient_db/clock.h"
 #include "patient_db/migrations/postgres/pg_migrations.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
@@ -17,13 +18,6 @@ constexpr int64_t kMigrationLockKey = 0x7665735f6d6967;  // "ves_mig"
 
 StoreStatus Internal(const std::string& what, const std::string& error) {
   return StoreStatus::Error(StoreCode::kInternal, what + ": " + error);
-}
-
-// An audit listing's row (its columns in AuditRow's order).
-AuditRow AuditRowFrom(const pqxx::row& row) {
-  return {row[0].as<int64_t>(),     row[1].as<int64_t>(),     row[2].as<std::string>(),
-          row[3].as<std::string>(), row[4].as<std::string>(), row[5].as<std::string>(),
-          row[6].as<std::string>(), row[7].as<std::string>(), row[8].as<std::string>()};
 }
 
 }  // namespace
@@ -179,13 +173,10 @@ StoreStatus PgStore::AddInstitution(const std::string& name, int64_t now_unix_ms
 }
 
 StoreResult<bool> PgStore::HasInstitution(const std::string& name) {
-  bool found = false;
-  StoreStatus st = Transact("find institution", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    found = !tx.exec_params("SELECT 1 FROM institutions WHERE name = $1", name).empty();
-    return StoreStatus::Ok();
+  return Query<bool>("find institution", [&](pqxx::transaction_base& tx) {
+    return StoreResult<bool>(
+        !tx.exec_params("SELECT 1 FROM institutions WHERE name = $1", name).empty());
   });
-  if (!st.ok()) return st;
-  return found;
 }
 
 StoreStatus PgStore::AddToken(const TokenRow& t) {
@@ -200,23 +191,14 @@ StoreStatus PgStore::AddToken(const TokenRow& t) {
 }
 
 StoreResult<TokenRow> PgStore::FindToken(const std::string& token_sha256_hex) {
-  TokenRow t;
-  StoreStatus st = Transact("find token", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+  return Query<TokenRow>("find token", [&](pqxx::transaction_base& tx) -> StoreResult<TokenRow> {
     pqxx::result r = tx.exec_params(
         "SELECT role, institution, trainee_id, label, created_unix_ms FROM tokens "
         "WHERE token_sha256_hex = $1",
         token_sha256_hex);
     if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such token");
-    t.token_sha256_hex = token_sha256_hex;
-    ParseRoleName(r[0][0].as<std::string>(), &t.role);
-    t.institution = r[0][1].as<std::string>();
-    t.trainee_id = r[0][2].as<std::string>();
-    t.label = r[0][3].as<std::string>();
-    t.created_unix_ms = r[0][4].as<int64_t>();
-    return StoreStatus::Ok();
+    return TokenRowFrom(PgColumns(r[0]), token_sha256_hex);
   });
-  if (!st.ok()) return st;
-  return t;
 }
 
 StoreStatus PgStore::AddTrainee(const TraineeRow& t) {
@@ -234,82 +216,59 @@ StoreStatus PgStore::AddTrainee(const TraineeRow& t) {
 }
 
 StoreResult<TraineeRow> PgStore::GetTrainee(const std::string& trainee_id) {
-  TraineeRow t;
-  StoreStatus st = Transact("get trainee", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        "SELECT institution, display_name, created_unix_ms FROM trainees WHERE trainee_id = $1",
-        trainee_id);
-    if (r.empty()) {
-      return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
-    }
-    t = {trainee_id, r[0][0].as<std::string>(), r[0][1].as<std::string>(),
-         r[0][2].as<int64_t>()};
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return t;
+  return Query<TraineeRow>(
+      "get trainee", [&](pqxx::transaction_base& tx) -> StoreResult<TraineeRow> {
+        pqxx::result r = tx.exec_params(
+            "SELECT institution, display_name, created_unix_ms FROM trainees WHERE trainee_id = $1",
+            trainee_id);
+        if (r.empty()) {
+          return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
+        }
+        const PgColumns c(r[0]);
+        return TraineeRow{trainee_id, c.Text(0), c.Text(1), c.Int(2)};
+      });
 }
 
 StoreResult<std::vector<TraineeRow>> PgStore::ListTrainees(const std::string& institution,
                                                            const ListPage& page) {
-  std::vector<TraineeRow> out;
-  StoreStatus st = Transact("list trainees", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
+  return Query<std::vector<TraineeRow>>("list trainees", [&](pqxx::transaction_base& tx) {
     // COLLATE "C": byte order, as SQLite sorts, whatever the cluster's locale.
-    pqxx::result r = tx.exec_params(
-        "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
-        "WHERE institution = $1 AND ($2 = 0 OR trainee_id COLLATE \"C\" > $3) "
-        "ORDER BY trainee_id COLLATE \"C\" LIMIT $4",
-        institution, page.has_after ? 1 : 0, page.after_text,
-        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
-    for (const auto& row : r) {
-      out.push_back({row[0].as<std::string>(), row[1].as<std::string>(),
-                     row[2].as<std::string>(), row[3].as<int64_t>()});
-    }
-    return StoreStatus::Ok();
+    return RowsOf(
+        tx.exec_params("SELECT trainee_id, institution, display_name, created_unix_ms FROM "
+                       "trainees WHERE institution = $1 AND ($2 = 0 OR trainee_id COLLATE \"C\" > "
+                       "$3) ORDER BY trainee_id COLLATE \"C\" LIMIT $4",
+                       institution, page.has_after ? 1 : 0, page.after_text,
+                       page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62),
+        TraineeRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<AuditRow>> PgStore::ListAudit(int64_t since_unix_ms, int limit,
                                                      int64_t after_id) {
-  std::vector<AuditRow> out;
-  StoreStatus st = Transact("list audit", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r = tx.exec_params(
-        "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
-        "FROM audit_log WHERE at_unix_ms >= $1 AND id > $2 ORDER BY id LIMIT $3",
-        since_unix_ms, after_id, limit);
-    for (const auto& row : r) {
-      out.push_back(AuditRowFrom(row));
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<AuditRow>>("list audit", [&](pqxx::transaction_base& tx) {
+    return RowsOf(
+        tx.exec_params("SELECT id, at_unix_ms, actor, actor_label, role, institution, action, "
+                       "target, result FROM audit_log WHERE at_unix_ms >= $1 AND id > $2 "
+                       "ORDER BY id LIMIT $3",
+                       since_unix_ms, after_id, limit),
+        AuditRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<AuditRow>> PgStore::ListAuditNewest(const AuditQuery& q) {
-  std::vector<AuditRow> out;
-  StoreStatus st = Transact("list audit", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
+  return Query<std::vector<AuditRow>>("list audit", [&](pqxx::transaction_base& tx) {
     // An empty or zero filter matches every row: one statement serves all.
-    pqxx::result r = tx.exec_params(
-        "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
-        "FROM audit_log WHERE ($1::TEXT = '' OR actor = $1 OR actor_label = $1) "
-        "AND ($2::TEXT = '' OR action = $2) AND at_unix_ms >= $3::BIGINT "
-        "AND ($4::BIGINT = 0 OR at_unix_ms < $4::BIGINT) AND ($5::BIGINT = 0 OR id < $5::BIGINT) "
-        "ORDER BY id DESC LIMIT $6::BIGINT",
-        q.actor, q.action, q.from_unix_ms, q.to_unix_ms, q.before_id,
-        q.limit > 0 ? int64_t{q.limit} : int64_t{1} << 62);
-    for (const auto& row : r) {
-      out.push_back(AuditRowFrom(row));
-    }
-    return StoreStatus::Ok();
+    return RowsOf(
+        tx.exec_params(
+            "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
+            "FROM audit_log WHERE ($1::TEXT = '' OR actor = $1 OR actor_label = $1) "
+            "AND ($2::TEXT = '' OR action = $2) AND at_unix_ms >= $3::BIGINT "
+            "AND ($4::BIGINT = 0 OR at_unix_ms < $4::BIGINT) AND ($5::BIGINT = 0 OR id < "
+            "$5::BIGINT) ORDER BY id DESC LIMIT $6::BIGINT",
+            q.actor, q.action, q.from_unix_ms, q.to_unix_ms, q.before_id,
+            q.limit > 0 ? int64_t{q.limit} : int64_t{1} << 62),
+        AuditRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 }  // namespace ves::patient_db

@@ -42,78 +42,8 @@ class PgStore final : public Store {
   explicit PgStore(PgStoreOptions options);
   ~PgStore() override;
 
-  StoreStatus AddInstitution(const std::string& name, int64_t now_unix_ms) override;
-  StoreResult<bool> HasInstitution(const std::string& name) override;
-  StoreStatus AddToken(const TokenRow& token) override;
-  StoreResult<TokenRow> FindToken(const std::string& token_sha256_hex) override;
-  StoreStatus AddAccount(const AccountRow& account) override;
-  StoreResult<AccountRow> GetAccount(const std::string& username) override;
-  StoreResult<AccountRow> FindAccountByIdentity(const std::string& identity) override;
-  StoreResult<std::vector<AccountRow>> ListAccounts(const std::string& institution) override;
-  StoreStatus RevokeAccount(const std::string& username, int64_t now_unix_ms) override;
-  StoreStatus SetAccountPassword(const std::string& username,
-                                 const std::string& password_hash) override;
-  StoreStatus AddTrainee(const TraineeRow& trainee) override;
-  StoreResult<TraineeRow> GetTrainee(const std::string& trainee_id) override;
-  StoreResult<std::vector<TraineeRow>> ListTrainees(const std::string& institution,
-                                                    const ListPage& page = {}) override;
-  StoreResult<PutCaseResult> PutCase(const CaseRow& row, const std::string& payload) override;
-  StoreResult<std::vector<CaseRow>> ListCases(const CaseFilter& filter) override;
-  StoreResult<CaseRow> GetCase(const std::string& case_id, uint32_t version) override;
-  StoreResult<std::string> GetBlob(const std::string& sha256_hex) override;
-  StoreResult<std::vector<SessionPutResult>> CommitBatch(const WriteBatch& batch) override;
-  StoreResult<SessionRow> GetSession(const std::string& uuid) override;
-  StoreResult<std::vector<SessionRow>> ListSessions(const std::string& trainee_id,
-                                                    const std::string& case_id,
-                                                    const ListPage& page = {}) override;
-  StoreResult<int64_t> CountSessions() override;
-  StoreResult<std::vector<std::vector<SessionRow>>> ListSessionsOf(
-      const std::vector<std::string>& trainee_ids, int64_t from_unix_ms, int64_t to_unix_ms,
-      int limit_each) override;
-  StoreResult<std::vector<SessionRow>> ListOperatorSessions(const std::string& institution,
-                                                            const std::string& case_id,
-                                                            const std::string& operator_kind,
-                                                            int limit) override;
-  StoreResult<std::vector<TraineeActivity>> GetTraineeActivity(
-      const std::vector<std::string>& trainee_ids) override;
-  StoreResult<std::vector<StationRow>> ListStations(const std::string& institution,
-                                                    const ListPage& page = {}) override;
-  StoreResult<std::vector<AuditRow>> ListAudit(int64_t since_unix_ms, int limit,
-                                               int64_t after_id = 0) override;
-  StoreResult<std::vector<AuditRow>> ListAuditNewest(const AuditQuery& query) override;
-  StoreResult<bool> PutCurriculum(const CurriculumRow& row) override;
-  StoreResult<CurriculumRow> GetCurriculum(const std::string& curriculum_id) override;
-  StoreResult<std::vector<CurriculumRow>> ListCurricula(const std::string& institution,
-                                                        const ListPage& page = {}) override;
-  StoreResult<std::string> FindLessonCurriculum(const std::string& lesson_id) override;
-  StoreStatus SetTraineeGroup(const std::string& trainee_id, const std::string& group) override;
-  StoreResult<std::string> GetTraineeGroup(const std::string& trainee_id) override;
-  StoreResult<std::vector<std::string>> GetTraineeGroups(
-      const std::vector<std::string>& trainee_ids) override;
-  StoreResult<std::vector<std::string>> ListGroupTrainees(const std::string& institution,
-                                                          const std::string& group) override;
-  StoreStatus AddAssignment(const AssignmentRow& row) override;
-  StoreResult<std::vector<AssignmentRow>> ListAssignments(const std::string& trainee_id) override;
-  StoreResult<std::vector<std::vector<AssignmentRow>>> ListAssignmentsOf(
-      const std::vector<std::string>& trainee_ids) override;
-  StoreResult<bool> PutLessonVerdict(const LessonVerdictRow& row) override;
-  StoreResult<LessonVerdictRow> GetLessonVerdict(const std::string& session_uuid) override;
-  StoreResult<std::vector<LessonVerdictRow>> ListLessonVerdicts(
-      const std::string& trainee_id) override;
-  StoreResult<std::vector<std::vector<LessonVerdictRow>>> ListLessonVerdictsOf(
-      const std::vector<std::string>& trainee_ids) override;
-  StoreResult<std::vector<std::string>> ListUnjudgedLessonSessions(const std::string& trainee_id,
-                                                                   int limit) override;
-  StoreResult<int> AddJudgeStarts(const std::string& session_uuid, int delta) override;
-  StoreStatus PutSessionSeries(const SessionSeriesRow& row) override;
-  StoreResult<SessionSeriesRow> GetSessionSeries(const std::string& session_uuid) override;
-  StoreStatus AddSessionNote(const SessionNoteRow& row) override;
-  StoreResult<std::vector<SessionNoteRow>> ListSessionNotes(const std::string& session_uuid,
-                                                            int limit) override;
-  StoreResult<bool> SignOffSession(const SessionSignOffRow& row) override;
-  StoreResult<SessionSignOffRow> GetSessionSignOff(const std::string& session_uuid) override;
-  StoreResult<std::vector<SessionSignOffRow>> ListTraineeSignOffs(
-      const std::string& trainee_id) override;
+  // Every Store method (docs in store.h).
+#include "patient_db/store_overrides.inc"
 
   int schema_version() const { return schema_version_; }
 
@@ -136,6 +66,16 @@ class PgStore final : public Store {
   // Runs `body` in a transaction and commits it when it returns Ok (an error
   // status rolls back). Retries as described above.
   StoreStatus Transact(const std::string& what, TxMode mode, const Body& body);
+  // A read (Transact, kRead) whose `body(tx)` returns its StoreResult<T>;
+  // defined in pg_store_internal.h.
+  template <typename T, typename Fn>
+  StoreResult<T> Query(const std::string& what, const Fn& body);
+  // Inserts a row a session has at most once (`sql` ends ON CONFLICT DO
+  // NOTHING RETURNING 1): true when this one was stored, false when the
+  // session already had one; kNotFound when there is no such session.
+  template <typename... Args>
+  StoreResult<bool> InsertOncePerSession(const std::string& what, const std::string& session_uuid,
+                                         const std::string& sql, const Args&... args);
   InDoubt ResolveInDoubt(int64_t txid);
   void Migrate();
   StoreStatus ReadShares(pqxx::transaction_base& tx, CaseRow* row);

@@ -3,35 +3,19 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
 
-constexpr const char* kAccountColumns =
-    "username, role, institution, password_hash, idp_identity, created_unix_ms, "
-    "expires_unix_ms, revoked_unix_ms";
-
-AccountRow ReadAccountRow(const pqxx::row& r) {
-  AccountRow a;
-  a.username = r[0].as<std::string>();
-  ParseRoleName(r[1].as<std::string>(), &a.role);
-  a.institution = r[2].as<std::string>();
-  a.password_hash = r[3].as<std::string>();
-  a.idp_identity = r[4].as<std::string>();
-  a.created_unix_ms = r[5].as<int64_t>();
-  a.expires_unix_ms = r[6].as<int64_t>();
-  a.revoked_unix_ms = r[7].as<int64_t>();
-  return a;
-}
-
-StoreStatus ReadOne(pqxx::transaction_base& tx, const char* column, const std::string& value,
-                    AccountRow* out) {
+StoreResult<AccountRow> ReadOne(pqxx::transaction_base& tx, const char* column,
+                                const std::string& value) {
   pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
                                       " FROM accounts WHERE " + column + " = $1",
                                   value);
   if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  *out = ReadAccountRow(r[0]);
-  return StoreStatus::Ok();
+  return AccountRowFrom(PgColumns(r[0]));
 }
 
 }  // namespace
@@ -61,37 +45,25 @@ StoreStatus PgStore::AddAccount(const AccountRow& a) {
 }
 
 StoreResult<AccountRow> PgStore::GetAccount(const std::string& username) {
-  AccountRow a;
-  StoreStatus st = Transact("get account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    return ReadOne(tx, "username", username, &a);
-  });
-  if (!st.ok()) return st;
-  return a;
+  return Query<AccountRow>(
+      "get account", [&](pqxx::transaction_base& tx) { return ReadOne(tx, "username", username); });
 }
 
 StoreResult<AccountRow> PgStore::FindAccountByIdentity(const std::string& identity) {
   if (identity.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  AccountRow a;
-  StoreStatus st = Transact("find account", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    return ReadOne(tx, "idp_identity", identity, &a);
+  return Query<AccountRow>("find account", [&](pqxx::transaction_base& tx) {
+    return ReadOne(tx, "idp_identity", identity);
   });
-  if (!st.ok()) return st;
-  return a;
 }
 
 StoreResult<std::vector<AccountRow>> PgStore::ListAccounts(const std::string& institution) {
-  std::vector<AccountRow> out;
-  StoreStatus st = Transact("list accounts", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r = tx.exec_params(std::string("SELECT ") + kAccountColumns +
-                                        " FROM accounts WHERE $1 = '' OR institution = $1 "
-                                        "ORDER BY username",
-                                    institution);
-    for (const auto& row : r) out.push_back(ReadAccountRow(row));
-    return StoreStatus::Ok();
+  return Query<std::vector<AccountRow>>("list accounts", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(std::string("SELECT ") + kAccountColumns +
+                                     " FROM accounts WHERE $1 = '' OR institution = $1 "
+                                     "ORDER BY username",
+                                 institution),
+                  AccountRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreStatus PgStore::RevokeAccount(const std::string& username, int64_t now_unix_ms) {

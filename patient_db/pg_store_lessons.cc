@@ -5,28 +5,11 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-constexpr const char* kVerdictColumns =
-    "session_uuid, trainee_id, curriculum_id, lesson_id, passed, score, session_start_unix_ms, "
-    "judged_unix_ms, detail, rejected";
-
-LessonVerdictRow ReadVerdictRow(const pqxx::row& r) {
-  LessonVerdictRow v;
-  v.session_uuid = r[0].as<std::string>();
-  v.trainee_id = r[1].as<std::string>();
-  v.curriculum_id = r[2].as<std::string>();
-  v.lesson_id = r[3].as<std::string>();
-  v.passed = r[4].as<int>() != 0;
-  v.score = r[5].as<double>();
-  v.session_start_unix_ms = r[6].as<int64_t>();
-  v.judged_unix_ms = r[7].as<int64_t>();
-  v.detail = r[8].as<std::string>();
-  v.rejected = r[9].as<int>() != 0;
-  return v;
-}
 
 // Reads one curriculum with its lesson ids; kNotFound when absent.
 StoreStatus ReadCurriculum(pqxx::transaction_base& tx, const std::string& id, CurriculumRow* out) {
@@ -35,14 +18,7 @@ StoreStatus ReadCurriculum(pqxx::transaction_base& tx, const std::string& id, Cu
       "body FROM curricula WHERE curriculum_id = $1",
       id);
   if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no curriculum '" + id + "'");
-  CurriculumRow row;
-  row.curriculum_id = r[0][0].as<std::string>();
-  row.institution = r[0][1].as<std::string>();
-  row.title = r[0][2].as<std::string>();
-  row.created_by = r[0][3].as<std::string>();
-  row.created_unix_ms = r[0][4].as<int64_t>();
-  row.body_sha256_hex = r[0][5].as<std::string>();
-  row.body = pqxx::binarystring(r[0][6]).str();
+  CurriculumRow row = CurriculumRowFrom(PgColumns(r[0]));
   for (const auto& l : tx.exec_params(
            "SELECT lesson_id FROM lessons WHERE curriculum_id = $1 ORDER BY position", id)) {
     row.lesson_ids.push_back(l[0].as<std::string>());
@@ -108,38 +84,34 @@ StoreResult<CurriculumRow> PgStore::GetCurriculum(const std::string& curriculum_
 
 StoreResult<std::vector<CurriculumRow>> PgStore::ListCurricula(const std::string& institution,
                                                                const ListPage& page) {
-  std::vector<CurriculumRow> out;
-  StoreStatus st = Transact("list curricula", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result ids = tx.exec_params(
-        "SELECT curriculum_id FROM curricula WHERE ($1 = '' OR institution = $1) "
-        "AND ($2 = 0 OR curriculum_id COLLATE \"C\" > $3) "
-        "ORDER BY curriculum_id COLLATE \"C\" LIMIT $4",
-        institution, page.has_after ? 1 : 0, page.after_text,
-        page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
-    for (const auto& id : ids) {
-      CurriculumRow row;
-      StoreStatus read = ReadCurriculum(tx, id[0].as<std::string>(), &row);
-      if (!read.ok()) return read;
-      out.push_back(std::move(row));
-    }
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<std::vector<CurriculumRow>>(
+      "list curricula", [&](pqxx::transaction_base& tx) -> StoreResult<std::vector<CurriculumRow>> {
+        pqxx::result ids = tx.exec_params(
+            "SELECT curriculum_id FROM curricula WHERE ($1 = '' OR institution = $1) "
+            "AND ($2 = 0 OR curriculum_id COLLATE \"C\" > $3) "
+            "ORDER BY curriculum_id COLLATE \"C\" LIMIT $4",
+            institution, page.has_after ? 1 : 0, page.after_text,
+            page.limit > 0 ? int64_t{page.limit} : int64_t{1} << 62);
+        std::vector<CurriculumRow> out;
+        for (const auto& id : ids) {
+          CurriculumRow row;
+          StoreStatus read = ReadCurriculum(tx, id[0].as<std::string>(), &row);
+          if (!read.ok()) return read;
+          out.push_back(std::move(row));
+        }
+        return out;
+      });
 }
 
 StoreResult<std::string> PgStore::FindLessonCurriculum(const std::string& lesson_id) {
-  std::string out;
-  StoreStatus st = Transact("find lesson", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r =
-        tx.exec_params("SELECT curriculum_id FROM lessons WHERE lesson_id = $1", lesson_id);
-    if (r.empty()) return StoreStatus::Error(StoreCode::kNotFound, "no lesson '" + lesson_id + "'");
-    out = r[0][0].as<std::string>();
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<std::string>(
+      "find lesson", [&](pqxx::transaction_base& tx) -> StoreResult<std::string> {
+        pqxx::result r =
+            tx.exec_params("SELECT curriculum_id FROM lessons WHERE lesson_id = $1", lesson_id);
+        if (r.empty())
+          return StoreStatus::Error(StoreCode::kNotFound, "no lesson '" + lesson_id + "'");
+        return r[0][0].as<std::string>();
+      });
 }
 
 StoreStatus PgStore::SetTraineeGroup(const std::string& trainee_id, const std::string& group) {
@@ -161,50 +133,37 @@ StoreStatus PgStore::SetTraineeGroup(const std::string& trainee_id, const std::s
 }
 
 StoreResult<std::string> PgStore::GetTraineeGroup(const std::string& trainee_id) {
-  std::string out;
-  StoreStatus st = Transact("get trainee group", TxMode::kRead, [&](pqxx::transaction_base& tx) {
+  return Query<std::string>("get trainee group", [&](pqxx::transaction_base& tx) {
     pqxx::result r = tx.exec_params(
         "SELECT group_name FROM trainee_groups WHERE trainee_id = $1", trainee_id);
-    out = r.empty() ? std::string() : r[0][0].as<std::string>();
-    return StoreStatus::Ok();
+    return StoreResult<std::string>(r.empty() ? std::string() : r[0][0].as<std::string>());
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<std::string>> PgStore::GetTraineeGroups(
     const std::vector<std::string>& trainee_ids) {
-  std::map<std::string, std::string> group_of;
-  StoreStatus st = Transact("get trainee groups", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    group_of.clear();
+  return Query<std::vector<std::string>>("get trainee groups", [&](pqxx::transaction_base& tx) {
+    std::map<std::string, std::string> group_of;
     for (const auto& r : tx.exec_params(
              "SELECT trainee_id, group_name FROM trainee_groups "
              "WHERE trainee_id IN (SELECT json_array_elements_text($1::json))",
              JsonStringArray(trainee_ids))) {
       group_of[r[0].as<std::string>()] = r[1].as<std::string>();
     }
-    return StoreStatus::Ok();
+    return InKeyOrder(trainee_ids, std::move(group_of));
   });
-  if (!st.ok()) return st;
-  return InKeyOrder(trainee_ids, std::move(group_of));
 }
 
 StoreResult<std::vector<std::string>> PgStore::ListGroupTrainees(const std::string& institution,
                                                                  const std::string& group) {
-  std::vector<std::string> out;
-  StoreStatus st = Transact("list group", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const auto& r : tx.exec_params(
-             "SELECT g.trainee_id FROM trainee_groups g JOIN trainees t ON t.trainee_id = "
-             "g.trainee_id WHERE t.institution = $1 AND g.group_name = $2 "
-             "ORDER BY g.trainee_id COLLATE \"C\"",
-             institution, group)) {
-      out.push_back(r[0].as<std::string>());
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<std::string>>("list group", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(
+                      "SELECT g.trainee_id FROM trainee_groups g JOIN trainees t ON t.trainee_id = "
+                      "g.trainee_id WHERE t.institution = $1 AND g.group_name = $2 "
+                      "ORDER BY g.trainee_id COLLATE \"C\"",
+                      institution, group),
+                  [](const PgColumns& c) { return c.Text(0); });
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreStatus PgStore::AddAssignment(const AssignmentRow& a) {
@@ -224,147 +183,107 @@ StoreStatus PgStore::AddAssignment(const AssignmentRow& a) {
 }
 
 StoreResult<std::vector<AssignmentRow>> PgStore::ListAssignments(const std::string& trainee_id) {
-  std::vector<AssignmentRow> out;
-  StoreStatus st = Transact("list assignments", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const auto& r : tx.exec_params(
-             "SELECT a.curriculum_id, a.assignee_kind, a.assignee, a.institution, "
-             "a.assigned_by, a.assigned_unix_ms FROM curriculum_assignments a "
-             "JOIN trainees t ON t.trainee_id = $1 "
-             "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
-             "WHERE (a.assignee_kind = 'trainee' AND a.assignee = t.trainee_id) "
-             "OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
-             "AND a.institution = t.institution) "
-             "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
-             trainee_id)) {
-      out.push_back({r[0].as<std::string>(), r[1].as<std::string>() == "group",
-                     r[2].as<std::string>(), r[3].as<std::string>(), r[4].as<std::string>(),
-                     r[5].as<int64_t>()});
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<AssignmentRow>>("list assignments", [&](pqxx::transaction_base& tx) {
+    return RowsOf(
+        tx.exec_params("SELECT a.curriculum_id, a.assignee_kind, a.assignee, a.institution, "
+                       "a.assigned_by, a.assigned_unix_ms FROM curriculum_assignments a "
+                       "JOIN trainees t ON t.trainee_id = $1 "
+                       "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
+                       "WHERE (a.assignee_kind = 'trainee' AND a.assignee = t.trainee_id) "
+                       "OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
+                       "AND a.institution = t.institution) "
+                       "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
+                       trainee_id),
+        [](const PgColumns& c) { return AssignmentRowFrom(c); });
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<std::vector<AssignmentRow>>> PgStore::ListAssignmentsOf(
     const std::vector<std::string>& trainee_ids) {
-  std::map<std::string, std::vector<AssignmentRow>> of;
-  StoreStatus st = Transact("list assignments of trainees", TxMode::kRead,
-                            [&](pqxx::transaction_base& tx) {
-    of.clear();
-    // ListAssignments' query for every listed trainee at once, in its order per trainee.
-    for (const auto& r : tx.exec_params(
-             "SELECT t.trainee_id, a.curriculum_id, a.assignee_kind, a.assignee, "
-             "a.institution, a.assigned_by, a.assigned_unix_ms FROM trainees t "
-             "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
-             "JOIN curriculum_assignments a ON (a.assignee_kind = 'trainee' AND a.assignee = "
-             "t.trainee_id) OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
-             "AND a.institution = t.institution) "
-             "WHERE t.trainee_id IN (SELECT json_array_elements_text($1::json)) "
-             "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
-             JsonStringArray(trainee_ids))) {
-      of[r[0].as<std::string>()].push_back(
-          {r[1].as<std::string>(), r[2].as<std::string>() == "group", r[3].as<std::string>(),
-           r[4].as<std::string>(), r[5].as<std::string>(), r[6].as<int64_t>()});
-    }
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return InKeyOrder(trainee_ids, std::move(of));
+  return Query<std::vector<std::vector<AssignmentRow>>>(
+      "list assignments of trainees", [&](pqxx::transaction_base& tx) {
+        std::map<std::string, std::vector<AssignmentRow>> of;
+        // ListAssignments' query for every listed trainee at once, in its order per trainee.
+        for (const auto& r : tx.exec_params(
+                 "SELECT t.trainee_id, a.curriculum_id, a.assignee_kind, a.assignee, "
+                 "a.institution, a.assigned_by, a.assigned_unix_ms FROM trainees t "
+                 "LEFT JOIN trainee_groups g ON g.trainee_id = t.trainee_id "
+                 "JOIN curriculum_assignments a ON (a.assignee_kind = 'trainee' AND a.assignee = "
+                 "t.trainee_id) OR (a.assignee_kind = 'group' AND a.assignee = g.group_name "
+                 "AND a.institution = t.institution) "
+                 "WHERE t.trainee_id IN (SELECT json_array_elements_text($1::json)) "
+                 "ORDER BY a.assigned_unix_ms, a.curriculum_id COLLATE \"C\"",
+                 JsonStringArray(trainee_ids))) {
+          const PgColumns c(r);
+          of[c.Text(0)].push_back(AssignmentRowFrom(c, 1));
+        }
+        return InKeyOrder(trainee_ids, std::move(of));
+      });
 }
 
 StoreResult<bool> PgStore::PutLessonVerdict(const LessonVerdictRow& v) {
-  bool inserted = false;
-  StoreStatus st = Transact("put verdict", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
-            ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) "
-            "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
-        v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
-        v.session_start_unix_ms, v.judged_unix_ms, v.detail, v.rejected ? 1 : 0);
-    inserted = !r.empty();
-    return StoreStatus::Ok();
-  });
-  if (st.code == StoreCode::kInvalidArgument) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + v.session_uuid + "'");
-  }
-  if (!st.ok()) return st;
-  return inserted;
+  return InsertOncePerSession(
+      "put verdict", v.session_uuid,
+      std::string("INSERT INTO lesson_verdicts (") + kVerdictColumns +
+          ") VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10) "
+          "ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
+      v.session_uuid, v.trainee_id, v.curriculum_id, v.lesson_id, v.passed ? 1 : 0, v.score,
+      v.session_start_unix_ms, v.judged_unix_ms, v.detail, v.rejected ? 1 : 0);
 }
 
 StoreResult<LessonVerdictRow> PgStore::GetLessonVerdict(const std::string& session_uuid) {
-  LessonVerdictRow out;
-  StoreStatus st = Transact("get verdict", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(std::string("SELECT ") + kVerdictColumns +
-                                        " FROM lesson_verdicts WHERE session_uuid = $1",
-                                    session_uuid);
-    if (r.empty()) {
-      return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
-    }
-    out = ReadVerdictRow(r[0]);
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<LessonVerdictRow>(
+      "get verdict", [&](pqxx::transaction_base& tx) -> StoreResult<LessonVerdictRow> {
+        pqxx::result r = tx.exec_params(std::string("SELECT ") + kVerdictColumns +
+                                            " FROM lesson_verdicts WHERE session_uuid = $1",
+                                        session_uuid);
+        if (r.empty()) {
+          return StoreStatus::Error(StoreCode::kNotFound, "no verdict for '" + session_uuid + "'");
+        }
+        return VerdictRowFrom(PgColumns(r[0]));
+      });
 }
 
 StoreResult<std::vector<LessonVerdictRow>> PgStore::ListLessonVerdicts(
     const std::string& trainee_id) {
-  std::vector<LessonVerdictRow> out;
-  StoreStatus st = Transact("list verdicts", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const auto& r : tx.exec_params(
-             std::string("SELECT ") + kVerdictColumns +
-                 " FROM lesson_verdicts WHERE trainee_id = $1 "
-                 "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
-             trainee_id)) {
-      out.push_back(ReadVerdictRow(r));
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<LessonVerdictRow>>("list verdicts", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(std::string("SELECT ") + kVerdictColumns +
+                                     " FROM lesson_verdicts WHERE trainee_id = $1 "
+                                     "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
+                                 trainee_id),
+                  VerdictRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<std::vector<std::vector<LessonVerdictRow>>> PgStore::ListLessonVerdictsOf(
     const std::vector<std::string>& trainee_ids) {
-  std::map<std::string, std::vector<LessonVerdictRow>> of;
-  StoreStatus st = Transact("list verdicts of trainees", TxMode::kRead,
-                            [&](pqxx::transaction_base& tx) {
-    of.clear();
-    for (const auto& r : tx.exec_params(
-             std::string("SELECT ") + kVerdictColumns +
-                 " FROM lesson_verdicts WHERE trainee_id IN "
-                 "(SELECT json_array_elements_text($1::json)) "
-                 "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
-             JsonStringArray(trainee_ids))) {
-      LessonVerdictRow v = ReadVerdictRow(r);
-      of[v.trainee_id].push_back(std::move(v));
-    }
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return InKeyOrder(trainee_ids, std::move(of));
+  return Query<std::vector<std::vector<LessonVerdictRow>>>(
+      "list verdicts of trainees", [&](pqxx::transaction_base& tx) {
+        std::map<std::string, std::vector<LessonVerdictRow>> of;
+        for (const auto& r :
+             tx.exec_params(std::string("SELECT ") + kVerdictColumns +
+                                " FROM lesson_verdicts WHERE trainee_id IN "
+                                "(SELECT json_array_elements_text($1::json)) "
+                                "ORDER BY session_start_unix_ms, session_uuid COLLATE \"C\"",
+                            JsonStringArray(trainee_ids))) {
+          LessonVerdictRow v = VerdictRowFrom(PgColumns(r));
+          of[v.trainee_id].push_back(std::move(v));
+        }
+        return InKeyOrder(trainee_ids, std::move(of));
+      });
 }
 
 StoreResult<std::vector<std::string>> PgStore::ListUnjudgedLessonSessions(
     const std::string& trainee_id, int limit) {
-  std::vector<std::string> out;
-  StoreStatus st = Transact("list unjudged", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    for (const auto& r : tx.exec_params(
-             "SELECT l.session_uuid FROM lesson_sessions l JOIN sessions s ON s.uuid = "
-             "l.session_uuid LEFT JOIN lesson_verdicts v ON v.session_uuid = l.session_uuid "
-             "WHERE v.session_uuid IS NULL AND ($1 = '' OR l.trainee_id = $1) "
-             "ORDER BY s.stored_unix_ms, l.session_uuid COLLATE \"C\" LIMIT $2",
-             trainee_id, int64_t{limit})) {
-      out.push_back(r[0].as<std::string>());
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<std::string>>("list unjudged", [&](pqxx::transaction_base& tx) {
+    return RowsOf(
+        tx.exec_params("SELECT l.session_uuid FROM lesson_sessions l JOIN sessions s ON s.uuid = "
+                       "l.session_uuid LEFT JOIN lesson_verdicts v ON v.session_uuid = "
+                       "l.session_uuid WHERE v.session_uuid IS NULL AND ($1 = '' OR l.trainee_id "
+                       "= $1) ORDER BY s.stored_unix_ms, l.session_uuid COLLATE \"C\" LIMIT $2",
+                       trainee_id, int64_t{limit}),
+        [](const PgColumns& c) { return c.Text(0); });
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<int> PgStore::AddJudgeStarts(const std::string& session_uuid, int delta) {

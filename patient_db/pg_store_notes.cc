@@ -3,19 +3,10 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-constexpr const char* kSignOffColumns = "session_uuid, signed_by, signed_by_label, signed_unix_ms";
-
-SessionSignOffRow ReadSignOff(const pqxx::row& r) {
-  return {r[0].as<std::string>(), r[1].as<std::string>(), r[2].as<std::string>(),
-          r[3].as<int64_t>()};
-}
-
-}  // namespace
-
 StoreStatus PgStore::AddSessionNote(const SessionNoteRow& row) {
   StoreStatus bad = CheckSessionNote(row);
   if (!bad.ok()) return bad;
@@ -38,73 +29,46 @@ StoreStatus PgStore::AddSessionNote(const SessionNoteRow& row) {
 
 StoreResult<std::vector<SessionNoteRow>> PgStore::ListSessionNotes(const std::string& session_uuid,
                                                                    int limit) {
-  std::vector<SessionNoteRow> out;
-  StoreStatus st = Transact("list session notes", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r = tx.exec_params(
-        "SELECT note_id, session_uuid, author, author_label, written_unix_ms, text "
-        "FROM session_notes WHERE session_uuid = $1 ORDER BY written_unix_ms, note_id LIMIT $2",
-        session_uuid, int64_t{limit});
-    for (const auto& row : r) {
-      out.push_back({row[0].as<std::string>(), row[1].as<std::string>(), row[2].as<std::string>(),
-                     row[3].as<std::string>(), row[4].as<int64_t>(), row[5].as<std::string>()});
-    }
-    return StoreStatus::Ok();
+  return Query<std::vector<SessionNoteRow>>("list session notes", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params(std::string("SELECT ") + kNoteColumns +
+                                     " FROM session_notes WHERE session_uuid = $1 ORDER BY "
+                                     "written_unix_ms, note_id LIMIT $2",
+                                 session_uuid, int64_t{limit}),
+                  NoteRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 StoreResult<bool> PgStore::SignOffSession(const SessionSignOffRow& row) {
-  bool inserted = false;
-  StoreStatus st = Transact("sign off session", TxMode::kWrite, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
-            ") VALUES ($1, $2, $3, $4) ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
-        row.session_uuid, row.signed_by, row.signed_by_label, row.signed_unix_ms);
-    inserted = !r.empty();
-    return StoreStatus::Ok();
-  });
-  // A foreign key violation: the session is not stored.
-  if (st.code == StoreCode::kInvalidArgument) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
-  }
-  if (!st.ok()) return st;
-  return inserted;
+  return InsertOncePerSession(
+      "sign off session", row.session_uuid,
+      std::string("INSERT INTO session_sign_offs (") + kSignOffColumns +
+          ") VALUES ($1, $2, $3, $4) ON CONFLICT (session_uuid) DO NOTHING RETURNING 1",
+      row.session_uuid, row.signed_by, row.signed_by_label, row.signed_unix_ms);
 }
 
 StoreResult<SessionSignOffRow> PgStore::GetSessionSignOff(const std::string& session_uuid) {
-  SessionSignOffRow out;
-  StoreStatus st = Transact("get sign-off", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(std::string("SELECT ") + kSignOffColumns +
-                                        " FROM session_sign_offs WHERE session_uuid = $1",
-                                    session_uuid);
-    if (r.empty()) {
-      return StoreStatus::Error(StoreCode::kNotFound,
-                                "session '" + session_uuid + "' not signed off");
-    }
-    out = ReadSignOff(r[0]);
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<SessionSignOffRow>(
+      "get sign-off", [&](pqxx::transaction_base& tx) -> StoreResult<SessionSignOffRow> {
+        pqxx::result r = tx.exec_params(std::string("SELECT ") + kSignOffColumns +
+                                            " FROM session_sign_offs WHERE session_uuid = $1",
+                                        session_uuid);
+        if (r.empty()) {
+          return StoreStatus::Error(StoreCode::kNotFound,
+                                    "session '" + session_uuid + "' not signed off");
+        }
+        return SignOffRowFrom(PgColumns(r[0]));
+      });
 }
 
 StoreResult<std::vector<SessionSignOffRow>> PgStore::ListTraineeSignOffs(
     const std::string& trainee_id) {
-  std::vector<SessionSignOffRow> out;
-  StoreStatus st = Transact("list sign-offs", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    out.clear();
-    pqxx::result r = tx.exec_params(
-        "SELECT o.session_uuid, o.signed_by, o.signed_by_label, o.signed_unix_ms "
-        "FROM session_sign_offs o JOIN sessions s ON s.uuid = o.session_uuid "
-        "WHERE s.trainee_id = $1",
-        trainee_id);
-    for (const auto& row : r) out.push_back(ReadSignOff(row));
-    return StoreStatus::Ok();
+  return Query<std::vector<SessionSignOffRow>>("list sign-offs", [&](pqxx::transaction_base& tx) {
+    return RowsOf(tx.exec_params("SELECT o.session_uuid, o.signed_by, o.signed_by_label, "
+                                 "o.signed_unix_ms FROM session_sign_offs o JOIN sessions s "
+                                 "ON s.uuid = o.session_uuid WHERE s.trainee_id = $1",
+                                 trainee_id),
+                  SignOffRowFrom<PgColumns>);
   });
-  if (!st.ok()) return st;
-  return out;
 }
 
 }  // namespace ves::patient_db

@@ -3,6 +3,8 @@
 #include <pqxx/pqxx>
 
 #include "patient_db/pg_store.h"
+#include "patient_db/pg_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 
@@ -27,23 +29,17 @@ StoreStatus PgStore::PutSessionSeries(const SessionSeriesRow& row) {
 }
 
 StoreResult<SessionSeriesRow> PgStore::GetSessionSeries(const std::string& session_uuid) {
-  SessionSeriesRow out;
-  StoreStatus st = Transact("get session series", TxMode::kRead, [&](pqxx::transaction_base& tx) {
-    pqxx::result r = tx.exec_params(
-        "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
-        "WHERE session_uuid = $1",
-        session_uuid);
-    if (r.empty()) {
-      return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
-    }
-    out.session_uuid = r[0][0].as<std::string>();
-    out.format_version = r[0][1].as<int>();
-    out.computed_unix_ms = r[0][2].as<int64_t>();
-    out.json = pqxx::binarystring(r[0][3]).str();
-    return StoreStatus::Ok();
-  });
-  if (!st.ok()) return st;
-  return out;
+  return Query<SessionSeriesRow>(
+      "get session series", [&](pqxx::transaction_base& tx) -> StoreResult<SessionSeriesRow> {
+        pqxx::result r = tx.exec_params(
+            "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
+            "WHERE session_uuid = $1",
+            session_uuid);
+        if (r.empty()) {
+          return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
+        }
+        return SeriesRowFrom(PgColumns(r[0]));
+      });
 }
 
 }  // namespace ves::patient_db

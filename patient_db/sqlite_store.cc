@@ -4,13 +4,11 @@
 
 #include "patient_db/clock.h"
 #include "patient_db/migrations/migrations.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
 
 // A constraint failure is the caller's mistake (unknown institution, ...).
 StoreStatus FromStep(SqliteDb& db, int rc, const std::string& what) {
@@ -18,19 +16,6 @@ StoreStatus FromStep(SqliteDb& db, int rc, const std::string& what) {
     return StoreStatus::Error(StoreCode::kInvalidArgument, what + ": " + db.LastError());
   }
   return Internal(db, what);
-}
-
-// The rows of a prepared audit listing (its columns in AuditRow's order).
-StoreResult<std::vector<AuditRow>> ReadAuditRows(SqliteDb& db, SqliteStatement* s) {
-  int rc = SQLITE_OK;
-  std::vector<AuditRow> out;
-  while (s->Step(&rc)) {
-    out.push_back({s->Int(0), s->Int(1), s->Text(2), s->Text(3), s->Text(4), s->Text(5),
-                   s->Text(6), s->Text(7), s->Text(8)});
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(db, "list audit");
-  return out;
 }
 
 }  // namespace
@@ -107,84 +92,62 @@ void SqliteStore::Migrate() {
 
 StoreStatus SqliteStore::AddInstitution(const std::string& name, int64_t now_unix_ms) {
   std::lock_guard lock(write_mutex_);
-  std::string error;
-  SqliteStatement* s = writer_->Prepare(
-      "INSERT INTO institutions (name, created_unix_ms) VALUES (?, ?) "
-      "ON CONFLICT (name) DO NOTHING",
-      &error);
-  if (!s) return Internal(*writer_, "add institution");
-  s->Bind(1, name).Bind(2, now_unix_ms);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  return rc == SQLITE_OK ? StoreStatus::Ok() : FromStep(*writer_, rc, "add institution");
+  if (Execute(*writer_,
+              "INSERT INTO institutions (name, created_unix_ms) VALUES (?, ?) "
+              "ON CONFLICT (name) DO NOTHING",
+              &rc, name, now_unix_ms)) {
+    return StoreStatus::Ok();
+  }
+  return FromStep(*writer_, rc, "add institution");
 }
 
 StoreResult<bool> SqliteStore::HasInstitution(const std::string& name) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare("SELECT 1 FROM institutions WHERE name = ?", nullptr);
-  if (!s) return Internal(r.db(), "find institution");
-  s->Bind(1, name);
-  int rc = SQLITE_OK;
-  const bool found = s->Step(&rc);
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "find institution");
+  bool found = false;
+  StoreStatus st = ForEachRow(
+      r.db(), "find institution", "SELECT 1 FROM institutions WHERE name = ?",
+      [&](const SqliteStatement&) {
+        found = true;
+        return false;
+      },
+      name);
+  if (!st.ok()) return st;
   return found;
 }
 
 StoreStatus SqliteStore::AddToken(const TokenRow& t) {
   std::lock_guard lock(write_mutex_);
-  SqliteStatement* s = writer_->Prepare(
-      "INSERT INTO tokens (token_sha256_hex, role, institution, trainee_id, label, "
-      "created_unix_ms) VALUES (?, ?, ?, ?, ?, ?)",
-      nullptr);
-  if (!s) return Internal(*writer_, "add token");
-  s->Bind(1, t.token_sha256_hex).Bind(2, RoleName(t.role)).Bind(3, t.institution);
-  s->Bind(4, t.trainee_id).Bind(5, t.label).Bind(6, t.created_unix_ms);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  return rc == SQLITE_OK ? StoreStatus::Ok() : FromStep(*writer_, rc, "add token");
+  if (Execute(*writer_,
+              "INSERT INTO tokens (token_sha256_hex, role, institution, trainee_id, label, "
+              "created_unix_ms) VALUES (?, ?, ?, ?, ?, ?)",
+              &rc, t.token_sha256_hex, RoleName(t.role), t.institution, t.trainee_id, t.label,
+              t.created_unix_ms)) {
+    return StoreStatus::Ok();
+  }
+  return FromStep(*writer_, rc, "add token");
 }
 
 StoreResult<TokenRow> SqliteStore::FindToken(const std::string& token_sha256_hex) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadFirst(
+      r.db(), "find token", "no such token",
       "SELECT role, institution, trainee_id, label, created_unix_ms FROM tokens "
       "WHERE token_sha256_hex = ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "find token");
-  s->Bind(1, token_sha256_hex);
-  int rc = SQLITE_OK;
-  TokenRow t;
-  const bool found = s->Step(&rc);
-  if (found) {
-    t.token_sha256_hex = token_sha256_hex;
-    ParseRoleName(s->Text(0), &t.role);
-    t.institution = s->Text(1);
-    t.trainee_id = s->Text(2);
-    t.label = s->Text(3);
-    t.created_unix_ms = s->Int(4);
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "find token");
-  if (!found) return StoreStatus::Error(StoreCode::kNotFound, "no such token");
-  return t;
+      [&](const SqliteStatement& s) { return TokenRowFrom(s, token_sha256_hex); },
+      token_sha256_hex);
 }
 
 StoreStatus SqliteStore::AddTrainee(const TraineeRow& t) {
   std::lock_guard lock(write_mutex_);
-  SqliteStatement* s = writer_->Prepare(
-      "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
-      "VALUES (?, ?, ?, ?)",
-      nullptr);
-  if (!s) return Internal(*writer_, "add trainee");
-  s->Bind(1, t.trainee_id).Bind(2, t.institution).Bind(3, t.display_name);
-  s->Bind(4, t.created_unix_ms);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  if (rc == SQLITE_OK) return StoreStatus::Ok();
+  if (Execute(*writer_,
+              "INSERT INTO trainees (trainee_id, institution, display_name, created_unix_ms) "
+              "VALUES (?, ?, ?, ?)",
+              &rc, t.trainee_id, t.institution, t.display_name, t.created_unix_ms)) {
+    return StoreStatus::Ok();
+  }
   if (rc == SQLITE_CONSTRAINT_PRIMARYKEY) {
     return StoreStatus::Error(StoreCode::kAlreadyExists,
                               "trainee '" + t.trainee_id + "' already exists");
@@ -194,66 +157,48 @@ StoreStatus SqliteStore::AddTrainee(const TraineeRow& t) {
 
 StoreResult<TraineeRow> SqliteStore::GetTrainee(const std::string& trainee_id) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadFirst(
+      r.db(), "get trainee", "no trainee '" + trainee_id + "'",
       "SELECT institution, display_name, created_unix_ms FROM trainees WHERE trainee_id = ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "get trainee");
-  s->Bind(1, trainee_id);
-  int rc = SQLITE_OK;
-  TraineeRow t;
-  const bool found = s->Step(&rc);
-  if (found) t = {trainee_id, s->Text(0), s->Text(1), s->Int(2)};
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "get trainee");
-  if (!found) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no trainee '" + trainee_id + "'");
-  }
-  return t;
+      [&](const SqliteStatement& s) {
+        return TraineeRow{trainee_id, s.Text(0), s.Text(1), s.Int(2)};
+      },
+      trainee_id);
 }
 
 StoreResult<std::vector<TraineeRow>> SqliteStore::ListTrainees(const std::string& institution,
                                                                const ListPage& page) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadRows(
+      r.db(), "list trainees",
       "SELECT trainee_id, institution, display_name, created_unix_ms FROM trainees "
       "WHERE institution = ? AND (? = 0 OR trainee_id > ?) ORDER BY trainee_id LIMIT ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "list trainees");
-  s->Bind(1, institution).Bind(2, int64_t{page.has_after}).Bind(3, page.after_text);
-  s->Bind(4, int64_t{page.limit > 0 ? page.limit : -1});
-  int rc = SQLITE_OK;
-  std::vector<TraineeRow> out;
-  while (s->Step(&rc)) out.push_back({s->Text(0), s->Text(1), s->Text(2), s->Int(3)});
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list trainees");
-  return out;
+      TraineeRowFrom<SqliteStatement>,
+      institution, int64_t{page.has_after}, page.after_text,
+      int64_t{page.limit > 0 ? page.limit : -1});
 }
 
 StoreResult<std::vector<AuditRow>> SqliteStore::ListAudit(int64_t since_unix_ms, int limit,
                                                          int64_t after_id) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadRows(
+      r.db(), "list audit",
       "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
       "FROM audit_log WHERE at_unix_ms >= ? AND id > ? ORDER BY id LIMIT ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "list audit");
-  s->Bind(1, since_unix_ms).Bind(2, after_id).Bind(3, int64_t{limit});
-  return ReadAuditRows(r.db(), s);
+      AuditRowFrom<SqliteStatement>, since_unix_ms, after_id, int64_t{limit});
 }
 
 StoreResult<std::vector<AuditRow>> SqliteStore::ListAuditNewest(const AuditQuery& q) {
   Reader r = Read();
   // An empty or zero filter matches every row: one statement serves all.
-  SqliteStatement* s = r.db().Prepare(
+  return ReadRows(
+      r.db(), "list audit",
       "SELECT id, at_unix_ms, actor, actor_label, role, institution, action, target, result "
       "FROM audit_log WHERE (?1 = '' OR actor = ?1 OR actor_label = ?1) "
       "AND (?2 = '' OR action = ?2) AND at_unix_ms >= ?3 AND (?4 = 0 OR at_unix_ms < ?4) "
       "AND (?5 = 0 OR id < ?5) ORDER BY id DESC LIMIT ?6",
-      nullptr);
-  if (!s) return Internal(r.db(), "list audit");
-  s->Bind(1, q.actor).Bind(2, q.action).Bind(3, q.from_unix_ms).Bind(4, q.to_unix_ms);
-  s->Bind(5, q.before_id).Bind(6, int64_t{q.limit > 0 ? q.limit : -1});
-  return ReadAuditRows(r.db(), s);
+      AuditRowFrom<SqliteStatement>, q.actor, q.action, q.from_unix_ms, q.to_unix_ms, q.before_id,
+      int64_t{q.limit > 0 ? q.limit : -1});
 }
 
 StoreStatus SqliteStore::WriteAudit(const AuditRow& a) {

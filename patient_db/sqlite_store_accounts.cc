@@ -3,58 +3,26 @@
 #include <optional>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
 namespace {
 
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-constexpr const char* kAccountColumns =
-    "username, role, institution, password_hash, idp_identity, created_unix_ms, "
-    "expires_unix_ms, revoked_unix_ms";
-
-AccountRow ReadAccountRow(const SqliteStatement& s) {
-  AccountRow a;
-  a.username = s.Text(0);
-  ParseRoleName(s.Text(1), &a.role);
-  a.institution = s.Text(2);
-  a.password_hash = s.Text(3);
-  a.idp_identity = s.Text(4);
-  a.created_unix_ms = s.Int(5);
-  a.expires_unix_ms = s.Int(6);
-  a.revoked_unix_ms = s.Int(7);
-  return a;
-}
-
 // One account by `column` (username or idp_identity).
 StoreResult<AccountRow> ReadOne(SqliteDb& db, const char* column, const std::string& value) {
-  SqliteStatement* s = db.Prepare(std::string("SELECT ") + kAccountColumns +
-                                      " FROM accounts WHERE " + column + " = ?",
-                                  nullptr);
-  if (!s) return Internal(db, "get account");
-  s->Bind(1, value);
-  int rc = SQLITE_OK;
-  std::optional<AccountRow> row;
-  if (s->Step(&rc)) row = ReadAccountRow(*s);
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(db, "get account");
-  if (!row) return StoreStatus::Error(StoreCode::kNotFound, "no such account");
-  return std::move(*row);
+  return ReadFirst(
+      db, "get account", "no such account",
+      std::string("SELECT ") + kAccountColumns + " FROM accounts WHERE " + column + " = ?",
+      AccountRowFrom<SqliteStatement>, value);
 }
 
 // An UPDATE of one account by username: kNotFound when no row changed.
 template <typename Value>
 StoreStatus UpdateOne(SqliteDb& db, const char* sql, const Value& value,
                       const std::string& username, const std::string& what) {
-  SqliteStatement* s = db.Prepare(sql, nullptr);
-  if (!s) return Internal(db, what);
-  s->Bind(1, value).Bind(2, username);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(db, what);
+  if (!Execute(db, sql, &rc, value, username)) return Internal(db, what);
   if (sqlite3_changes(db.raw()) == 0) {
     return StoreStatus::Error(StoreCode::kNotFound, "no account '" + username + "'");
   }
@@ -77,18 +45,15 @@ StoreStatus SqliteStore::AddAccount(const AccountRow& a) {
     }
     if (found.status.code != StoreCode::kNotFound) return found.status;
   }
-  SqliteStatement* s = db.Prepare(std::string("INSERT INTO accounts (") + kAccountColumns +
-                                      ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                                  nullptr);
-  if (!s) return Internal(db, "add account");
-  s->Bind(1, a.username).Bind(2, RoleName(a.role)).Bind(3, a.institution);
-  s->Bind(4, a.password_hash).Bind(5, a.idp_identity).Bind(6, a.created_unix_ms);
-  s->Bind(7, a.expires_unix_ms).Bind(8, a.revoked_unix_ms);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  if (rc == SQLITE_OK) return StoreStatus::Ok();
-  if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+  if (Execute(db,
+              std::string("INSERT INTO accounts (") + kAccountColumns +
+                  ") VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+              &rc, a.username, RoleName(a.role), a.institution, a.password_hash, a.idp_identity,
+              a.created_unix_ms, a.expires_unix_ms, a.revoked_unix_ms)) {
+    return StoreStatus::Ok();
+  }
+  if (IsConstraint(rc)) {
     return StoreStatus::Error(StoreCode::kInvalidArgument, "add account: " + db.LastError());
   }
   return Internal(db, "add account");
@@ -107,18 +72,10 @@ StoreResult<AccountRow> SqliteStore::FindAccountByIdentity(const std::string& id
 
 StoreResult<std::vector<AccountRow>> SqliteStore::ListAccounts(const std::string& institution) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(std::string("SELECT ") + kAccountColumns +
-                                          " FROM accounts WHERE ? = '' OR institution = ? "
-                                          "ORDER BY username",
-                                      nullptr);
-  if (!s) return Internal(r.db(), "list accounts");
-  s->Bind(1, institution).Bind(2, institution);
-  int rc = SQLITE_OK;
-  std::vector<AccountRow> out;
-  while (s->Step(&rc)) out.push_back(ReadAccountRow(*s));
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "list accounts");
-  return out;
+  return ReadRows(r.db(), "list accounts",
+                  std::string("SELECT ") + kAccountColumns +
+                      " FROM accounts WHERE ? = '' OR institution = ? ORDER BY username",
+                  AccountRowFrom<SqliteStatement>, institution, institution);
 }
 
 StoreStatus SqliteStore::RevokeAccount(const std::string& username, int64_t now_unix_ms) {

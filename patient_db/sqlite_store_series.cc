@@ -3,16 +3,10 @@
 #include <optional>
 
 #include "patient_db/sqlite_store.h"
+#include "patient_db/sqlite_store_internal.h"
+#include "patient_db/store_rows.h"
 
 namespace ves::patient_db {
-namespace {
-
-StoreStatus Internal(SqliteDb& db, const std::string& what) {
-  return StoreStatus::Error(StoreCode::kInternal, what + ": " + db.LastError());
-}
-
-}  // namespace
-
 StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
   StoreStatus bad = CheckSessionSeries(row);
   if (!bad.ok()) return bad;
@@ -27,9 +21,8 @@ StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
   s->Bind(1, row.session_uuid).Bind(2, int64_t{row.format_version});
   s->Bind(3, row.computed_unix_ms).BindBlob(4, row.json);
   int rc = SQLITE_OK;
-  s->Step(&rc);
-  s->Reset();
-  if ((rc & 0xff) == SQLITE_CONSTRAINT) {
+  Run(s, &rc);
+  if (IsConstraint(rc)) {
     return StoreStatus::Error(StoreCode::kNotFound, "no session '" + row.session_uuid + "'");
   }
   if (rc != SQLITE_OK) return Internal(*writer_, "put session series");
@@ -38,23 +31,12 @@ StoreStatus SqliteStore::PutSessionSeries(const SessionSeriesRow& row) {
 
 StoreResult<SessionSeriesRow> SqliteStore::GetSessionSeries(const std::string& session_uuid) {
   Reader r = Read();
-  SqliteStatement* s = r.db().Prepare(
+  return ReadFirst(
+      r.db(), "get session series", "no series for '" + session_uuid + "'",
       "SELECT session_uuid, format_version, computed_unix_ms, series FROM session_series "
       "WHERE session_uuid = ?",
-      nullptr);
-  if (!s) return Internal(r.db(), "get session series");
-  s->Bind(1, session_uuid);
-  int rc = SQLITE_OK;
-  std::optional<SessionSeriesRow> row;
-  if (s->Step(&rc)) {
-    row = SessionSeriesRow{s->Text(0), static_cast<int>(s->Int(1)), s->Int(2), s->Blob(3)};
-  }
-  s->Reset();
-  if (rc != SQLITE_OK) return Internal(r.db(), "get session series");
-  if (!row) {
-    return StoreStatus::Error(StoreCode::kNotFound, "no series for '" + session_uuid + "'");
-  }
-  return std::move(*row);
+      SeriesRowFrom<SqliteStatement>,
+      session_uuid);
 }
 
 }  // namespace ves::patient_db

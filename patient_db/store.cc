@@ -77,12 +77,50 @@ std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string&
   std::sort(added.begin(), added.end());
   added.erase(std::unique(added.begin(), added.end()), added.end());
   if (!added.empty() && requested_owner != stored.institution) {
-    *refusal = "case '" + stored.case_id + "' version " + std::to_string(stored.version) +
-               " is owned by institution '" + stored.institution +
+    *refusal = CaseVersionName(stored) + " is owned by institution '" + stored.institution +
                "': only its owner can share it (upload it again for that institution)";
     return {};
   }
   return added;
+}
+
+std::string CaseVersionName(const CaseRow& row) {
+  return "case '" + row.case_id + "' version " + std::to_string(row.version);
+}
+
+CasePutPlan PlanCasePut(const CaseRow* stored, const CaseRow& row, uint64_t size_bytes) {
+  CasePutPlan plan;
+  if (stored == nullptr) {
+    plan.new_shares = row.shared_with;
+    std::sort(plan.new_shares.begin(), plan.new_shares.end());
+    plan.new_shares.erase(std::unique(plan.new_shares.begin(), plan.new_shares.end()),
+                          plan.new_shares.end());
+    plan.new_shares.erase(
+        std::remove(plan.new_shares.begin(), plan.new_shares.end(), row.institution),
+        plan.new_shares.end());
+    plan.result.row = row;
+    plan.result.row.size_bytes = size_bytes;
+    plan.result.row.shared_with = plan.new_shares;
+    return plan;
+  }
+  if (stored->sha256_hex != row.sha256_hex) {
+    plan.status =
+        StoreStatus::Error(StoreCode::kAlreadyExists,
+                           CaseVersionName(row) + " is already stored with other content (sha256 " +
+                               stored->sha256_hex + "); give the new content a higher version");
+    return plan;
+  }
+  std::string refusal;
+  plan.new_shares = NewCaseShares(*stored, row.institution, row.shared_with, &refusal);
+  if (!refusal.empty()) {
+    plan.status = StoreStatus::Error(StoreCode::kAlreadyExists, refusal);
+    return plan;
+  }
+  plan.result = {*stored, /*already_stored=*/true};
+  std::vector<std::string>& shares = plan.result.row.shared_with;
+  shares.insert(shares.end(), plan.new_shares.begin(), plan.new_shares.end());
+  std::sort(shares.begin(), shares.end());
+  return plan;
 }
 
 std::unique_ptr<Store> OpenStore(const std::string& url) {

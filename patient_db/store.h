@@ -166,6 +166,22 @@ std::vector<std::string> NewCaseShares(const CaseRow& stored, const std::string&
                                        const std::vector<std::string>& requested,
                                        std::string* refusal);
 
+// "case 'ID' version N", as the stores' messages name a case version.
+std::string CaseVersionName(const CaseRow& row);
+
+// What Store::PutCase does with `row` (its payload `size_bytes` long) given
+// the row already stored under its id and version (`stored`, with its shares;
+// null when none): the rule of case sharing, for every store. The status is
+// kAlreadyExists when `stored` has other content or when an institution
+// other than the owner asks for new shares; otherwise the store writes the
+// case (only when `stored` is null) and `new_shares`, and answers `result`.
+struct CasePutPlan {
+  StoreStatus status;
+  std::vector<std::string> new_shares;  // rows to add to case_shares, sorted
+  PutCaseResult result;                 // shared_with sorted, new shares included
+};
+CasePutPlan PlanCasePut(const CaseRow* stored, const CaseRow& row, uint64_t size_bytes);
+
 // `ids` as a JSON array of strings: how the stores pass a list of keys to one
 // query (SQLite json_each, PostgreSQL json_array_elements_text). Pure.
 std::string JsonStringArray(const std::vector<std::string>& ids);

@@ -22,6 +22,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/server/bench_server.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
 #include "server/client.h"
@@ -69,16 +70,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "live_bench: --stations in 1..500, --seconds in (0, 120]\n");
     return 2;
   }
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("ves-live-bench-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  ves::server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.insecure_loopback = true;
-  options.log_calls = false;
-  options.http_listen = "127.0.0.1:0";
-  auto server = std::make_unique<ves::server::VesServer>(
-      options, ves::patient_db::OpenStore("sqlite:" + (dir / "ves.db").string()));
+  const auto dir = ves::bench::ScratchDir("ves-live-bench-");
+  auto server = ves::bench::LoopbackServer(dir, /*http=*/true);
   auto& store = server->store();
   store.AddInstitution("north", 1);
   const std::string station_token = ves::server::NewToken();

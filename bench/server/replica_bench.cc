@@ -30,11 +30,12 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/server/bench_server.h"
 #include "patient_db/case_format.h"
 #include "patient_db/pg_store.h"
-#include "station/training/input_log.h"
 #include "server/auth.h"
 #include "server/client.h"
+#include "station/training/input_log.h"
 #include "ves/v1/services.grpc.pb.h"
 
 namespace {
@@ -74,18 +75,7 @@ constexpr char kCaseFile[] = VES_SOURCE_DIR "/patient_db/cases/standard-adult.te
 
 // A record of realistic size (a few KiB with its input log).
 ves::v1::SessionRecord Record(std::mt19937_64& rng, int i) {
-  ves::v1::SessionRecord r;
-  r.set_uuid(Uuid(rng));
-  r.set_trainee_id("bench-trainee");
-  r.set_case_id("standard-adult");
-  r.set_case_version(1);
-  r.set_station_id("bench-station");
-  r.set_start_unix_ms(1'700'000'000'000 + i);
-  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
-  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
-  r.mutable_metrics()->set_duration_s(300);
-  r.mutable_metrics()->set_completed(true);
-  r.mutable_metrics()->set_time_to_cecum_s(200);
+  ves::v1::SessionRecord r = ves::bench::BenchRecord(Uuid(rng), 1'700'000'000'000 + i);
   r.set_score(75);
   // A well-formed log (its header is checked at upload) of 1000 steps.
   std::vector<ves::training::InputSample> samples(1000);
@@ -282,15 +272,7 @@ int main(int argc, char** argv) {
       store.AddInstitution("bench", 1);
       store.AddTrainee({"bench-trainee", "bench", "Bench", 1});
       // The case the records name (the server refuses sessions of unknown cases).
-      const auto colon_case = ves::patient_db::LoadCaseFile(kCaseFile);
-      const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
-      ves::patient_db::CaseRow row;
-      row.case_id = colon_case.id();
-      row.version = colon_case.version();
-      row.institution = "bench";
-      row.sha256_hex = ves::server::Sha256Hex(bundle);
-      row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
-      store.PutCase(row, bundle);
+      ves::bench::PutBenchCase(store, ves::patient_db::LoadCaseFile(kCaseFile), "bench");
       store.AddToken({ves::server::Sha256Hex(token), ves::patient_db::StoreRole::kStation,
                       "bench", "", "bench", 1});
     }

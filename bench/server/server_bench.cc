@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/server/bench_server.h"
 #include "patient_db/case_format.h"
 #include "patient_db/sqlite_db.h"
 #include "server/client.h"
@@ -62,18 +63,7 @@ const ves::v1::InputLog& InputLogBytes() {
 
 // A session record of typical size: metrics, a few events, a 1 KiB input log.
 ves::v1::SessionRecord Record(const std::string& uuid, int seed) {
-  ves::v1::SessionRecord r;
-  r.set_uuid(uuid);
-  r.set_trainee_id("bench-trainee");
-  r.set_case_id("standard-adult");
-  r.set_case_version(1);
-  r.set_station_id("bench-station");
-  r.set_start_unix_ms(1'700'000'000'000 + seed);
-  r.set_end_unix_ms(r.start_unix_ms() + 300'000);
-  r.set_outcome(ves::v1::OUTCOME_CECUM_REACHED);
-  r.mutable_metrics()->set_duration_s(300);
-  r.mutable_metrics()->set_completed(true);
-  r.mutable_metrics()->set_time_to_cecum_s(200);
+  ves::v1::SessionRecord r = ves::bench::BenchRecord(uuid, 1'700'000'000'000 + seed);
   r.mutable_metrics()->set_pain_s(4);
   r.set_score(70);
   for (int i = 0; i < 8; ++i) {
@@ -214,36 +204,22 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--case-mb")) case_mb = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--case-file")) case_file = argv[i + 1];
   }
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("ves_server_bench_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = ves::bench::ScratchDir("ves_server_bench_");
   std::printf("server_bench: %u hardware threads, %.1f s per measurement, db in %s\n",
               std::thread::hardware_concurrency(), seconds, dir.c_str());
 
   std::printf("raw SQLite single-row commits (WAL, synchronous=FULL): %.0f commits/s\n",
               RawSqliteCommitsPerSecond(dir, seconds));
 
-  ves::server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.insecure_loopback = true;
-  options.log_calls = false;
-  ves::server::VesServer server(options,
-                                ves::patient_db::OpenStore("sqlite:" + (dir / "ves.db").string()));
+  const auto server_ptr = ves::bench::LoopbackServer(dir, /*http=*/false);
+  ves::server::VesServer& server = *server_ptr;
   server.Start();
   auto& store = server.store();
   store.AddInstitution("bench", 1);
   store.AddTrainee({"bench-trainee", "bench", "Bench", 1});
   {
     // The case the records name (the server refuses sessions of unknown cases).
-    const auto plain = ves::patient_db::LoadCaseFile(case_file);
-    const std::string plain_bundle = ves::patient_db::EncodeCaseBundle(plain);
-    ves::patient_db::CaseRow row;
-    row.case_id = plain.id();
-    row.version = plain.version();
-    row.institution = "bench";
-    row.sha256_hex = ves::server::Sha256Hex(plain_bundle);
-    row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(plain);
-    store.PutCase(row, plain_bundle);
+    ves::bench::PutBenchCase(store, ves::patient_db::LoadCaseFile(case_file), "bench");
   }
   const std::string token = ves::server::NewToken();
   store.AddToken({ves::server::Sha256Hex(token), ves::patient_db::StoreRole::kAdmin, "bench",
@@ -277,14 +253,7 @@ int main(int argc, char** argv) {
   colon_case.mutable_mucosa_texture()->set_media_type("image/png");
   colon_case.mutable_mucosa_texture()->set_image(image);
   colon_case.set_version(colon_case.version() + 1);  // the records' version stays as it is
-  const std::string bundle = ves::patient_db::EncodeCaseBundle(colon_case);
-  ves::patient_db::CaseRow row;
-  row.case_id = colon_case.id();
-  row.version = colon_case.version();
-  row.institution = "bench";
-  row.sha256_hex = ves::server::Sha256Hex(bundle);
-  row.payload_sha256_hex = ves::patient_db::CasePayloadSha256Hex(colon_case);
-  store.PutCase(row, bundle);
+  const std::string bundle = ves::bench::PutBenchCase(store, colon_case, "bench");
   const double grpc_mbps = DownloadMBps(client, colon_case.id(), bundle.size());
   const double tcp_mbps = RawTcpMBps(bundle);
   std::printf("case download, %.1f MB bundle, plaintext loopback:\n", bundle.size() / 1e6);

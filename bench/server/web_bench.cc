@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/server/bench_server.h"
 #include "bench/server/web_latency.h"
 #include "patient_db/case_format.h"
 #include "patient_db/store.h"
@@ -43,6 +44,12 @@ using Clock = std::chrono::steady_clock;
 
 using Stats = ves::bench::LatencyStats;
 constexpr auto Measure = ves::bench::MeasureGets;
+
+// One row of the latency table.
+void PrintRow(const char* label, const Stats& stats, int requests) {
+  std::printf("  %s  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n", label,
+              stats.p50_ms, stats.p99_ms, stats.max_ms, requests);
+}
 
 // One load of a session page: what session.html asks for, one after another
 // (a browser asks some of them at once: this is the slower case).
@@ -97,16 +104,8 @@ int main(int argc, char** argv) {
   }
   const int trainees = 100;
   const int per_trainee = total_sessions / trainees;
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("ves-web-bench-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  ves::server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.insecure_loopback = true;
-  options.log_calls = false;
-  options.http_listen = "127.0.0.1:0";
-  auto server = std::make_unique<ves::server::VesServer>(
-      options, ves::patient_db::OpenStore("sqlite:" + (dir / "ves.db").string()));
+  const auto dir = ves::bench::ScratchDir("ves-web-bench-");
+  auto server = ves::bench::LoopbackServer(dir, /*http=*/true);
   auto& store = server->store();
   store.AddInstitution("north", 1);
 
@@ -268,25 +267,13 @@ int main(int argc, char** argv) {
       MeasurePage({"/api/v1/sessions/" + uuid + "/series"}, port, token, page_loads, &series_bytes);
   const double cpu = CpuSeconds() - cpu0;
   const double wall = std::chrono::duration<double>(Clock::now() - wall0).count();
-  std::printf(
-      "  GET trainees/{id}/curve     p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-      c.p50_ms, c.p99_ms, c.max_ms, requests);
-  std::printf(
-      "  GET trainees/{id}/sessions  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-      s.p50_ms, s.p99_ms, s.max_ms, requests);
-  std::printf(
-      "  GET trainees (list, 100)    p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-      l.p50_ms, l.p99_ms, l.max_ms, std::max(10, requests / 10));
-  std::printf(
-      "  GET trainees/{id}/sessions.csv  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-      x.p50_ms, x.p99_ms, x.max_ms, requests);
-  std::printf(
-      "  GET audit (newest 50 of 100k)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms  (%d requests)\n",
-      an.p50_ms, an.p99_ms, an.max_ms, std::max(10, requests / 10));
-  std::printf(
-      "  GET audit (actor+action, none of 100k match)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
-      "  (%d requests)\n",
-      ar.p50_ms, ar.p99_ms, ar.max_ms, std::max(10, requests / 10));
+  const int list_requests = std::max(10, requests / 10);
+  PrintRow("GET trainees/{id}/curve   ", c, requests);
+  PrintRow("GET trainees/{id}/sessions", s, requests);
+  PrintRow("GET trainees (list, 100)  ", l, list_requests);
+  PrintRow("GET trainees/{id}/sessions.csv", x, requests);
+  PrintRow("GET audit (newest 50 of 100k)", an, list_requests);
+  PrintRow("GET audit (actor+action, none of 100k match)", ar, list_requests);
   std::printf(
       "  session page, first load (6 requests, %.0f KB)  p50 %6.2f ms  p99 %6.2f ms  max %6.2f ms"
       "  (%d loads)\n",

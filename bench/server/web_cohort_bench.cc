@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/server/bench_server.h"
 #include "bench/server/web_latency.h"
 #include "patient_db/store.h"
 #include "server/auth.h"
@@ -136,16 +137,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   const int per_trainee = total_sessions / trainees;
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("ves-web-cohort-bench-" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  ves::server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.insecure_loopback = true;
-  options.log_calls = false;
-  options.http_listen = "127.0.0.1:0";
-  auto server = std::make_unique<ves::server::VesServer>(
-      options, ves::patient_db::OpenStore("sqlite:" + (dir / "ves.db").string()));
+  const auto dir = ves::bench::ScratchDir("ves-web-cohort-bench-");
+  auto server = ves::bench::LoopbackServer(dir, /*http=*/true);
   const auto t_seed = Clock::now();
   if (!Seed(server->store(), trainees, per_trainee, group_size)) {
     std::fprintf(stderr, "web_cohort_bench: cannot seed the store\n");

@@ -1,10 +1,17 @@
 #include "patient_db/migrations/migrations.h"
 
 namespace ves::patient_db {
+namespace {
 
-const std::vector<Migration>& SqlMigrations() {
-  static const std::vector<Migration> kMigrations = {
-      {1, "institutions, tokens, trainees, cases, sessions, audit log", R"sql(
+// One schema version: its number, what it adds, and its portable SQL.
+struct MigrationText {
+  int version;
+  const char* description;
+  const char* sql;
+};
+
+constexpr MigrationText kMigrationTexts[] = {
+    {1, "institutions, tokens, trainees, cases, sessions, audit log", R"sql(
 CREATE TABLE institutions (
   name TEXT PRIMARY KEY,
   created_unix_ms BIGINT NOT NULL
@@ -82,7 +89,7 @@ CREATE TABLE audit_log (
 );
 CREATE INDEX audit_by_time ON audit_log(at_unix_ms);
 )sql"},
-      {2, "lessons: curricula, groups, assignments, lesson sessions, verdicts", R"sql(
+    {2, "lessons: curricula, groups, assignments, lesson sessions, verdicts", R"sql(
 CREATE TABLE curricula (
   curriculum_id TEXT PRIMARY KEY,
   institution TEXT NOT NULL REFERENCES institutions(name),
@@ -128,15 +135,15 @@ CREATE TABLE lesson_verdicts (
 );
 CREATE INDEX lesson_verdicts_by_trainee ON lesson_verdicts(trainee_id, session_start_unix_ms);
 )sql"},
-      {3, "hardening: rejected lesson verdicts, judge starts", R"sql(
+    {3, "hardening: rejected lesson verdicts, judge starts", R"sql(
 ALTER TABLE lesson_verdicts ADD COLUMN rejected INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE lesson_sessions ADD COLUMN judge_starts INTEGER NOT NULL DEFAULT 0;
 )sql"},
-      {4, "sessions: who operated and how deep the tip got, for listings", R"sql(
+    {4, "sessions: who operated and how deep the tip got, for listings", R"sql(
 ALTER TABLE sessions ADD COLUMN operator_kind TEXT NOT NULL DEFAULT '';
 ALTER TABLE sessions ADD COLUMN max_tip_arc_m DOUBLE PRECISION NOT NULL DEFAULT 0;
 )sql"},
-      {5, "stations: last seen, software version and health, reported with uploads", R"sql(
+    {5, "stations: last seen, software version and health, reported with uploads", R"sql(
 CREATE TABLE stations (
   institution TEXT NOT NULL REFERENCES institutions(name),
   station_id TEXT NOT NULL,
@@ -160,7 +167,7 @@ CREATE TABLE stations (
   PRIMARY KEY (institution, station_id)
 );
 )sql"},
-      {6, "session series: the web pages' plots and replay track, computed once", R"sql(
+    {6, "session series: the web pages' plots and replay track, computed once", R"sql(
 CREATE TABLE session_series (
   session_uuid TEXT PRIMARY KEY REFERENCES sessions(uuid),
   format_version INTEGER NOT NULL,
@@ -168,13 +175,13 @@ CREATE TABLE session_series (
   series BLOB NOT NULL
 );
 )sql"},
-      // -1: not known (stored before version 7; the record's body has it).
-      {7, "sessions: loop and X-ray time for cohort listings; scripted runs by case", R"sql(
+    // -1: not known (stored before version 7; the record's body has it).
+    {7, "sessions: loop and X-ray time for cohort listings; scripted runs by case", R"sql(
 ALTER TABLE sessions ADD COLUMN loop_s DOUBLE PRECISION NOT NULL DEFAULT -1;
 ALTER TABLE sessions ADD COLUMN xray_s DOUBLE PRECISION NOT NULL DEFAULT -1;
 CREATE INDEX sessions_by_case_operator ON sessions(institution, case_id, operator_kind, start_unix_ms);
 )sql"},
-      {8, "accounts: people who sign in to the web pages (password or identity provider)", R"sql(
+    {8, "accounts: people who sign in to the web pages (password or identity provider)", R"sql(
 CREATE TABLE accounts (
   username TEXT PRIMARY KEY,
   role TEXT NOT NULL,
@@ -188,7 +195,7 @@ CREATE TABLE accounts (
 CREATE UNIQUE INDEX accounts_by_idp_identity ON accounts(idp_identity) WHERE idp_identity <> '';
 CREATE INDEX accounts_by_institution ON accounts(institution, username);
 )sql"},
-      {9, "session notes and sign-offs: supervisors' workflow on the web pages", R"sql(
+    {9, "session notes and sign-offs: supervisors' workflow on the web pages", R"sql(
 CREATE TABLE session_notes (
   note_id TEXT PRIMARY KEY,
   session_uuid TEXT NOT NULL REFERENCES sessions(uuid),
@@ -205,12 +212,21 @@ CREATE TABLE session_sign_offs (
   signed_unix_ms BIGINT NOT NULL
 );
 )sql"},
-      // The trainee list's count and latest end per trainee read from the
-      // index alone (GetTraineeActivity; 10,000 sessions: 16 ms -> 1 ms).
-      {10, "sessions: each trainee's sessions by end time, for the trainee list", R"sql(
+    // The trainee list's count and latest end per trainee read from the
+    // index alone (GetTraineeActivity; 10,000 sessions: 16 ms -> 1 ms).
+    {10, "sessions: each trainee's sessions by end time, for the trainee list", R"sql(
 CREATE INDEX sessions_by_trainee_end ON sessions(trainee_id, end_unix_ms);
 )sql"},
-  };
+};
+
+}  // namespace
+
+const std::vector<Migration>& SqlMigrations() {
+  static const std::vector<Migration> kMigrations = [] {
+    std::vector<Migration> out;
+    for (const MigrationText& m : kMigrationTexts) out.push_back({m.version, m.description, m.sql});
+    return out;
+  }();
   return kMigrations;
 }
 

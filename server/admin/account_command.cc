@@ -9,10 +9,10 @@
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
-#include <chrono>
 #include <ctime>
 #include <iostream>
 
+#include "patient_db/clock.h"
 #include "patient_db/store.h"
 #include "patient_db/store_factory.h"
 #include "server/accounts.h"
@@ -24,12 +24,6 @@ namespace {
 namespace po = boost::program_options;
 using patient_db::AccountRow;
 using patient_db::StoreRole;
-
-int64_t NowMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // "YYYY-MM-DD" as 00:00 UTC of that day, in ms; -1 when malformed.
 int64_t ParseDate(const std::string& text) {
@@ -90,14 +84,96 @@ std::string OsUser() {
 patient_db::StoreStatus Audit(patient_db::Store& store, const std::string& action,
                               const AccountRow& account) {
   patient_db::WriteBatch batch;
-  batch.audit.push_back({0, NowMs(), "ves-admin", OsUser(), "admin", account.institution, action,
-                         account.username, "OK"});
+  batch.audit.push_back({0, patient_db::NowUnixMs(), "ves-admin", OsUser(), "admin",
+                         account.institution, action, account.username, "OK"});
   return store.CommitBatch(batch).status;
 }
 
 int Fail(const std::string& message, int status) {
   std::cerr << "ves-admin account: " << message << "\n";
   return status;
+}
+
+// The command line's options (a verb takes the ones it needs).
+struct AccountOptions {
+  std::string db;
+  std::string username;
+  std::string role_name;
+  std::string institution;
+  std::string expires;
+  std::string idp_identity;
+  bool no_password = false;
+};
+
+int CreateAccount(const AccountOptions& o) {
+  AccountRow a;
+  a.username = o.username;
+  if (!patient_db::ParseRoleName(o.role_name, &a.role) ||
+      (a.role != StoreRole::kAdmin && a.role != StoreRole::kSupervisor)) {
+    return Fail("--role '" + o.role_name + "': must be supervisor or admin", 2);
+  }
+  if (o.institution.empty()) return Fail("--institution is required", 2);
+  a.institution = o.institution;
+  if (!o.expires.empty()) {
+    a.expires_unix_ms = ParseDate(o.expires);
+    if (a.expires_unix_ms < 0) return Fail("--expires '" + o.expires + "': not YYYY-MM-DD", 2);
+  }
+  if (o.idp_identity.size() > 255) return Fail("--idp-identity: over 255 bytes", 2);
+  a.idp_identity = o.idp_identity;
+  if (!o.no_password) {
+    std::string password;
+    if (!ReadPassword("password for " + o.username + ": ", &password)) {
+      return Fail("no password on standard input (or --no-password)", 2);
+    }
+    if (std::string why = server::CheckNewPassword(password); !why.empty()) return Fail(why, 2);
+    a.password_hash = server::HashPassword(password);
+  } else if (o.idp_identity.empty()) {
+    return Fail("--no-password needs --idp-identity (else nobody can sign in)", 2);
+  }
+  a.created_unix_ms = patient_db::NowUnixMs();
+  auto store = patient_db::OpenStoreFromUrl(o.db);
+  auto st = store->AddAccount(a);
+  if (!st.ok()) return Fail(st.message, 1);
+  st = Audit(*store, "account.create", a);
+  if (!st.ok()) return Fail(st.message, 1);
+  std::cout << "account '" << o.username << "' created (" << o.role_name << ", " << o.institution
+            << (a.expires_unix_ms ? ", expires " + FormatDate(a.expires_unix_ms) : "") << ")\n";
+  return 0;
+}
+
+int ListAccounts(patient_db::Store& store, const AccountOptions& o) {
+  auto rows = store.ListAccounts(o.institution);
+  if (!rows.ok()) return Fail(rows.status.message, 1);
+  std::cout << "username\trole\tinstitution\tpassword\tidp_identity\texpires\trevoked\n";
+  for (const AccountRow& a : rows.value) {
+    std::cout << a.username << "\t" << patient_db::RoleName(a.role) << "\t" << a.institution << "\t"
+              << (a.password_hash.empty() ? "no" : "yes") << "\t"
+              << (a.idp_identity.empty() ? "-" : a.idp_identity) << "\t"
+              << FormatDate(a.expires_unix_ms) << "\t" << FormatDate(a.revoked_unix_ms) << "\n";
+  }
+  return 0;
+}
+
+// `revoke` or `password` of the existing account `found`, named `username`.
+int ChangeAccount(patient_db::Store& store, const std::string& verb, const std::string& username,
+                  const AccountRow& found) {
+  if (verb == "revoke") {
+    auto st = store.RevokeAccount(username, patient_db::NowUnixMs());
+    if (st.ok()) st = Audit(store, "account.revoke", found);
+    if (!st.ok()) return Fail(st.message, 1);
+    std::cout << "account '" << username << "' revoked\n";
+    return 0;
+  }
+  std::string password;  // verb == "password"
+  if (!ReadPassword("new password for " + username + ": ", &password)) {
+    return Fail("no password on standard input", 2);
+  }
+  if (std::string why = server::CheckNewPassword(password); !why.empty()) return Fail(why, 2);
+  auto st = store.SetAccountPassword(username, server::HashPassword(password));
+  if (st.ok()) st = Audit(store, "account.password", found);
+  if (!st.ok()) return Fail(st.message, 1);
+  std::cout << "account '" << username << "': password set\n";
+  return 0;
 }
 
 }  // namespace
@@ -118,15 +194,15 @@ int RunAccountCommand(const CommandArgs& args) {
   if (verb != "create" && verb != "revoke" && verb != "password" && verb != "list") {
     return Fail("unknown subcommand '" + verb + "' (create, revoke, password, list)", 2);
   }
-  std::string db, username, role_name, institution, expires, idp_identity;
+  AccountOptions o;
   po::options_description options("options");
   options.add_options()("help,h", "show this help")(
-      "db", po::value(&db)->required(), "database URL, e.g. sqlite:/var/lib/ves/ves.db")(
-      "username", po::value(&username), "the account's name (a-z 0-9 . _ @ -)")(
-      "role", po::value(&role_name), "supervisor or admin")(
-      "institution", po::value(&institution), "the account's institution")(
-      "expires", po::value(&expires), "refused from 00:00 UTC of this day (default: never)")(
-      "idp-identity", po::value(&idp_identity),
+      "db", po::value(&o.db)->required(), "database URL, e.g. sqlite:/var/lib/ves/ves.db")(
+      "username", po::value(&o.username), "the account's name (a-z 0-9 . _ @ -)")(
+      "role", po::value(&o.role_name), "supervisor or admin")(
+      "institution", po::value(&o.institution), "the account's institution")(
+      "expires", po::value(&o.expires), "refused from 00:00 UTC of this day (default: never)")(
+      "idp-identity", po::value(&o.idp_identity),
       "the identity provider's `sub` (or verified email) that signs in as this account")(
       "no-password", "no password sign-in: only through the identity provider");
   po::variables_map vm;
@@ -140,84 +216,20 @@ int RunAccountCommand(const CommandArgs& args) {
       return 0;
     }
     po::notify(vm);
+    o.no_password = vm.count("no-password") > 0;
   } catch (const po::error& e) {
     return Fail(e.what(), 2);
   }
   if (verb != "list") {
-    if (std::string why = server::CheckUsername(username); !why.empty()) return Fail(why, 2);
+    if (std::string why = server::CheckUsername(o.username); !why.empty()) return Fail(why, 2);
   }
   try {
-    if (verb == "create") {
-      AccountRow a;
-      a.username = username;
-      if (!patient_db::ParseRoleName(role_name, &a.role) ||
-          (a.role != StoreRole::kAdmin && a.role != StoreRole::kSupervisor)) {
-        return Fail("--role '" + role_name + "': must be supervisor or admin", 2);
-      }
-      if (institution.empty()) return Fail("--institution is required", 2);
-      a.institution = institution;
-      if (!expires.empty()) {
-        a.expires_unix_ms = ParseDate(expires);
-        if (a.expires_unix_ms < 0) return Fail("--expires '" + expires + "': not YYYY-MM-DD", 2);
-      }
-      if (idp_identity.size() > 255) return Fail("--idp-identity: over 255 bytes", 2);
-      a.idp_identity = idp_identity;
-      if (!vm.count("no-password")) {
-        std::string password;
-        if (!ReadPassword("password for " + username + ": ", &password)) {
-          return Fail("no password on standard input (or --no-password)", 2);
-        }
-        if (std::string why = server::CheckNewPassword(password); !why.empty()) {
-          return Fail(why, 2);
-        }
-        a.password_hash = server::HashPassword(password);
-      } else if (idp_identity.empty()) {
-        return Fail("--no-password needs --idp-identity (else nobody can sign in)", 2);
-      }
-      a.created_unix_ms = NowMs();
-      auto store = patient_db::OpenStoreFromUrl(db);
-      auto st = store->AddAccount(a);
-      if (!st.ok()) return Fail(st.message, 1);
-      st = Audit(*store, "account.create", a);
-      if (!st.ok()) return Fail(st.message, 1);
-      std::cout << "account '" << username << "' created (" << role_name << ", " << institution
-                << (a.expires_unix_ms ? ", expires " + FormatDate(a.expires_unix_ms) : "")
-                << ")\n";
-      return 0;
-    }
-    auto store = patient_db::OpenStoreFromUrl(db);
-    if (verb == "list") {
-      auto rows = store->ListAccounts(institution);
-      if (!rows.ok()) return Fail(rows.status.message, 1);
-      std::cout << "username\trole\tinstitution\tpassword\tidp_identity\texpires\trevoked\n";
-      for (const AccountRow& a : rows.value) {
-        std::cout << a.username << "\t" << patient_db::RoleName(a.role) << "\t" << a.institution
-                  << "\t" << (a.password_hash.empty() ? "no" : "yes") << "\t"
-                  << (a.idp_identity.empty() ? "-" : a.idp_identity) << "\t"
-                  << FormatDate(a.expires_unix_ms) << "\t" << FormatDate(a.revoked_unix_ms)
-                  << "\n";
-      }
-      return 0;
-    }
-    auto found = store->GetAccount(username);
-    if (!found.ok()) return Fail("no account '" + username + "'", 1);
-    if (verb == "revoke") {
-      auto st = store->RevokeAccount(username, NowMs());
-      if (st.ok()) st = Audit(*store, "account.revoke", found.value);
-      if (!st.ok()) return Fail(st.message, 1);
-      std::cout << "account '" << username << "' revoked\n";
-      return 0;
-    }
-    std::string password;  // verb == "password"
-    if (!ReadPassword("new password for " + username + ": ", &password)) {
-      return Fail("no password on standard input", 2);
-    }
-    if (std::string why = server::CheckNewPassword(password); !why.empty()) return Fail(why, 2);
-    auto st = store->SetAccountPassword(username, server::HashPassword(password));
-    if (st.ok()) st = Audit(*store, "account.password", found.value);
-    if (!st.ok()) return Fail(st.message, 1);
-    std::cout << "account '" << username << "': password set\n";
-    return 0;
+    if (verb == "create") return CreateAccount(o);
+    auto store = patient_db::OpenStoreFromUrl(o.db);
+    if (verb == "list") return ListAccounts(*store, o);
+    auto found = store->GetAccount(o.username);
+    if (!found.ok()) return Fail("no account '" + o.username + "'", 1);
+    return ChangeAccount(*store, verb, o.username, found.value);
   } catch (const std::invalid_argument& e) {
     return Fail(e.what(), 2);
   } catch (const std::exception& e) {

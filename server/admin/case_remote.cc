@@ -15,21 +15,18 @@ namespace po = boost::program_options;
 using ves::server::ClientOptions;
 
 int RunCaseUpload(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 300;
   std::string file, institution;
   std::vector<std::string> share_with;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("file", po::value(&file)->required(), "case file (any readable format)")(
+  RemoteCommandLine line;
+  line.Add()("file", po::value(&file)->required(), "case file (any readable format)")(
       "share-with", po::value(&share_with)->composing(), "institution allowed to download it")(
       "institution", po::value(&institution), "owner (default: the caller's)");
-  po::positional_options_description pos;
-  pos.add("file", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("case upload", "case upload FILE [--share-with I]... --server A",
-                             args, options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("file", 1);
+  if (const int rc =
+          line.Parse("case upload", "case upload FILE [--share-with I]... --server A", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   std::string bundle;
   try {
     // Any format the case tools read; validated here first, again on the server.
@@ -77,27 +74,21 @@ int RunCaseUpload(const CommandArgs& args) {
 }
 
 int RunCaseList(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("institution", po::value(&institution), "only this owner")(
+  RemoteCommandLine line;
+  line.Add()("institution", po::value(&institution), "only this owner")(
       "all-versions", "every version, not only the latest");
-  po::variables_map vm;
-  const int rc = ParseRemote("case list", "case list [--all-versions] --server A", args, options,
-                             nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  if (const int rc = line.Parse("case list", "case list [--all-versions] --server A", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListCasesRequest q;
   q.set_institution(institution);
-  q.set_all_versions(vm.count("all-versions") > 0);
+  q.set_all_versions(line.Has("all-versions"));
   q.set_page_size(1000);
   auto stub = ves::v1::Cases::NewStub(ves::server::MakeClientChannel(client));
-  auto status = ForEachPage<ves::v1::ListCasesResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListCases(c, request, reply);
-      },
+  return ListAllPages(
+      "case list", client, *stub, &ves::v1::Cases::Stub::ListCases, q,
       [](const ves::v1::ListCasesResponse& r) {
         for (const auto& c : r.cases()) {
           // The payload hash, as `case validate` and the station print it.
@@ -110,26 +101,21 @@ int RunCaseList(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("case list", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunCaseDownload(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 300;
   std::string id, out;
   unsigned version = 0;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("id", po::value(&id)->required(), "case id")(
-      "output,o", po::value(&out)->required(), "where to write the .vescase")(
+  RemoteCommandLine line;
+  line.Add()("id", po::value(&id)->required(), "case id")("output,o", po::value(&out)->required(),
+                                                          "where to write the .vescase")(
       "version", po::value(&version), "version (default: latest)");
-  po::positional_options_description pos;
-  pos.add("id", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("case download", "case download ID -o FILE.vescase --server A", args,
-                             options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("id", 1);
+  if (const int rc =
+          line.Parse("case download", "case download ID -o FILE.vescase --server A", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   // Bytes land in FILE.part; an interrupted download resumes from there.
   const std::string partial = out + ".part";
   std::string bytes;

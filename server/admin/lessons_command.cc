@@ -62,11 +62,10 @@ int CurriculumCreate(const std::string& file, const ClientOptions& client,
   }
   if (!institution.empty()) q.mutable_curriculum()->set_institution(institution);
   ves::v1::CreateCurriculumResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->CreateCurriculum(&ctx, q, &r);
-  if (!status.ok()) {
-    return ReportRpcError("curriculum create", status.error_code(), status.error_message());
+  if (const int called = CallOnce("curriculum create", client, *LessonsStub(client),
+                                  &ves::v1::Lessons::Stub::CreateCurriculum, q, &r);
+      called != kExitOk) {
+    return called;
   }
   const auto& c = r.curriculum();
   std::cout << (r.already_stored() ? "already stored: " : "created: ") << c.curriculum_id()
@@ -83,11 +82,8 @@ int CurriculumList(const ClientOptions& client, const std::string& institution) 
   ves::v1::ListCurriculaRequest q;
   q.set_institution(institution);
   auto stub = LessonsStub(client);
-  auto status = ForEachPage<ves::v1::ListCurriculaResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListCurricula(c, request, reply);
-      },
+  return ListAllPages(
+      "curriculum list", client, *stub, &ves::v1::Lessons::Stub::ListCurricula, q,
       [](const ves::v1::ListCurriculaResponse& r) {
         for (const auto& c : r.curricula()) {
           std::printf("%-24s %-16s %2d lesson(s)  %s\n", Shown(c.curriculum_id()).c_str(),
@@ -95,10 +91,6 @@ int CurriculumList(const ClientOptions& client, const std::string& institution) 
         }
         return true;
       });
-  if (!status.ok()) {
-    return ReportRpcError("curriculum list", status.error_code(), status.error_message());
-  }
-  return kExitOk;
 }
 
 // The progress of one trainee: one line per lesson.
@@ -166,20 +158,16 @@ int RunCurriculumCommand(const CommandArgs& args) {
     const CommandArgs rest(args.begin() + 1, args.end());
     return args[0] == "assign" ? RunAssignCommand(rest) : RunProgressCommand(rest);
   }
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, file, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "create or list")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "create or list")(
       "file", po::value(&file), "create: the curriculum (textproto of ves.v1.Curriculum)")(
       "institution", po::value(&institution), "owner (default: the caller's; admins only)");
-  po::positional_options_description pos;
-  pos.add("action", 1).add("file", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("curriculum", "curriculum create FILE.textproto | list", args,
-                             options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1).Positional("file", 1);
+  if (const int rc = line.Parse("curriculum", "curriculum create FILE.textproto | list", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action == "create") {
     if (file.empty()) {
       std::cerr << "ves-admin curriculum create: give the curriculum FILE.textproto\n";
@@ -194,17 +182,14 @@ int RunCurriculumCommand(const CommandArgs& args) {
 }
 
 int RunAssignCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string curriculum, trainee, group;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("curriculum", po::value(&curriculum)->required(), "curriculum id")(
+  RemoteCommandLine line;
+  line.Add()("curriculum", po::value(&curriculum)->required(), "curriculum id")(
       "trainee", po::value(&trainee), "one trainee")("group", po::value(&group), "a group");
-  po::variables_map vm;
-  const int rc = ParseRemote("assign", "assign --curriculum C --trainee T|--group G", args,
-                             options, nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  if (const int rc = line.Parse("assign", "assign --curriculum C --trainee T|--group G", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (trainee.empty() == group.empty()) {
     std::cerr << "ves-admin assign: give exactly one of --trainee T and --group G\n";
     return kExitUsage;
@@ -217,10 +202,11 @@ int RunAssignCommand(const CommandArgs& args) {
     q.set_group(group);
   }
   ves::v1::AssignCurriculumResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->AssignCurriculum(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("assign", status.error_code(), status.error_message());
+  if (const int called = CallOnce("assign", client, *LessonsStub(client),
+                                  &ves::v1::Lessons::Stub::AssignCurriculum, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << "assigned " << curriculum << " to "
             << (group.empty() ? "trainee " + trainee : "group " + group) << " ("
             << r.trainee_ids_size() << " trainee(s) now)\n";
@@ -228,18 +214,14 @@ int RunAssignCommand(const CommandArgs& args) {
 }
 
 int RunProgressCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string trainee, group, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("trainee", po::value(&trainee), "one trainee")(
-      "group", po::value(&group), "a group (table)")(
-      "institution", po::value(&institution), "with --group: the group's institution");
-  po::variables_map vm;
-  const int rc = ParseRemote("progress", "progress --trainee T | --group G", args, options,
-                             nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("trainee", po::value(&trainee), "one trainee")(
+      "group", po::value(&group), "a group (table)")("institution", po::value(&institution),
+                                                     "with --group: the group's institution");
+  if (const int rc = line.Parse("progress", "progress --trainee T | --group G", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (trainee.empty() == group.empty()) {
     std::cerr << "ves-admin progress: give exactly one of --trainee T and --group G\n";
     return kExitUsage;
@@ -252,10 +234,11 @@ int RunProgressCommand(const CommandArgs& args) {
     q.set_institution(institution);
   }
   ves::v1::GetProgressResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->GetProgress(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("progress", status.error_code(), status.error_message());
+  if (const int called = CallOnce("progress", client, *LessonsStub(client),
+                                  &ves::v1::Lessons::Stub::GetProgress, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   if (group.empty()) {
     for (const auto& t : r.trainees()) PrintTraineeProgress(t);
   } else {
@@ -265,20 +248,15 @@ int RunProgressCommand(const CommandArgs& args) {
 }
 
 int RunGroupCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, trainee, group;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "set")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "set")(
       "trainee", po::value(&trainee)->required(), "trainee id")(
       "group", po::value(&group)->default_value(""), "group name (empty: none)");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("group", "group set --trainee T --group G", args, options, &pos, &vm,
-                             &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1);
+  if (const int rc = line.Parse("group", "group set --trainee T --group G", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action != "set") {
     std::cerr << "ves-admin group: unknown action '" << action << "' (only: set)\n";
     return kExitUsage;
@@ -287,10 +265,11 @@ int RunGroupCommand(const CommandArgs& args) {
   q.set_trainee_id(trainee);
   q.set_group(group);
   ves::v1::SetTraineeGroupResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = LessonsStub(client)->SetTraineeGroup(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("group", status.error_code(), status.error_message());
+  if (const int called = CallOnce("group", client, *LessonsStub(client),
+                                  &ves::v1::Lessons::Stub::SetTraineeGroup, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << "trainee " << trainee << ": group " << (group.empty() ? "(none)" : group) << "\n";
   return kExitOk;
 }

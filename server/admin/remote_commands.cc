@@ -206,22 +206,19 @@ auto Stub(const ClientOptions& client) {
 }  // namespace
 
 int RunTokenCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, role, institution, trainee, label;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "create")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "create")(
       "role", po::value(&role)->required(), "admin, supervisor, station or trainee")(
       "institution", po::value(&institution), "institution (default: the caller's)")(
-      "trainee", po::value(&trainee), "trainee id (role trainee)")(
-      "label", po::value(&label), "who or what holds the token");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("token", "token create --role R [--institution I] --server A",
-                             args, options, &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+      "trainee", po::value(&trainee), "trainee id (role trainee)")("label", po::value(&label),
+                                                                   "who or what holds the token");
+  line.Positional("action", 1);
+  if (const int rc =
+          line.Parse("token", "token create --role R [--institution I] --server A", args);
+      rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   if (action != "create") {
     std::cerr << "ves-admin token: unknown action '" << action << "' (only: create)\n";
     return kExitUsage;
@@ -238,10 +235,11 @@ int RunTokenCommand(const CommandArgs& args) {
   q.set_trainee_id(trainee);
   q.set_label(label);
   ves::v1::CreateTokenResponse r;
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
-  auto status = Stub<ves::v1::Admin>(client)->CreateToken(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("token", status.error_code(), status.error_message());
+  if (const int called = CallOnce("token", client, *Stub<ves::v1::Admin>(client),
+                                  &ves::v1::Admin::Stub::CreateToken, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   std::cout << r.token() << "\n";
   std::cerr << "token " << r.token_id() << " (" << role
             << "): shown once, the server keeps only its hash\n";
@@ -249,24 +247,17 @@ int RunTokenCommand(const CommandArgs& args) {
 }
 
 int RunTraineeCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, id, name, institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("action", po::value(&action)->required(), "add or list")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "add or list")(
       "id", po::value(&id), "trainee id (add)")("name", po::value(&name), "display name (add)")(
       "institution", po::value(&institution), "institution (default: the caller's)");
-  po::positional_options_description pos;
-  pos.add("action", 1);
-  po::variables_map vm;
-  const int rc = ParseRemote("trainee", "trainee add --id ID [--name N] | list", args, options,
-                             &pos, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1);
+  if (const int rc = line.Parse("trainee", "trainee add --id ID [--name N] | list", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   auto stub = Stub<ves::v1::Trainees>(client);
   if (action == "add") {
-    grpc::ClientContext ctx;
-    ves::server::PrepareContext(&ctx, client);
     if (id.empty()) {
       std::cerr << "ves-admin trainee add: --id is required\n";
       return kExitUsage;
@@ -276,8 +267,11 @@ int RunTraineeCommand(const CommandArgs& args) {
     q.mutable_trainee()->set_display_name(name);
     q.mutable_trainee()->set_institution(institution);
     ves::v1::AddTraineeResponse r;
-    auto status = stub->AddTrainee(&ctx, q, &r);
-    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
+    if (const int called =
+            CallOnce("trainee", client, *stub, &ves::v1::Trainees::Stub::AddTrainee, q, &r);
+        called != kExitOk) {
+      return called;
+    }
     std::cout << "added " << Shown(r.trainee().trainee_id()) << " ("
               << Shown(r.trainee().institution())
               << ")\n";
@@ -286,48 +280,36 @@ int RunTraineeCommand(const CommandArgs& args) {
   if (action == "list") {
     ves::v1::ListTraineesRequest q;
     q.set_institution(institution);
-    auto status = ForEachPage<ves::v1::ListTraineesResponse>(
-        client, q,
-        [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-          return stub->ListTrainees(c, request, reply);
-        },
-        [](const ves::v1::ListTraineesResponse& r) {
-          for (const auto& t : r.trainees()) {
-            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
-                        Shown(t.institution()).c_str(), Shown(t.display_name()).c_str());
-          }
-          return true;
-        });
-    if (!status.ok()) return ReportRpcError("trainee", status.error_code(), status.error_message());
-    return kExitOk;
+    return ListAllPages("trainee", client, *stub, &ves::v1::Trainees::Stub::ListTrainees, q,
+                        [](const ves::v1::ListTraineesResponse& r) {
+                          for (const auto& t : r.trainees()) {
+                            std::printf("%-24s %-20s %s\n", Shown(t.trainee_id()).c_str(),
+                                        Shown(t.institution()).c_str(),
+                                        Shown(t.display_name()).c_str());
+                          }
+                          return true;
+                        });
   }
   std::cerr << "ves-admin trainee: unknown action '" << action << "' (add or list)\n";
   return kExitUsage;
 }
 
 int RunScoresCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string trainee, case_id;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("trainee", po::value(&trainee)->required(), "trainee id")(
-      "case", po::value(&case_id), "only this case");
-  po::variables_map vm;
-  const int rc = ParseRemote("scores", "scores --trainee ID [--case C]", args, options, nullptr,
-                             &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("trainee", po::value(&trainee)->required(), "trainee id")("case", po::value(&case_id),
+                                                                       "only this case");
+  if (const int rc = line.Parse("scores", "scores --trainee ID [--case C]", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListSessionsRequest q;
   q.set_trainee_id(trainee);
   q.set_case_id(case_id);
   q.set_page_size(1000);
   auto stub = Stub<ves::v1::Trainees>(client);
   bool header = false;
-  auto status = ForEachPage<ves::v1::ListSessionsResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListSessions(c, request, reply);
-      },
+  return ListAllPages(
+      "scores", client, *stub, &ves::v1::Trainees::Stub::ListSessions, q,
       [&](const ves::v1::ListSessionsResponse& r) {
         // One session a line, oldest first; `session show SESSION` reads one.
         if (!header) {
@@ -351,38 +333,30 @@ int RunScoresCommand(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("scores", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunSessionCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string action, uuid;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
   bool raw = false;
-  options.add_options()("action", po::value(&action)->required(), "show")(
-      "uuid", po::value(&uuid)->required(), "session uuid")(
+  RemoteCommandLine line;
+  line.Add()("action", po::value(&action)->required(), "show")("uuid", po::value(&uuid)->required(),
+                                                               "session uuid")(
       "raw", po::bool_switch(&raw), "the whole record (text format) instead of the summary");
-  po::positional_options_description pos;
-  pos.add("action", 1).add("uuid", 1);
-  po::variables_map vm;
-  const int rc =
-      ParseRemote("session", "session show UUID [--raw]", args, options, &pos, &vm, &client,
-                  deadline_s);
-  if (rc >= 0) return rc;
+  line.Positional("action", 1).Positional("uuid", 1);
+  if (const int rc = line.Parse("session", "session show UUID [--raw]", args); rc >= 0) return rc;
+  const ClientOptions& client = line.client();
   if (action != "show") {
     std::cerr << "ves-admin session: unknown action '" << action << "' (only: show)\n";
     return kExitUsage;
   }
-  grpc::ClientContext ctx;
-  ves::server::PrepareContext(&ctx, client);
   ves::v1::GetSessionRequest q;
   q.set_uuid(uuid);
   ves::v1::GetSessionResponse r;
-  auto status = Stub<ves::v1::Trainees>(client)->GetSession(&ctx, q, &r);
-  if (!status.ok()) return ReportRpcError("session", status.error_code(), status.error_message());
+  if (const int called = CallOnce("session", client, *Stub<ves::v1::Trainees>(client),
+                                  &ves::v1::Trainees::Stub::GetSession, q, &r);
+      called != kExitOk) {
+    return called;
+  }
   if (!raw) {
     PrintSessionSummary(r.record(), std::cout);
     return kExitOk;
@@ -397,28 +371,21 @@ int RunSessionCommand(const CommandArgs& args) {
 }
 
 int RunAuditCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   int64_t since_unix_ms = 0;
   unsigned limit = 1000;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("since", po::value(&since_unix_ms), "Unix time in ms (default: all)")(
+  RemoteCommandLine line;
+  line.Add()("since", po::value(&since_unix_ms), "Unix time in ms (default: all)")(
       "limit", po::value(&limit), "most entries shown (default 1000)");
-  po::variables_map vm;
-  const int rc = ParseRemote("audit", "audit [--since UNIX_MS] [--limit N]", args, options,
-                             nullptr, &vm, &client, deadline_s);
-  if (rc >= 0) return rc;
+  if (const int rc = line.Parse("audit", "audit [--since UNIX_MS] [--limit N]", args); rc >= 0)
+    return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListAuditRequest q;
   q.set_since_unix_ms(since_unix_ms);
   q.set_limit(std::min(limit, 1000u));  // a page; --limit bounds the total shown
   auto stub = Stub<ves::v1::Admin>(client);
   unsigned shown = 0;
-  auto status = ForEachPage<ves::v1::ListAuditResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListAudit(c, request, reply);
-      },
+  return ListAllPages(
+      "audit", client, *stub, &ves::v1::Admin::Stub::ListAudit, q,
       [&](const ves::v1::ListAuditResponse& r) {
         for (const auto& e : r.entries()) {
           if (shown == limit) return false;
@@ -431,22 +398,14 @@ int RunAuditCommand(const CommandArgs& args) {
         }
         return shown < limit;
       });
-  if (!status.ok()) return ReportRpcError("audit", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 int RunStationsCommand(const CommandArgs& args) {
-  ClientOptions client;
-  int deadline_s = 30;
   std::string institution;
-  po::options_description options("options");
-  AddRemoteOptions(&options, &client, &deadline_s);
-  options.add_options()("institution", po::value(&institution),
-                        "institution (default: the token's)");
-  po::variables_map vm;
-  const int rc = ParseRemote("stations", "stations [--institution I]", args, options, nullptr, &vm,
-                             &client, deadline_s);
-  if (rc >= 0) return rc;
+  RemoteCommandLine line;
+  line.Add()("institution", po::value(&institution), "institution (default: the token's)");
+  if (const int rc = line.Parse("stations", "stations [--institution I]", args); rc >= 0) return rc;
+  const ClientOptions& client = line.client();
   ves::v1::ListStationsRequest q;
   q.set_institution(institution);
   q.set_page_size(1000);
@@ -454,11 +413,8 @@ int RunStationsCommand(const CommandArgs& args) {
   std::printf("%-24s %-17s %-12s %-10s %-14s %-10s %-12s %-10s %s\n", "station", "last seen UTC",
               "version", "device", "p99/budget us", "overruns", "safe-state", "CAN errors",
               "flags");
-  auto status = ForEachPage<ves::v1::ListStationsResponse>(
-      client, q,
-      [&](grpc::ClientContext* c, const auto& request, auto* reply) {
-        return stub->ListStations(c, request, reply);
-      },
+  return ListAllPages(
+      "stations", client, *stub, &ves::v1::Admin::Stub::ListStations, q,
       [&](const ves::v1::ListStationsResponse& r) {
         for (const auto& st : r.stations()) {
           std::string device = "-", loop = "-", overruns = "-", safe = "-", can = "-", flags;
@@ -490,8 +446,6 @@ int RunStationsCommand(const CommandArgs& args) {
         }
         return true;
       });
-  if (!status.ok()) return ReportRpcError("stations", status.error_code(), status.error_message());
-  return kExitOk;
 }
 
 }  // namespace ves::admin
