@@ -24,7 +24,7 @@ void BindStationRow(SqliteStatement* s, const StationRow& r) {
   s->Bind(6, int64_t{r.has_health}).Bind(7, r.health_session_uuid);
   s->Bind(8, r.health_session_end_unix_ms).Bind(9, h.device).Bind(10, u(h.loop_cycles));
   s->Bind(11, h.loop_cycle_p99_us).Bind(12, h.loop_budget_us).Bind(13, u(h.loop_overruns));
-  s->Bind(14, u(h.safe_state_entries)).Bind(15, u(h.force_pauses));
+  s->Bind(14, u(h.hard_faults)).Bind(15, u(h.transient_faults));
   s->Bind(16, u(h.can_bus_errors)).Bind(17, u(h.can_lost_frames));
   s->Bind(18, u(h.can_send_failures)).Bind(19, u(h.can_malformed_frames));
 }

@@ -128,8 +128,8 @@ struct StationHealthRow {
   double loop_cycle_p99_us = 0;
   double loop_budget_us = 0;
   uint64_t loop_overruns = 0;
-  uint64_t safe_state_entries = 0;
-  uint64_t force_pauses = 0;
+  uint64_t hard_faults = 0;
+  uint64_t transient_faults = 0;
   uint64_t can_bus_errors = 0;
   uint64_t can_lost_frames = 0;
   uint64_t can_send_failures = 0;

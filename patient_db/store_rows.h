@@ -29,7 +29,7 @@ inline constexpr const char* kSessionLessonColumn =
 inline constexpr const char* kStationColumns =
     "institution, station_id, last_seen_unix_ms, software_version, version_session_end_unix_ms, "
     "has_health, health_session_uuid, health_session_end_unix_ms, device, loop_cycles, "
-    "loop_cycle_p99_us, loop_budget_us, loop_overruns, safe_state_entries, force_pauses, "
+    "loop_cycle_p99_us, loop_budget_us, loop_overruns, hard_faults, transient_faults, "
     "can_bus_errors, can_lost_frames, can_send_failures, can_malformed_frames";
 inline constexpr int kStationColumnCount = 19;
 
@@ -100,8 +100,8 @@ StationRow StationRowFrom(const Columns& c) {
   h.loop_cycle_p99_us = c.Real(10);
   h.loop_budget_us = c.Real(11);
   h.loop_overruns = static_cast<uint64_t>(c.Int(12));
-  h.safe_state_entries = static_cast<uint64_t>(c.Int(13));
-  h.force_pauses = static_cast<uint64_t>(c.Int(14));
+  h.hard_faults = static_cast<uint64_t>(c.Int(13));
+  h.transient_faults = static_cast<uint64_t>(c.Int(14));
   h.can_bus_errors = static_cast<uint64_t>(c.Int(15));
   h.can_lost_frames = static_cast<uint64_t>(c.Int(16));
   h.can_send_failures = static_cast<uint64_t>(c.Int(17));

@@ -17,8 +17,8 @@ void ToStationHealth(const patient_db::StationHealthRow& h, ves::v1::StationHeal
   out->set_loop_cycle_p99_us(h.loop_cycle_p99_us);
   out->set_loop_budget_us(h.loop_budget_us);
   out->set_loop_overruns(h.loop_overruns);
-  out->set_safe_state_entries(h.safe_state_entries);
-  out->set_force_pauses(h.force_pauses);
+  out->set_hard_faults(h.hard_faults);
+  out->set_transient_faults(h.transient_faults);
   out->set_can_bus_errors(h.can_bus_errors);
   out->set_can_lost_frames(h.can_lost_frames);
   out->set_can_send_failures(h.can_send_failures);

@@ -79,7 +79,7 @@ std::string CheckLiveFrame(const v1::LiveFrame& f, bool first) {
   bad(CheckFloats(f.colon_xyz_m(), "frame.colon_xyz_m", 3 * kMaxLivePolylinePoints, 3));
   bad(CheckFloats(f.tip_xyz_m(), "frame.tip_xyz_m", 3, 3));
   bad(CheckFloats(f.tip_dir(), "frame.tip_dir", 3, 3));
-  bad(CheckNumber(f.hand_force_n(), "frame.hand_force_n", 1e4));
+  bad(CheckNumber(f.base_force_n(), "frame.base_force_n", 1e4));
   bad(CheckNumber(f.inserted_m(), "frame.inserted_m", 1e3));
   bad(CheckNumber(f.tip_arc_m(), "frame.tip_arc_m", 1e3));
   bad(CheckNumber(f.stretch_m(), "frame.stretch_m", 1e3));
@@ -101,7 +101,7 @@ std::string CheckLiveJpeg(const std::string& jpeg) {
 
 std::string LiveFrameJson(const v1::LiveFrame& f, int64_t received_unix_ms) {
   nlohmann::json j = {{"t_s", f.t_s()},
-                      {"hand_force_N", f.hand_force_n()},
+                      {"base_force_N", f.base_force_n()},
                       {"inserted_m", f.inserted_m()},
                       {"tip_arc_m", f.tip_arc_m()},
                       {"stretch_m", f.stretch_m()},

@@ -41,8 +41,8 @@ struct StationHealthCount {
 inline constexpr StationHealthCount kStationHealthCounts[] = {
     {"loop_cycles", &ves::v1::StationHealth::loop_cycles},
     {"loop_overruns", &ves::v1::StationHealth::loop_overruns},
-    {"safe_state_entries", &ves::v1::StationHealth::safe_state_entries},
-    {"force_pauses", &ves::v1::StationHealth::force_pauses},
+    {"hard_faults", &ves::v1::StationHealth::hard_faults},
+    {"transient_faults", &ves::v1::StationHealth::transient_faults},
     {"can_bus_errors", &ves::v1::StationHealth::can_bus_errors},
     {"can_lost_frames", &ves::v1::StationHealth::can_lost_frames},
     {"can_send_failures", &ves::v1::StationHealth::can_send_failures},

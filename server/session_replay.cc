@@ -50,7 +50,7 @@ void ReplayRecorder::OnStep(const training::SessionRunner& runner) {
   if (step_ % series_every_ != 0 && !first_or_last) return;
   ReplayFrame f;
   f.t_s = obs.t_s;
-  f.hand_force_N = obs.base_force_N;
+  f.base_force_N = obs.base_force_N;
   f.stretch_m = obs.peak_stretch_m;
   f.tip_arc_m = obs.tip_arc_m;
   f.inserted_m = obs.inserted_m;

@@ -16,7 +16,7 @@ namespace ves::server {
 
 struct ReplayFrame {
   double t_s = 0;
-  double hand_force_N = 0;  // thrust at the base: what the hand feels
+  double base_force_N = 0;  // thrust at the base: what the hand feels
   double stretch_m = 0;     // largest mesentery stretch
   double tip_arc_m = 0;     // tip depth along the colon
   double inserted_m = 0;

@@ -47,7 +47,7 @@ json SeriesJson(const std::string& uuid, const SessionReplay& replay, double ser
     if (!Kept(i, n, plot_stride)) continue;
     const ReplayFrame& f = replay.frames[i];
     json j = {{"t_s", Round(f.t_s, 1e4)},
-              {"hand_force_N", Round(f.hand_force_N, 1e4)},
+              {"base_force_N", Round(f.base_force_N, 1e4)},
               {"stretch_m", Round(f.stretch_m, 1e5)},
               {"tip_arc_m", Round(f.tip_arc_m, 1e5)},
               {"inserted_m", Round(f.inserted_m, 1e5)},

@@ -30,7 +30,7 @@
 namespace ves::server {
 
 // A stored series of another format version is computed again.
-inline constexpr int kSeriesFormatVersion = 1;
+inline constexpr int kSeriesFormatVersion = 2;
 // Bounds of one series: plot frames (10 Hz up to 150 s, fewer per second
 // beyond), frames with shapes (5 Hz up to 120 s) and points per shape. With
 // the numbers rounded, a series stays under patient_db::kMaxSessionSeriesBytes.

@@ -32,7 +32,7 @@ patient_db::StationRow StationReportOf(const CheckedRecord& checked,
     r.health_session_end_unix_ms = rec.end_unix_ms();
     r.health = {
         h.device(),          h.loop_cycles(),        h.loop_cycle_p99_us(),   h.loop_budget_us(),
-        h.loop_overruns(),   h.safe_state_entries(), h.force_pauses(),        h.can_bus_errors(),
+        h.loop_overruns(),   h.hard_faults(), h.transient_faults(),        h.can_bus_errors(),
         h.can_lost_frames(), h.can_send_failures(),  h.can_malformed_frames()};
   }
   return r;

@@ -152,7 +152,7 @@ std::vector<std::string> StationHealthFlags(const v1::StationHealth& h) {
     flags.push_back("loop_p99");
   }
   if (h.loop_overruns() > 0) flags.push_back("overruns");
-  if (h.safe_state_entries() + h.force_pauses() > 0) flags.push_back("safe_state");
+  if (h.hard_faults() + h.transient_faults() > 0) flags.push_back("safe_state");
   if (h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() + h.can_malformed_frames() >
       0) {
     flags.push_back("can_errors");

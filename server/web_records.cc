@@ -161,7 +161,7 @@ json ReplayFramesJson(const SessionReplay& replay) {
   json frames = json::array();
   for (const ReplayFrame& f : replay.frames) {
     json j = {{"t_s", f.t_s},
-              {"hand_force_N", f.hand_force_N},
+              {"base_force_N", f.base_force_N},
               {"stretch_m", f.stretch_m},
               {"tip_arc_m", f.tip_arc_m},
               {"inserted_m", f.inserted_m},

@@ -217,6 +217,12 @@ CREATE TABLE session_sign_offs (
     {10, "sessions: each trainee's sessions by end time, for the trainee list", R"sql(
 CREATE INDEX sessions_by_trainee_end ON sessions(trainee_id, end_unix_ms);
 )sql"},
+    // The safety monitor's counts under the names they have everywhere else
+    // (docs/architecture.md, "One name per quantity").
+    {11, "stations: the safety monitor's hard and transient faults", R"sql(
+ALTER TABLE stations RENAME COLUMN safe_state_entries TO hard_faults;
+ALTER TABLE stations RENAME COLUMN force_pauses TO transient_faults;
+)sql"},
 };
 
 }  // namespace

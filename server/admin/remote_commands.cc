@@ -430,7 +430,7 @@ int RunStationsCommand(const CommandArgs& args) {
             } else {
               loop = "not timed";
             }
-            safe = std::to_string(h.safe_state_entries() + h.force_pauses());
+            safe = std::to_string(h.hard_faults() + h.transient_faults());
             can = std::to_string(h.can_bus_errors() + h.can_lost_frames() + h.can_send_failures() +
                                  h.can_malformed_frames());
             for (const std::string& f : ves::server::StationHealthFlags(h)) {

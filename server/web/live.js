@@ -41,7 +41,7 @@ async function livePage() {
     $('live-t').textContent = Number(f.t_s).toFixed(1) + ' s';
     $('live-tip-depth').textContent = (f.tip_arc_m * 1000).toFixed(0) + ' mm';
     $('live-inserted').textContent = (f.inserted_m * 1000).toFixed(0) + ' mm';
-    $('live-force').textContent = Number(f.hand_force_N).toFixed(2) + ' N';
+    $('live-force').textContent = Number(f.base_force_N).toFixed(2) + ' N';
     $('live-stretch').textContent = (f.stretch_m * 1000).toFixed(1) + ' mm';
     $('live-pain').textContent = f.pain ? 'yes' : 'no';
     $('live-loop').textContent = f.loop ? 'yes' : 'no';

@@ -72,7 +72,7 @@ function drawFrame(replay, index) {
   $('fig-t').textContent = f.t_s.toFixed(1) + ' s';
   $('tip-depth').textContent = (f.tip_arc_m * 1000).toFixed(0) + ' mm';
   $('fig-inserted').textContent = (f.inserted_m * 1000).toFixed(0) + ' mm';
-  $('fig-force').textContent = f.hand_force_N.toFixed(2) + ' N';
+  $('fig-force').textContent = f.base_force_N.toFixed(2) + ' N';
   $('fig-stretch').textContent = (f.stretch_m * 1000).toFixed(1) + ' mm';
   $('fig-pain').textContent = f.pain ? 'yes' : 'no';
   $('fig-loop').textContent = f.loop ? 'yes' : 'no';
@@ -128,7 +128,7 @@ async function sessionPage() {
   const frames = series.frames;
   const seek = (t) => showReplayAt(timeIndex(frames, t), t);
   ves.charts.force = timeChart($('plot-force'), 'Hand force (N)', frames,
-                               [['hand force N', 'hand_force_N', 1, '#a33']], seek);
+                               [['base force N', 'base_force_N', 1, '#a33']], seek);
   ves.charts.stretch = timeChart($('plot-stretch'), 'Colon stretch (mm)', frames,
                                  [['stretch mm', 'stretch_m', 1000, '#a60']], seek);
   ves.charts.depth = timeChart($('plot-depth'), 'Tip depth and inserted length (mm)', frames,

@@ -13,8 +13,8 @@ function healthTexts(h) {
                    h.can_malformed_frames;
   return [h.device, loop,
           h.loop_cycles > 0 ? h.loop_overruns + ' of ' + h.loop_cycles : '—',
-          (h.safe_state_entries + h.force_pauses) + ' (' + h.safe_state_entries +
-              ' re-armed, ' + h.force_pauses + ' paused)',
+          (h.hard_faults + h.transient_faults) + ' (' + h.hard_faults +
+              ' re-armed, ' + h.transient_faults + ' paused)',
           canTotal + ' (bus ' + h.can_bus_errors + ', lost ' + h.can_lost_frames +
               ', unsent ' + h.can_send_failures + ', malformed ' + h.can_malformed_frames + ')'];
 }

@@ -149,8 +149,8 @@ ves::v1::StationHealth MakeStationHealth(const std::string& device, const Health
     h.set_loop_cycle_p99_us(f.loop_cycle_p99_us);
     h.set_loop_overruns(f.loop_overruns);
   }
-  h.set_safe_state_entries(f.hard_faults);
-  h.set_force_pauses(f.transient_faults);
+  h.set_hard_faults(f.hard_faults);
+  h.set_transient_faults(f.transient_faults);
   h.set_can_bus_errors(f.counters.bus_errors);
   h.set_can_lost_frames(f.counters.lost_frames);
   h.set_can_send_failures(f.counters.send_failures);

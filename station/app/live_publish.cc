@@ -29,7 +29,7 @@ LiveFigures LiveFiguresOf(const training::SessionRunner& runner) {
   const auto& obs = runner.observation();
   LiveFigures f;
   f.t_s = obs.t_s;
-  f.hand_force_N = obs.base_force_N;
+  f.base_force_N = obs.base_force_N;
   f.inserted_m = obs.inserted_m;
   f.tip_arc_m = obs.tip_arc_m;
   f.stretch_m = obs.peak_stretch_m;
@@ -45,7 +45,7 @@ ves::v1::LiveFrame MakeLiveFrame(const training::SessionRunner& runner) {
 ves::v1::LiveFrame MakeLiveFrame(const model::ModelState& state, const LiveFigures& figures) {
   ves::v1::LiveFrame f;
   f.set_t_s(figures.t_s);
-  f.set_hand_force_n(figures.hand_force_N);
+  f.set_base_force_n(figures.base_force_N);
   f.set_inserted_m(figures.inserted_m);
   f.set_tip_arc_m(figures.tip_arc_m);
   f.set_stretch_m(figures.stretch_m);

@@ -28,7 +28,7 @@ inline constexpr double kLiveJpegPeriodS = 0.2;  // 5 Hz, wall clock
 // loop can hand them to the UI thread without allocating.
 struct LiveFigures {
   double t_s{0.0};
-  double hand_force_N{0.0};
+  double base_force_N{0.0};
   double inserted_m{0.0};
   double tip_arc_m{0.0};
   double stretch_m{0.0};

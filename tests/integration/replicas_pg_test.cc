@@ -152,7 +152,7 @@ TEST_F(Replicas, StationRowsFromBothReplicasEndWithTheNewestSessionsHealth) {
     rec.set_software_version("0.1." + std::to_string(i));
     auto* h = rec.mutable_station_health();
     h->set_device("sim");
-    h->set_safe_state_entries(static_cast<uint64_t>(i));
+    h->set_hard_faults(static_cast<uint64_t>(i));
     records.push_back(rec);
   }
   std::atomic<int> errors{0};
@@ -180,7 +180,7 @@ TEST_F(Replicas, StationRowsFromBothReplicasEndWithTheNewestSessionsHealth) {
     EXPECT_EQ(rows.value[k].station_id, "st-" + std::to_string(k));
     EXPECT_EQ(rows.value[k].software_version, newest.software_version());
     EXPECT_EQ(rows.value[k].health_session_uuid, newest.uuid());
-    EXPECT_EQ(rows.value[k].health.safe_state_entries, static_cast<uint64_t>(76 + k));
+    EXPECT_EQ(rows.value[k].health.hard_faults, static_cast<uint64_t>(76 + k));
   }
 }
 

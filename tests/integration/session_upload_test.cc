@@ -127,7 +127,7 @@ grpc::Status ListStations(const ClientOptions& who, const std::string& instituti
   return ves::v1::Admin::NewStub(MakeClientChannel(who))->ListStations(&ctx, q, r);
 }
 
-ves::v1::SessionRecord WithHealth(ves::v1::SessionRecord r, uint64_t safe_state_entries) {
+ves::v1::SessionRecord WithHealth(ves::v1::SessionRecord r, uint64_t hard_faults) {
   r.set_software_version("0.1.0");
   auto* h = r.mutable_station_health();
   h->set_device("can:can0");
@@ -135,7 +135,7 @@ ves::v1::SessionRecord WithHealth(ves::v1::SessionRecord r, uint64_t safe_state_
   h->set_loop_cycle_p99_us(380);
   h->set_loop_budget_us(1000);
   h->set_loop_overruns(2);
-  h->set_safe_state_entries(safe_state_entries);
+  h->set_hard_faults(hard_faults);
   h->set_can_bus_errors(4);
   return r;
 }
@@ -160,7 +160,7 @@ TEST_F(SessionUpload, AnUploadWithHealthCreatesThenUpdatesItsStationRow) {
   ASSERT_TRUE(UploadSession(station_, second, &r).ok());
   ASSERT_TRUE(ListStations(supervisor_, "", &list).ok());
   ASSERT_EQ(list.stations_size(), 1);
-  EXPECT_EQ(list.stations(0).health().safe_state_entries(), 3u);
+  EXPECT_EQ(list.stations(0).health().hard_faults(), 3u);
   EXPECT_EQ(list.stations(0).health_session_uuid(), second.uuid());
   // Supervisors see their own institution only; trainees and stations none.
   EXPECT_EQ(ListStations(supervisor_, "south", &list).error_code(),

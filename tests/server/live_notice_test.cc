@@ -48,7 +48,7 @@ v1::LiveFrame Frame(int k, size_t jpeg_bytes = 0) {
   v1::LiveFrame f;
   f.set_t_s(0.05 * k);
   f.set_tip_arc_m(0.01 * k);
-  f.set_hand_force_n(2.5);
+  f.set_base_force_n(2.5);
   f.set_dropped_frames(2);
   for (int i = 0; i < 80; ++i) {
     for (float v : {0.001f * i, -0.002f * i, 0.003f * i * k}) f.add_scope_xyz_m(v);
@@ -393,8 +393,8 @@ TEST(LiveNotice, MalformedPayloadsAreRefusedNamingTheProblem) {
     n.frame.add_scope_xyz_m(1.0f);
     ExpectRefused(EncodeLiveNotice(n), "frame.scope_xyz_m", "not triples");
     n.frame = Frame(1);
-    n.frame.set_hand_force_n(1e9);
-    ExpectRefused(EncodeLiveNotice(n), "frame.hand_force_n", "absurd force");
+    n.frame.set_base_force_n(1e9);
+    ExpectRefused(EncodeLiveNotice(n), "frame.base_force_n", "absurd force");
     // Ids inside the frame would bypass the envelope's checks, and a JPEG
     // there skip the parts' checks; EncodeLiveNotice clears both, so the
     // frame is forged by hand.

@@ -212,7 +212,7 @@ ves::v1::SessionRecord WithHealth() {
   h->set_loop_cycle_p99_us(412.5);
   h->set_loop_budget_us(1000);
   h->set_loop_overruns(3);
-  h->set_safe_state_entries(1);
+  h->set_hard_faults(1);
   h->set_can_bus_errors(2);
   return r;
 }
@@ -262,8 +262,8 @@ TEST(CheckSessionRecord, StationHealthIsBoundedNamingTheField) {
        [](ves::v1::StationHealth* h) {
          h->set_loop_budget_us(std::numeric_limits<double>::infinity());
        }},
-      {"record.station_health.safe_state_entries = 18446744073709551615: more than 1000000000",
-       [](ves::v1::StationHealth* h) { h->set_safe_state_entries(UINT64_MAX); }},
+      {"record.station_health.hard_faults = 18446744073709551615: more than 1000000000",
+       [](ves::v1::StationHealth* h) { h->set_hard_faults(UINT64_MAX); }},
       {"record.station_health.can_lost_frames = 1000000001: more than 1000000000",
        [](ves::v1::StationHealth* h) { h->set_can_lost_frames(1'000'000'001); }},
       {"record.station_health.loop_overruns = 600001: more than loop_cycles 600000",

@@ -301,7 +301,7 @@ TEST_F(WebApiTest, StationsShowTheirReportedHealthToTheirOwnInstitution) {
   h->set_loop_cycles(600'000);
   h->set_loop_cycle_p99_us(1500);  // over the 1000 us budget
   h->set_loop_budget_us(1000);
-  h->set_safe_state_entries(1);
+  h->set_hard_faults(1);
   ves::v1::UploadSessionResponse r;
   ASSERT_TRUE(UploadSession(server_.Client(station_), record, &r).ok());
   auto south = MakeRecord(NewUuid(rng), "s1", 4);
@@ -318,7 +318,7 @@ TEST_F(WebApiTest, StationsShowTheirReportedHealthToTheirOwnInstitution) {
   EXPECT_EQ(stations[0]["station_id"], kXss);
   EXPECT_EQ(stations[0]["software_version"], "0.1.0");
   EXPECT_EQ(stations[0]["health"]["loop_cycle_p99_us"], 1500.0);
-  EXPECT_EQ(stations[0]["health"]["safe_state_entries"], 1);
+  EXPECT_EQ(stations[0]["health"]["hard_faults"], 1);
   EXPECT_EQ(stations[0]["health"]["loop_cycles"], 600'000);
   for (const auto& count : ves::server::kStationHealthCounts) {  // every counter, unset ones 0
     EXPECT_TRUE(stations[0]["health"].contains(count.name)) << count.name;
@@ -386,7 +386,7 @@ TEST(StationHealthFlags, FlagWhatIsOutOfRange) {
   EXPECT_EQ(StationHealthFlags(h), std::vector<std::string>{"loop_p99"});
   h.set_loop_cycle_p99_us(10);
   h.set_loop_overruns(1);
-  h.set_force_pauses(1);
+  h.set_transient_faults(1);
   h.set_can_malformed_frames(1);
   EXPECT_EQ(StationHealthFlags(h),
             (std::vector<std::string>{"overruns", "safe_state", "can_errors"}));

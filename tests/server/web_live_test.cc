@@ -58,7 +58,7 @@ v1::LiveFrame FrameAt(int k, size_t jpeg_bytes = 0) {
   f.set_t_s(0.05 * k);
   f.set_tip_arc_m(0.01 * k);
   f.set_inserted_m(0.012 * k);
-  f.set_hand_force_n(2.5);
+  f.set_base_force_n(2.5);
   for (int i = 0; i <= 10; ++i) {
     f.add_scope_xyz_m(0.0f);
     f.add_scope_xyz_m(0.0f);
@@ -336,8 +336,8 @@ TEST_F(WebLiveTest, MalformedFramesAreRefusedNamingTheField) {
   }
   {
     v1::LiveFrame f = FirstFrame(uuid_, "t1");
-    f.set_hand_force_n(std::numeric_limits<double>::infinity());
-    cases.push_back({"infinite force", f, "frame.hand_force_n"});
+    f.set_base_force_n(std::numeric_limits<double>::infinity());
+    cases.push_back({"infinite force", f, "frame.base_force_n"});
   }
   {
     v1::LiveFrame f = FirstFrame(uuid_, "t1");

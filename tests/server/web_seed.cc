@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
         h->set_loop_cycle_p99_us(1500);
         h->set_loop_budget_us(1000);
         h->set_loop_overruns(12);
-        h->set_safe_state_entries(1);
+        h->set_hard_faults(1);
         h->set_can_bus_errors(2);
       } else if (argc == 9) {
         std::cerr << "web_seed: HEALTH '" << argv[8] << "' must be faulty\n";

@@ -209,8 +209,8 @@ TEST(MakeStationHealth, CarriesTheCountersTheFaultsAndTheLoopsTail) {
   EXPECT_EQ(h.loop_cycle_p99_us(), 1500.0);  // 2 % of the cycles ended 1.5 ms after the deadline
   EXPECT_EQ(h.loop_budget_us(), 1000.0);
   EXPECT_EQ(h.loop_overruns(), 20u);
-  EXPECT_EQ(h.safe_state_entries(), 1u);
-  EXPECT_EQ(h.force_pauses(), 0u);
+  EXPECT_EQ(h.hard_faults(), 1u);
+  EXPECT_EQ(h.transient_faults(), 0u);
   EXPECT_EQ(h.can_bus_errors(), 3u);
   EXPECT_EQ(h.can_lost_frames(), 5u);
   EXPECT_EQ(h.can_send_failures(), 7u);
@@ -227,7 +227,7 @@ TEST(MakeStationHealth, CarriesTheCountersTheFaultsAndTheLoopsTail) {
   const ves::v1::StationHealth headless = MakeStationHealth("sim", {}, safety, nullptr, 0.001);
   EXPECT_EQ(headless.loop_cycles(), 0u);
   EXPECT_EQ(headless.loop_cycle_p99_us(), 0.0);
-  EXPECT_EQ(headless.safe_state_entries(), 1u);
+  EXPECT_EQ(headless.hard_faults(), 1u);
   EXPECT_EQ(headless.can_bus_errors(), 0u);
 }
 

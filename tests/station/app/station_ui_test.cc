@@ -545,7 +545,7 @@ TEST_F(StationUi, AWholeSessionWithKeysAndMouseChangesTheRightPartsOfTheScreen) 
   EXPECT_GT(health.loop_cycle_p99_us(), 0.0);
   // Each 30 ms stop above ends at least one cycle past its next deadline.
   EXPECT_GE(health.loop_overruns(), 5u);
-  EXPECT_EQ(health.safe_state_entries(), 0u);  // hard_faults=0
+  EXPECT_EQ(health.hard_faults(), 0u);  // hard_faults=0
   EXPECT_LE(health.can_bus_errors(), count("bus_errors")) << quit.out;
   EXPECT_LE(health.can_lost_frames(), count("lost_frames")) << quit.out;
 }
@@ -957,7 +957,7 @@ TEST_F(StationUi, AnInteractiveRunStreamsLiveAndOutlivesTheServer) {
   sync::Outbox outbox(sync::ResolveStationPaths(data.string()).outbox_db());
   const std::optional<ves::v1::SessionRecord> record = outbox.Find(second[0]);
   ASSERT_TRUE(record.has_value());
-  EXPECT_EQ(record->station_health().safe_state_entries(), 0u);
+  EXPECT_EQ(record->station_health().hard_faults(), 0u);
 }
 
 }  // namespace
